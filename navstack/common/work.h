@@ -1,0 +1,40 @@
+#pragma once
+// Work counts: what a navstack job did, in units the board cost model prices
+// (time = sum(count x ns_per_unit[board]), DESIGN.md section 4). Counting, not timing, is what
+// makes the virtual clock bit-reproducible on any host.
+
+#include <array>
+#include <cstdint>
+#include <string_view>
+
+namespace enavi::navstack {
+
+enum class WorkUnit : int {
+  kPixel = 0,          ///< depth pixel read and classified (eci, difference, point projection)
+  kRayStep,            ///< one voxel traversed by a ray during map insertion
+  kVoxelUpdate,        ///< one octree leaf updated (log-odds, with tree descent)
+  kGridCell,           ///< one cell of a dense grid extracted from the map or distance-transformed
+  kStateCheck,         ///< one planner state validity / motion check
+  kPlannerIteration,   ///< one iteration of the sampling-based search
+  kOptimizerEval,      ///< one B-spline control point visited in one cost evaluation
+  kTrajectorySample,   ///< one trajectory sample checked against the map
+  kPolicyFlop,         ///< one multiply-add in the frequency adapter's network
+  kCount
+};
+
+constexpr std::array<std::string_view, static_cast<int>(WorkUnit::kCount)> kWorkUnitNames = {
+    "pixel",          "ray_step",           "voxel_update", "grid_cell",  "state_check",
+    "planner_iteration", "optimizer_eval", "trajectory_sample", "policy_flop"};
+
+struct WorkCounts {
+  std::array<std::int64_t, static_cast<int>(WorkUnit::kCount)> n{};
+
+  void Add(WorkUnit unit, std::int64_t count) { n[static_cast<int>(unit)] += count; }
+  std::int64_t Get(WorkUnit unit) const { return n[static_cast<int>(unit)]; }
+  WorkCounts& operator+=(const WorkCounts& o) {
+    for (std::size_t i = 0; i < n.size(); ++i) n[i] += o.n[i];
+    return *this;
+  }
+};
+
+}  // namespace enavi::navstack

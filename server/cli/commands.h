@@ -1,0 +1,15 @@
+#pragma once
+// Registration of the `enavi` subcommand families; each lives in its own *_cmd.cc file.
+// Handlers throw std::invalid_argument for bad input (exit 2) and anything else for failures
+// (exit 1); main() maps them.
+
+#include <CLI/CLI.hpp>
+
+namespace enavi::cli {
+
+/// Exit codes shared by every subcommand (DESIGN.md section 10).
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailure = 1;
+inline constexpr int kExitBadInput = 2;
+
+}  // namespace enavi::cli

@@ -1,0 +1,29 @@
+// enavi: one executable, subcommands with --help (DESIGN.md section 10).
+#include <cstdio>
+#include <exception>
+#include <stdexcept>
+
+#include <CLI/CLI.hpp>
+
+#include "server/cli/commands.h"
+
+int main(int argc, char** argv) {
+  using namespace enavi::cli;
+  CLI::App app{"E-Navi Farm: a simulation farm for UAV navigation stacks on weak onboard computers"};
+  app.require_subcommand(1);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // CLI11 prints help on --help (exit 0) and usage errors (bad flags) with its own code;
+    // we map every usage error to the bad-input code.
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitBadInput;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitFailure;
+  }
+  return kExitOk;
+}

@@ -1,0 +1,73 @@
+#pragma once
+// World description: the static scene one episode flies through (DESIGN.md section 6).
+// Pure geometry: no Bullet, no Embree. Lengths in metres, angles in radians, z up.
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "worlds/mesh.h"
+
+namespace enavi::worlds {
+
+/// Axis-aligned box rotated by `yaw` about its vertical centre axis.
+struct Box {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  Eigen::Vector3d size = Eigen::Vector3d::Ones();  ///< full extents along the box's own x, y, z
+  double yaw = 0.0;
+};
+
+/// Vertical cylinder standing on `base` (centre of its bottom disc).
+struct Cylinder {
+  Eigen::Vector3d base = Eigen::Vector3d::Zero();
+  double radius = 0.5;
+  double height = 1.0;
+};
+
+/// Ellipsoid (tree crowns, boulders); `radii` along world x, y, z.
+struct Ellipsoid {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  Eigen::Vector3d radii = Eigen::Vector3d::Ones();
+};
+
+/// Triangle mesh loaded from a Wavefront OBJ file, placed by position, yaw and uniform scale.
+struct MeshObject {
+  std::string path;  ///< as written in the world file (resolved relative to it)
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  double yaw = 0.0;
+  double scale = 1.0;
+  TriangleMesh mesh;  ///< in the object's own frame, as loaded
+};
+
+using Object = std::variant<Box, Cylinder, Ellipsoid, MeshObject>;
+
+/// Ground: a horizontal plane at `z` over the world bounds, or none (e.g. indoors a box floor).
+struct Ground {
+  bool enabled = true;
+  double z = 0.0;
+};
+
+struct WorldMetadata {
+  std::string name;
+  std::string scenario;  ///< generator id (s1..s5, forest, empty) or "custom"
+  std::uint64_t seed = 0;
+  int generator_version = 0;
+  std::map<std::string, std::string> params;  ///< generator parameters, sorted for stable output
+};
+
+/// A static world: built once, shared read-only by every episode flown in it.
+struct World {
+  Eigen::AlignedBox3d bounds;  ///< flight volume; nothing outside it is simulated
+  Ground ground;
+  Eigen::Vector3d start = Eigen::Vector3d::Zero();
+  Eigen::Vector3d goal = Eigen::Vector3d::Zero();
+  std::vector<Object> objects;
+  WorldMetadata metadata;
+};
+
+}  // namespace enavi::worlds
