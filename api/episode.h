@@ -1,0 +1,101 @@
+#pragma once
+// The contract for one flight episode: what to fly (EpisodeSpec) and what came out of it
+// (EpisodeResult). `enavi fly --json`, the worker, the DDS messages and the SQLite store all use
+// these records and their JSON form, so a result means the same thing everywhere.
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+namespace enavi::api {
+
+using Vec3 = std::array<double, 3>;
+
+/// Methods, clocks and cost modes the farm knows (DESIGN.md sections 4, 5).
+inline constexpr std::array<const char*, 2> kMethods = {"baseline", "enavi"};
+inline constexpr std::array<const char*, 2> kClocks = {"virtual", "emulated"};
+inline constexpr std::array<const char*, 2> kCostModes = {"model", "measured"};
+
+struct EpisodeSpec {
+  std::string world = "s1";  ///< scenario id (s1..s5, forest, empty) or a .yaml/.obj path
+  std::uint64_t seed = 1;    ///< world generator seed and episode seed (sensor noise, planner)
+  std::map<std::string, std::string> world_params;  ///< generator parameters
+  std::optional<Vec3> start;  ///< required for .obj worlds
+  std::optional<Vec3> goal;
+  std::string board = "host";
+  std::string method = "baseline";
+  std::string clock = "virtual";
+  std::string cost = "model";
+  double dilation = 1.0;      ///< emulated clock: 1 sim second = dilation wall seconds
+  double timeout_s = 0.0;     ///< 0: derived from the start-goal distance
+  std::string policy;         ///< E-Navi policy file; empty: the shipped default
+  std::map<std::string, double> overrides;  ///< named tunables (validated by the runner)
+};
+
+/// Per-task CPU utilisation, % of one board core (psutil convention).
+struct TaskUtilisation {
+  double perception = 0, planning = 0, collision = 0, difference = 0;
+  double Sum() const { return perception + planning + collision + difference; }
+};
+
+struct EciSummary {
+  double min = 0, mean = 0, max = 0;
+};
+
+struct EpisodeEvent {
+  double t = 0;
+  std::string kind;    ///< replan, collision_trigger, difference_trigger, deadline_miss, failsafe, ...
+  std::string detail;
+};
+
+/// Time series sampled at a fixed rate for plots; all columns have the same length.
+struct TimeSeries {
+  std::vector<double> t;
+  std::vector<Vec3> position, velocity;
+  std::vector<double> eci, f_per, f_col, f_dif, res, utilisation;
+  std::size_t size() const { return t.size(); }
+};
+
+struct EpisodeResult {
+  EpisodeSpec spec;
+  std::string scenario;  ///< world's scenario id (or "custom")
+  bool success = false;
+  bool collided = false;
+  bool timed_out = false;
+  std::string end_reason;  ///< goal_reached, collision, timeout, failsafe, error: ...
+  std::optional<Vec3> collision_point;
+  double flight_time_s = 0;
+  double path_length_m = 0;
+  double straight_line_m = 0;
+  double velocity_mean_mps = 0;
+  double velocity_std_mps = 0;
+  double accel_peak_mps2 = 0;
+  double nav_cpu_util_pct = 0;  ///< sum of the four navigation tasks
+  TaskUtilisation task_cpu_util_pct;
+  double deadline_miss_ratio = 0;
+  std::int64_t jobs_released = 0;
+  std::int64_t deadline_misses = 0;
+  std::int64_t replans = 0;
+  EciSummary eci;
+  double eci_time_ms_mean = 0;
+  double adapter_time_ms_mean = 0;
+  double sim_time_s = 0;
+  std::map<std::string, std::string> notes;  ///< how the result was produced (clock, fallbacks)
+  std::vector<EpisodeEvent> events;
+  TimeSeries series;
+};
+
+void to_json(nlohmann::json& j, const EpisodeSpec& s);
+void from_json(const nlohmann::json& j, EpisodeSpec& s);
+/// The flat result record (no time series or events): what `enavi fly --json` prints.
+nlohmann::json ResultSummaryJson(const EpisodeResult& r);
+/// Everything including time series and events.
+void to_json(nlohmann::json& j, const EpisodeResult& r);
+void from_json(const nlohmann::json& j, EpisodeResult& r);
+
+}  // namespace enavi::api
