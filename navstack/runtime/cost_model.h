@@ -1,0 +1,55 @@
+#pragma once
+// How long a job takes on the emulated board (DESIGN.md section 4).
+
+#include <array>
+#include <string>
+
+#include "navstack/common/work.h"
+#include "navstack/runtime/task.h"
+
+namespace enavi::navstack {
+
+class CostModel {
+ public:
+  virtual ~CostModel() = default;
+  /// Board execution time of one job in seconds, from its work counts (model mode) or from the
+  /// host CPU time its code took (measured mode).
+  virtual double JobSeconds(TaskId task, const WorkCounts& work, double host_cpu_seconds) const = 0;
+  /// "model" or "measured".
+  virtual std::string mode() const = 0;
+};
+
+/// model: time = fixed per-job overhead + sum(count x ns_per_unit). Bit-reproducible.
+class WorkCountCostModel final : public CostModel {
+ public:
+  struct Coefficients {
+    std::array<double, static_cast<int>(WorkUnit::kCount)> ns_per_unit{};
+    double ns_per_job = 0.0;  ///< dispatch + bookkeeping overhead of any job
+  };
+  explicit WorkCountCostModel(const Coefficients& board) : c_(board) {}
+  double JobSeconds(TaskId, const WorkCounts& work, double) const override {
+    double ns = c_.ns_per_job;
+    for (std::size_t i = 0; i < work.n.size(); ++i) ns += static_cast<double>(work.n[i]) * c_.ns_per_unit[i];
+    return ns * 1e-9;
+  }
+  std::string mode() const override { return "model"; }
+  const Coefficients& coefficients() const { return c_; }
+
+ private:
+  Coefficients c_;
+};
+
+/// measured: the host thread CPU time of the job's code, scaled by host speed / board speed.
+class MeasuredCostModel final : public CostModel {
+ public:
+  explicit MeasuredCostModel(double host_to_board) : scale_(host_to_board) {}
+  double JobSeconds(TaskId, const WorkCounts&, double host_cpu_seconds) const override {
+    return host_cpu_seconds * scale_;
+  }
+  std::string mode() const override { return "measured"; }
+
+ private:
+  double scale_;
+};
+
+}  // namespace enavi::navstack

@@ -1,0 +1,49 @@
+#pragma once
+// TaskExecutor: runs the navigation stack's jobs under an emulated onboard computer
+// (DESIGN.md section 4). Deadlines equal periods (paper Sec. III.A).
+
+#include <array>
+#include <cstdint>
+
+#include "navstack/runtime/task.h"
+
+namespace enavi::navstack {
+
+struct TaskStats {
+  std::int64_t released = 0;   ///< release instants, periodic and sporadic
+  std::int64_t started = 0;
+  std::int64_t completed = 0;
+  std::int64_t late = 0;       ///< finished after their deadline
+  std::int64_t skipped = 0;    ///< releases dropped because the previous job was still running
+  double busy_s = 0.0;         ///< board time spent executing this task
+  double cost_sum_s = 0.0;     ///< board time of started jobs
+  double cost_max_s = 0.0;
+  double host_cpu_s = 0.0;     ///< host CPU time spent in the task's code
+
+  /// Deadline misses: late finishes plus skipped releases (an overrun job takes its successors' slots).
+  std::int64_t misses() const { return late + skipped; }
+  double MeanCost() const { return started > 0 ? cost_sum_s / static_cast<double>(started) : 0.0; }
+};
+
+class TaskExecutor {
+ public:
+  virtual ~TaskExecutor() = default;
+  /// The code a job of `task` runs. Must be called before the task is released.
+  virtual void Register(TaskId task, JobFn fn) = 0;
+  /// Periodic releases at `hz` with deadline = period; 0 stops them. A new rate applies from the
+  /// next release. An overrunning task skips releases rather than queueing without bound.
+  virtual void SetRate(TaskId task, double hz) = 0;
+  virtual double rate(TaskId task) const = 0;
+  /// Releases one sporadic job now with the given relative deadline. If a job of the task is
+  /// active, the request is kept and one more job is released when it finishes.
+  virtual void Trigger(TaskId task, double relative_deadline) = 0;
+  /// Runs the schedule up to sim time `t` (s): releases, starts, preemptions and finishes.
+  virtual void AdvanceTo(double t) = 0;
+  virtual double now() const = 0;
+  virtual int cores() const = 0;
+  virtual const TaskStats& stats(TaskId task) const = 0;
+  /// True while a job of the task is released and not finished.
+  virtual bool active(TaskId task) const = 0;
+};
+
+}  // namespace enavi::navstack

@@ -1,0 +1,62 @@
+#pragma once
+// The virtual clock: a discrete-event, preemptive global-EDF schedule of the board's N cores in
+// sim time. A job's code runs on the host when the simulated scheduler first gives it a core; its
+// board time comes from the cost model; its commit is applied at its simulated finish.
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "navstack/runtime/cost_model.h"
+#include "navstack/runtime/executor.h"
+
+namespace enavi::navstack {
+
+class VirtualExecutor final : public TaskExecutor {
+ public:
+  /// @pre cores >= 1; `cost` outlives the executor.
+  VirtualExecutor(int cores, const CostModel& cost, double t0 = 0.0);
+
+  void Register(TaskId task, JobFn fn) override;
+  void SetRate(TaskId task, double hz) override;
+  double rate(TaskId task) const override { return slot(task).rate_hz; }
+  void Trigger(TaskId task, double relative_deadline) override;
+  void AdvanceTo(double t) override;
+  double now() const override { return now_; }
+  int cores() const override { return cores_; }
+  const TaskStats& stats(TaskId task) const override { return slot(task).stats; }
+  bool active(TaskId task) const override { return slot(task).job.has_value(); }
+
+ private:
+  struct Job {
+    double release = 0, deadline = 0;
+    double remaining = 0;  ///< board seconds still to execute
+    bool started = false;
+    std::function<void()> commit;
+  };
+  struct Slot {
+    JobFn fn;
+    double rate_hz = 0;
+    double next_release = 0;
+    double last_release = -1;
+    std::optional<Job> job;
+    std::optional<double> pending_trigger;  ///< relative deadline of a coalesced trigger
+    TaskStats stats;
+  };
+
+  Slot& slot(TaskId t) { return slots_[static_cast<int>(t)]; }
+  const Slot& slot(TaskId t) const { return slots_[static_cast<int>(t)]; }
+  void Release(TaskId task, double relative_deadline);
+  /// The (at most N) active jobs with the earliest deadlines, in a deterministic order.
+  std::vector<TaskId> Running() const;
+  void Start(TaskId task);
+  void Finish(TaskId task);
+
+  int cores_;
+  const CostModel& cost_;
+  double now_;
+  std::array<Slot, kTaskCount> slots_;
+};
+
+}  // namespace enavi::navstack
