@@ -91,7 +91,8 @@ void to_json(nlohmann::json& j, const EpisodeResult& r) {
   const TimeSeries& s = r.series;
   j["series"] = {{"t", s.t},     {"position", s.position}, {"velocity", s.velocity},
                  {"eci", s.eci}, {"f_per", s.f_per},       {"f_col", s.f_col},
-                 {"f_dif", s.f_dif}, {"res", s.res},       {"utilisation", s.utilisation}};
+                 {"f_dif", s.f_dif}, {"res", s.res},       {"utilisation", s.utilisation},
+                 {"events", s.events}};
 }
 
 void from_json(const nlohmann::json& j, EpisodeResult& r) {
@@ -144,6 +145,7 @@ void from_json(const nlohmann::json& j, EpisodeResult& r) {
     GetIf(*it, "f_dif", s.f_dif);
     GetIf(*it, "res", s.res);
     GetIf(*it, "utilisation", s.utilisation);
+    GetIf(*it, "events", s.events);
   }
 }
 

@@ -58,6 +58,7 @@ struct TimeSeries {
   std::vector<double> t;
   std::vector<Vec3> position, velocity;
   std::vector<double> eci, f_per, f_col, f_dif, res, utilisation;
+  std::vector<std::string> events;  ///< event kinds in the interval ending at t, ';'-separated
   std::size_t size() const { return t.size(); }
 };
 

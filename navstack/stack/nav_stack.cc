@@ -1,0 +1,214 @@
+#include "navstack/stack/nav_stack.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "navstack/planning/collision_check.h"
+
+namespace enavi::navstack {
+namespace {
+
+// splitmix64: decorrelates the per-plan seeds drawn from one episode seed.
+std::uint64_t Mix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+double YawOf(const Eigen::Quaterniond& q_WB) {
+  const Eigen::Vector3d x_W = q_WB * Eigen::Vector3d::UnitX();
+  return std::atan2(x_W.y(), x_W.x());
+}
+
+TrajectorySample HoldAt(const Eigen::Vector3d& p, double yaw) {
+  TrajectorySample s;
+  s.p = p;
+  s.yaw = yaw;
+  return s;
+}
+
+}  // namespace
+
+NavStack::NavStack(const NavStackOptions& options, TaskExecutor* executor, const VehicleState& initial)
+    : options_(options),
+      executor_(executor),
+      map_(std::make_unique<OccupancyMap>(options.map)),
+      pending_resolution_(options.map.resolution),
+      state_(initial) {
+  options_.planner.Validate();
+  const Eigen::Vector3d to_goal = options_.goal - initial.p_WB;
+  hold_ = HoldAt(initial.p_WB, std::atan2(to_goal.y(), to_goal.x()));
+  executor_->Register(TaskId::kPerception, [this] { return PerceptionJob(); });
+  executor_->Register(TaskId::kPlanning, [this] { return PlanningJob(); });
+  executor_->Register(TaskId::kCollision, [this] { return CollisionJob(); });
+  executor_->Register(TaskId::kDifference, [this] { return DifferenceJob(); });
+  SetRates(options_.rates);
+  if (rates_.f_plan == 0) RequestReplan("start");
+}
+
+void NavStack::SetRates(const TaskRates& rates) {
+  rates_ = rates;
+  executor_->SetRate(TaskId::kPerception, rates.f_per);
+  executor_->SetRate(TaskId::kPlanning, rates.f_plan);
+  executor_->SetRate(TaskId::kCollision, rates.collision_on_map_update ? 0.0 : rates.f_col);
+  executor_->SetRate(TaskId::kDifference, rates.f_dif);
+  if (rates.resolution != pending_resolution_) {
+    pending_resolution_ = rates.resolution;
+    AddEvent("resolution", std::to_string(rates.resolution));
+  }
+}
+
+void NavStack::OnFrame(DepthFramePtr frame) {
+  latest_frame_ = std::move(frame);
+  // Triggered planning also replans ahead of the end of the current trajectory, so the vehicle
+  // does not stop at every local goal.
+  if (rates_.f_plan == 0 && trajectory_ && !stopped_) {
+    const double left = trajectory_->end_time() - latest_frame_->t;
+    const bool ends_at_goal = (trajectory_->end_point() - options_.goal).norm() < 0.1;
+    if (left < options_.replan_before_end_s && !ends_at_goal) RequestReplan("trajectory_end");
+  }
+}
+
+TrajectorySample NavStack::Reference(double t) const {
+  if (stopped_ || !trajectory_) return hold_;
+  // A plan that landed before its own start time hands over at that time.
+  if (t < trajectory_->start_time() && previous_trajectory_) return previous_trajectory_->Sample(t);
+  return trajectory_->Sample(t);
+}
+
+std::vector<NavEvent> NavStack::TakeEvents() { return std::exchange(events_, {}); }
+
+void NavStack::AddEvent(std::string kind, std::string detail) {
+  events_.push_back({executor_->now(), std::move(kind), std::move(detail)});
+}
+
+void NavStack::RequestReplan(const char* why) {
+  // The baseline's 20 Hz timer replans anyway; a trigger would only collide with it.
+  if (rates_.f_plan > 0) return;
+  executor_->Trigger(TaskId::kPlanning, options_.triggered_plan_deadline_s);
+  (void)why;
+}
+
+JobOutput NavStack::PerceptionJob() {
+  JobOutput out;
+  const DepthFramePtr frame = latest_frame_;
+  const bool rebuild = pending_resolution_ != map_->resolution();
+  if (!rebuild && (!frame || frame == last_mapped_frame_)) return out;
+  // A resolution change rebuilds the map from recent frames (paper Sec. V.A); the rebuilt map
+  // replaces the current one when this job finishes.
+  std::shared_ptr<OccupancyMap> next;
+  if (rebuild) next = map_->Rebuilt(pending_resolution_, &out.work);
+  const OccupancyMap& target = next ? *next : *map_;
+  std::shared_ptr<const MapUpdate> update;
+  if (frame && frame != last_mapped_frame_) {
+    update = std::make_shared<const MapUpdate>(
+        target.ComputeUpdate(*frame, options_.camera, options_.perception, &out.work));
+    // Apply runs at the finish; its updateNode calls are priced here, one per key.
+    out.work.Add(WorkUnit::kVoxelUpdate,
+                 static_cast<std::int64_t>(update->free_keys.size() + update->occupied_keys.size()));
+    last_mapped_frame_ = frame;
+  }
+  out.commit = [this, next, update] {
+    if (next) map_ = next;
+    if (update) map_->Apply(*update);
+    if (rates_.collision_on_map_update && trajectory_) executor_->Trigger(TaskId::kCollision, 1.0 / rates_.f_per);
+  };
+  return out;
+}
+
+Eigen::AlignedBox3d NavStack::RemainingBox(const Trajectory& traj, double t, double pad) const {
+  Eigen::AlignedBox3d box;
+  const double step = 0.1;
+  for (double s = t; s <= traj.end_time() + step; s += step) box.extend(traj.Sample(s).p);
+  box.min().array() -= pad;
+  box.max().array() += pad;
+  return box;
+}
+
+JobOutput NavStack::CollisionJob() {
+  JobOutput out;
+  const std::shared_ptr<const Trajectory> traj = trajectory_;
+  const double t = executor_->now();
+  if (!traj || stopped_ || t >= traj->end_time()) return out;
+  const double radius = options_.planner.robot_radius;
+  const VoxelGrid grid = map_->ExtractGrid(RemainingBox(*traj, t, radius + map_->resolution()), &out.work);
+  const CollisionCheckResult hit = CheckTrajectory(*traj, t, traj->end_time(), grid, radius, &out.work);
+  if (!hit.collides) return out;
+  out.commit = [this, traj, hit] {
+    if (trajectory_ != traj) return;  // a newer plan landed meanwhile
+    const double now = executor_->now();
+    AddEvent("collision_predicted", "in " + std::to_string(hit.t_hit - now) + " s");
+    if (hit.t_hit - now < options_.emergency_horizon_s) {
+      stopped_ = true;
+      hold_ = HoldAt(state_.p_WB, YawOf(state_.q_WB));
+      AddEvent("emergency_stop");
+    }
+    RequestReplan("collision");
+  };
+  return out;
+}
+
+JobOutput NavStack::DifferenceJob() {
+  JobOutput out;
+  const DepthFramePtr frame = latest_frame_;
+  const DepthFramePtr previous = last_diff_frame_;
+  if (!frame || frame == previous) return out;
+  last_diff_frame_ = frame;
+  if (!previous) return out;
+  const DifferenceResult diff =
+      DetectDifference(*previous, *frame, options_.camera, options_.difference, &out.work);
+  if (diff.trigger) {
+    out.commit = [this, diff] {
+      AddEvent("difference", std::to_string(diff.changed_fraction));
+      RequestReplan("difference");
+    };
+  }
+  return out;
+}
+
+JobOutput NavStack::PlanningJob() {
+  JobOutput out;
+  const double t = executor_->now();
+  // Continue the current reference from where the vehicle will be when this plan lands; start
+  // from the measured state when there is no reference to continue or it has drifted away.
+  const double t_start = t + plan_latency_estimate_;
+  TrajectorySample start = Reference(t_start);
+  const bool from_state = !trajectory_ || stopped_ || (Reference(t).p - state_.p_WB).norm() > options_.max_tracking_error;
+  if (from_state) {
+    start = TrajectorySample{};
+    start.p = state_.p_WB;
+    start.v = state_.v_WB;
+    start.yaw = YawOf(state_.q_WB);
+  }
+  PlanRequest request;
+  request.t_start = from_state ? t : t_start;
+  request.start = start;
+  request.goal_W = options_.goal;
+  request.flight_bounds_W = options_.flight_bounds;
+  request.seed = static_cast<std::uint32_t>(Mix(options_.seed ^ Mix(static_cast<std::uint64_t>(plan_calls_++))));
+  request.grid = std::make_shared<const VoxelGrid>(
+      map_->ExtractGrid(PlanningVolume(start.p, options_.goal, options_.flight_bounds, options_.planner), &out.work));
+  auto result = std::make_shared<PlanResult>(Plan(request, options_.planner));
+  out.work += result->work;
+  out.commit = [this, result, t] {
+    // Latency = board time from start to finish; the next plan aims that far ahead.
+    const double latency = executor_->now() - t;
+    plan_latency_estimate_ = std::clamp(0.7 * plan_latency_estimate_ + 0.3 * 1.2 * latency, 0.02, 0.5);
+    if (!result->ok()) {
+      ++plan_failures_;
+      AddEvent("plan_failed", std::string(ToString(result->status)) + ": " + result->message);
+      return;
+    }
+    previous_trajectory_ = stopped_ ? nullptr : trajectory_;
+    trajectory_ = result->trajectory;
+    stopped_ = false;
+    last_search_path_ = result->search_path;
+    ++replans_;
+    AddEvent("replan", result->goal_is_local ? "local goal" : "goal");
+  };
+  return out;
+}
+
+}  // namespace enavi::navstack

@@ -1,0 +1,146 @@
+// `enavi fly`: one episode, locally, no server.
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "api/episode.h"
+#include "server/cli/commands.h"
+#include "server/report/flight_report.h"
+#include "workers/board/board_profile.h"
+#include "workers/sim/episode.h"
+#include "worlds/resolve.h"
+
+namespace enavi::cli {
+namespace {
+
+struct FlyArgs {
+  api::EpisodeSpec spec;
+  std::string start, goal;
+  std::vector<std::string> params;
+  std::vector<std::string> overrides;
+  std::string out_dir;
+  bool json = false;
+  std::string spec_file, result_file;
+};
+
+api::Vec3 ParseVec3(const std::string& text, const char* flag) {
+  api::Vec3 v{};
+  std::istringstream in(text);
+  char comma1 = 0, comma2 = 0;
+  if (!(in >> v[0] >> comma1 >> v[1] >> comma2 >> v[2]) || comma1 != ',' || comma2 != ',' || !in.eof())
+    throw std::invalid_argument(std::string(flag) + ": expected x,y,z in metres, got '" + text + "'");
+  return v;
+}
+
+std::pair<std::string, std::string> SplitKeyValue(const std::string& kv, const char* flag) {
+  const auto eq = kv.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw std::invalid_argument(std::string(flag) + ": expected key=value, got '" + kv + "'");
+  return {kv.substr(0, eq), kv.substr(eq + 1)};
+}
+
+void WriteText(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+void Run(FlyArgs args) {
+  api::EpisodeSpec spec = args.spec;
+  if (!args.spec_file.empty()) {
+    std::ifstream in(args.spec_file);
+    if (!in) throw std::invalid_argument(args.spec_file + ": cannot read the spec file");
+    try {
+      spec = nlohmann::json::parse(in).get<api::EpisodeSpec>();
+    } catch (const nlohmann::json::exception& e) {
+      throw std::invalid_argument(args.spec_file + ": not an episode spec: " + e.what());
+    }
+  } else {
+    if (!args.start.empty()) spec.start = ParseVec3(args.start, "--start");
+    if (!args.goal.empty()) spec.goal = ParseVec3(args.goal, "--goal");
+    for (const auto& p : args.params) spec.world_params.insert(SplitKeyValue(p, "--param"));
+    for (const auto& o : args.overrides) {
+      const auto [k, v] = SplitKeyValue(o, "--set");
+      try {
+        std::size_t used = 0;
+        spec.overrides[k] = std::stod(v, &used);
+        if (used != v.size()) throw std::invalid_argument(v);
+      } catch (const std::exception&) {
+        throw std::invalid_argument("--set " + k + ": '" + v + "' is not a number");
+      }
+    }
+  }
+
+  sim::EpisodeOptions options;
+  const bool tty = isatty(STDERR_FILENO) && !args.json;
+  if (tty) {
+    options.progress = [](double t, double distance) {
+      std::fprintf(stderr, "\r  sim %6.1f s, %5.1f m to goal", t, distance);
+      std::fflush(stderr);
+    };
+  }
+  worlds::WorldRequest request{spec.world, spec.seed, spec.world_params, std::nullopt, std::nullopt};
+  if (spec.start) request.start = Eigen::Vector3d((*spec.start)[0], (*spec.start)[1], (*spec.start)[2]);
+  if (spec.goal) request.goal = Eigen::Vector3d((*spec.goal)[0], (*spec.goal)[1], (*spec.goal)[2]);
+  const auto world = sim::PrepareWorld(worlds::ResolveWorld(request));
+  const api::EpisodeResult result = sim::RunEpisode(spec, *world, options);
+  if (tty) std::fprintf(stderr, "\n");
+
+  if (!args.result_file.empty()) WriteText(args.result_file, nlohmann::json(result).dump() + "\n");
+  if (!args.out_dir.empty()) {
+    const std::filesystem::path dir(args.out_dir);
+    std::filesystem::create_directories(dir);
+    nlohmann::json full = result;
+    full.erase("series");
+    WriteText(dir / "result.json", full.dump(2) + "\n");
+    WriteText(dir / "timeseries.csv", report::TimeSeriesCsv(result.series));
+    report::WriteFlightPlots(result, world->world, dir.string());
+  }
+  if (args.json) {
+    std::printf("%s\n", api::ResultSummaryJson(result).dump().c_str());
+  } else if (args.result_file.empty()) {
+    std::printf("%s %s on %s (seed %llu): %s, %.1f s, %.1f m, nav CPU %.1f %%, deadline misses %.2f %%\n",
+                spec.method.c_str(), result.scenario.c_str(), spec.board.c_str(),
+                static_cast<unsigned long long>(spec.seed), result.end_reason.c_str(), result.flight_time_s,
+                result.path_length_m, result.nav_cpu_util_pct, 100.0 * result.deadline_miss_ratio);
+  }
+}
+
+}  // namespace
+
+void RegisterFlyCommand(CLI::App& app) {
+  auto args = std::make_shared<FlyArgs>();
+  CLI::App* fly = app.add_subcommand("fly", "Fly one episode locally (no server) and print or write its results");
+  fly->add_option("--world", args->spec.world, "s1..s5, forest, empty, FILE.yaml or FILE.obj")->capture_default_str();
+  fly->add_option("--seed", args->spec.seed, "world and episode seed")->capture_default_str();
+  fly->add_option("--start", args->start, "start x,y,z (required for .obj worlds)");
+  fly->add_option("--goal", args->goal, "goal x,y,z (required for .obj worlds)");
+  fly->add_option("--param", args->params, "world generator parameter k=v (repeatable)");
+  fly->add_option("--board", args->spec.board, "onboard computer to emulate")
+      ->capture_default_str()
+      ->check(CLI::IsMember(board::KnownBoards()));
+  fly->add_option("--method", args->spec.method, "navigation stack")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"baseline", "enavi"}));
+  fly->add_option("--clock", args->spec.clock, "virtual (sim-time EDF) or emulated (throttled cgroup)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"virtual", "emulated"}));
+  fly->add_option("--cost", args->spec.cost, "virtual clock cost mode: model (work counts) or measured (host CPU)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"model", "measured"}));
+  fly->add_option("--timeout", args->spec.timeout_s, "episode timeout in sim seconds (0: from the distance)");
+  fly->add_option("--set", args->overrides, "override a tunable, name=value (repeatable)");
+  fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv and plots here");
+  fly->add_flag("--json", args->json, "print one JSON object with the results on stdout");
+  fly->add_option("--spec-file", args->spec_file, "read the episode spec (JSON) from this file")->group("");
+  fly->add_option("--result-file", args->result_file, "write the full result (JSON) to this file")->group("");
+  fly->callback([args] { Run(*args); });
+}
+
+}  // namespace enavi::cli

@@ -1,0 +1,51 @@
+#pragma once
+// Onboard computers the farm emulates (DESIGN.md section 7) and their cost-model coefficients.
+// Profiles are data (workers/board/profiles/*.yaml, embedded in the binary) with a cited source
+// for every per-core speed figure; see profiles/SOURCES.md.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "navstack/runtime/cost_model.h"
+
+namespace enavi::board {
+
+struct BoardProfile {
+  std::string id;
+  std::string name;
+  std::string cpu;
+  int cores = 1;
+  double clock_ghz = 0;
+  double paper_gflops = 0;
+  /// Single-core speed relative to the reference core (the calibration host): a job that takes
+  /// 1 ms on the reference core takes 1 / per_core_speed ms on this board.
+  double per_core_speed = 1.0;
+  std::string speed_benchmark;
+  std::string notes;
+  bool is_host = false;  ///< the machine itself, unthrottled
+};
+
+/// Nanoseconds per work unit on the reference core, fitted by `enavi calibrate`.
+struct ReferenceCosts {
+  std::string reference_cpu;
+  std::string calibration_id;
+  navstack::WorkCountCostModel::Coefficients ns;
+};
+
+/// Ids of all known boards, sorted.
+std::vector<std::string> KnownBoards();
+/// Loads an embedded profile. Throws std::invalid_argument naming the id and the known ones.
+BoardProfile LoadBoard(const std::string& id);
+/// Parses one profile document (`source` names it in error messages).
+BoardProfile ParseBoardProfile(const std::string& yaml_text, const std::string& source);
+
+/// The embedded reference costs (workers/board/profiles/reference_costs.yaml).
+ReferenceCosts LoadReferenceCosts();
+ReferenceCosts ParseReferenceCosts(const std::string& yaml_text, const std::string& source);
+
+/// The board's cost-model coefficients: reference ns per unit / per-core speed.
+navstack::WorkCountCostModel::Coefficients BoardCoefficients(const BoardProfile& board,
+                                                             const ReferenceCosts& reference);
+
+}  // namespace enavi::board

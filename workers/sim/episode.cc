@@ -1,0 +1,228 @@
+#include "workers/sim/episode.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "navstack/control/controller.h"
+#include "navstack/eci/eci.h"
+#include "navstack/runtime/virtual_executor.h"
+#include "navstack/stack/nav_stack.h"
+#include "workers/board/board_profile.h"
+#include "workers/sim/depth_camera.h"
+#include "workers/sim/embree_scene.h"
+#include "workers/sim/episode_config.h"
+#include "workers/sim/flight_recorder.h"
+#include "workers/sim/quadrotor.h"
+#include "workers/sim/static_world.h"
+#include "worlds/mesh.h"
+#include "worlds/resolve.h"
+
+namespace enavi::sim {
+namespace {
+
+using navstack::TaskId;
+
+api::Vec3 ToVec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+std::unique_ptr<navstack::CostModel> MakeCostModel(const api::EpisodeSpec& spec, const board::BoardProfile& b) {
+  if (spec.cost == "model")
+    return std::make_unique<navstack::WorkCountCostModel>(board::BoardCoefficients(b, board::LoadReferenceCosts()));
+  if (spec.cost == "measured") return std::make_unique<navstack::MeasuredCostModel>(1.0 / b.per_core_speed);
+  throw std::invalid_argument("cost: unknown cost mode '" + spec.cost + "' (known: model, measured)");
+}
+
+// Navigation-task busy time: the four tasks the paper counts as navigation workload.
+double NavBusy(const navstack::TaskExecutor& ex) {
+  double busy = 0;
+  for (int i = 0; i < navstack::kTaskCount; ++i)
+    if (navstack::IsNavigationTask(static_cast<TaskId>(i))) busy += ex.stats(static_cast<TaskId>(i)).busy_s;
+  return busy;
+}
+
+}  // namespace
+
+std::shared_ptr<const PreparedWorld> PrepareWorld(worlds::World world) {
+  auto prepared = std::make_shared<PreparedWorld>();
+  const worlds::TriangleMesh mesh = worlds::BuildWorldMesh(world);
+  prepared->scene = std::make_shared<const EmbreeScene>(mesh);
+  prepared->collision = std::make_shared<const StaticCollisionWorld>(mesh);
+  prepared->triangles = mesh.triangle_count();
+  prepared->world = std::move(world);
+  return prepared;
+}
+
+api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const EpisodeOptions& options) {
+  worlds::WorldRequest request;
+  request.world = spec.world;
+  request.seed = spec.seed;
+  request.params = spec.world_params;
+  if (spec.start) request.start = Eigen::Vector3d((*spec.start)[0], (*spec.start)[1], (*spec.start)[2]);
+  if (spec.goal) request.goal = Eigen::Vector3d((*spec.goal)[0], (*spec.goal)[1], (*spec.goal)[2]);
+  const auto world = PrepareWorld(worlds::ResolveWorld(request));
+  return RunEpisode(spec, *world, options);
+}
+
+api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld& prepared,
+                              const EpisodeOptions& options) {
+  if (spec.clock != "virtual")
+    throw std::invalid_argument("clock: '" + spec.clock + "' is not available in this build (known: virtual)");
+  const worlds::World& world = prepared.world;
+  const board::BoardProfile board = board::LoadBoard(spec.board);
+  const auto cost = MakeCostModel(spec, board);
+  EpisodeConfig config = MakeEpisodeConfig(spec);
+
+  api::EpisodeResult result;
+  result.spec = spec;
+  result.scenario = world.metadata.scenario.empty() ? "custom" : world.metadata.scenario;
+  result.straight_line_m = (world.goal - world.start).norm();
+  result.notes["clock"] = spec.clock;
+  result.notes["cost"] = cost->mode();
+  result.notes["board_cores"] = std::to_string(board.cores);
+  result.notes["triangles"] = std::to_string(prepared.triangles);
+
+  // Vehicle: hovering at the start, facing the goal.
+  const navstack::VehicleParams vehicle;
+  const Eigen::Vector3d to_goal = world.goal - world.start;
+  QuadrotorOptions quad_options;
+  quad_options.vehicle = vehicle;
+  quad_options.dt = options.physics_dt;
+  QuadrotorSim quad(prepared.collision, quad_options, world.start, std::atan2(to_goal.y(), to_goal.x()));
+  navstack::Controller controller(vehicle);
+  const DepthCamera camera(config.nav.camera, config.noise);
+
+  // Navigation stack on the board's executor.
+  navstack::VirtualExecutor executor(board.cores, *cost);
+  config.nav.goal = world.goal;
+  config.nav.flight_bounds = world.bounds;
+  config.nav.planner.robot_radius = std::max(config.nav.planner.robot_radius, vehicle.collision_radius);
+  navstack::NavStack nav(config.nav, &executor, quad.State());
+
+  const double timeout = spec.timeout_s > 0 ? spec.timeout_s
+                                            : 20.0 + 6.0 * result.straight_line_m / config.nav.planner.v_max;
+  const double frame_dt = 1.0 / config.nav.f_sen;
+  const long control_every = std::max(1L, std::lround(options.control_dt / options.physics_dt));
+  const long record_every = std::max(1L, std::lround(0.01 / options.physics_dt));
+  const long series_every = std::max(1L, std::lround(options.series_dt / options.physics_dt));
+
+  FlightRecorder recorder(record_every * options.physics_dt);
+  double next_frame_t = 0.0;
+  std::int64_t frame_index = 0;
+  double eci_latest = 0, eci_sum = 0, eci_min = std::numeric_limits<double>::infinity(), eci_max = 0;
+  double eci_cost_sum = 0;
+  double last_busy = 0;
+  std::string interval_events;
+  double next_progress = 1.0;
+
+  for (long k = 0;; ++k) {
+    const double t = k * options.physics_dt;
+    const navstack::VehicleState state = quad.State();
+    nav.OnState(state);
+
+    // Sensor: a depth frame at f_sen; eci of every frame for the metrics.
+    if (t >= next_frame_t - 1e-9) {
+      next_frame_t += frame_dt;
+      auto frame = std::make_shared<navstack::DepthFrame>();
+      frame->index = frame_index++;
+      frame->t = t;
+      Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+      X_WB.linear() = state.q_WB.toRotationMatrix();
+      X_WB.translation() = state.p_WB;
+      frame->X_WC = CameraPoseInWorld(X_WB, vehicle);
+      frame->v_W = state.v_WB;
+      camera.Render(*prepared.scene, frame->X_WC, &frame->image, spec.seed * 1000003ULL + frame->index);
+      navstack::WorkCounts eci_work;
+      const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * state.v_WB;
+      eci_latest = navstack::ComputeEci(frame->image, config.nav.camera, v_C, config.nav.eci, &eci_work).eci;
+      eci_cost_sum += cost->JobSeconds(TaskId::kEci, eci_work, 0.0);
+      eci_sum += eci_latest;
+      eci_min = std::min(eci_min, eci_latest);
+      eci_max = std::max(eci_max, eci_latest);
+      nav.OnFrame(std::move(frame));
+    }
+
+    executor.AdvanceTo(t);
+    for (const auto& e : nav.TakeEvents()) {
+      if (e.kind == "replan") ++result.replans;
+      interval_events += (interval_events.empty() ? "" : ";") + e.kind;
+      if (result.events.size() < 5000) result.events.push_back({e.t, e.kind, e.detail});
+    }
+
+    if (k % control_every == 0) quad.SetCommand(controller.Update(state, nav.Reference(t)));
+    if (k % record_every == 0) recorder.Sample(state.p_WB, state.v_WB);
+    if (k % series_every == 0) {
+      api::TimeSeries& s = result.series;
+      const double busy = NavBusy(executor);
+      s.t.push_back(t);
+      s.position.push_back(ToVec3(state.p_WB));
+      s.velocity.push_back(ToVec3(state.v_WB));
+      s.eci.push_back(eci_latest);
+      const navstack::TaskRates& r = nav.rates();
+      s.f_per.push_back(r.f_per);
+      s.f_col.push_back(r.collision_on_map_update ? r.f_per : r.f_col);
+      s.f_dif.push_back(r.f_dif);
+      s.res.push_back(nav.map_resolution());
+      s.utilisation.push_back(k == 0 ? 0.0 : 100.0 * (busy - last_busy) / options.series_dt);
+      last_busy = busy;
+      s.events.push_back(std::exchange(interval_events, {}));
+    }
+    if (options.progress && t >= next_progress) {
+      next_progress += 1.0;
+      options.progress(t, (state.p_WB - world.goal).norm());
+    }
+
+    // End conditions: goal reached, collision, timeout.
+    if ((state.p_WB - world.goal).norm() < options.goal_radius) {
+      result.success = true;
+      result.end_reason = "goal_reached";
+      break;
+    }
+    if (const auto contact = quad.contact()) {
+      result.collided = true;
+      result.end_reason = "collision";
+      result.collision_point = ToVec3(contact->point_W);
+      result.events.push_back({contact->t, "collision", ""});
+      break;
+    }
+    if (t >= timeout) {
+      result.timed_out = true;
+      result.end_reason = "timeout";
+      break;
+    }
+    quad.Step();
+  }
+
+  // Results (DESIGN.md section 8).
+  const double T = quad.time();
+  result.sim_time_s = T;
+  result.flight_time_s = T;
+  result.path_length_m = recorder.path_length();
+  result.velocity_mean_mps = recorder.speed_mean();
+  result.velocity_std_mps = recorder.speed_std();
+  result.accel_peak_mps2 = recorder.accel_peak();
+  auto util = [&](TaskId id) { return T > 0 ? 100.0 * executor.stats(id).busy_s / T : 0.0; };
+  result.task_cpu_util_pct = {util(TaskId::kPerception), util(TaskId::kPlanning), util(TaskId::kCollision),
+                              util(TaskId::kDifference)};
+  result.nav_cpu_util_pct = result.task_cpu_util_pct.Sum();
+  for (int i = 0; i < navstack::kTaskCount; ++i) {
+    const auto id = static_cast<TaskId>(i);
+    if (!navstack::IsNavigationTask(id)) continue;
+    result.jobs_released += executor.stats(id).released;
+    result.deadline_misses += executor.stats(id).misses();
+    const auto& st = executor.stats(id);
+    result.notes["task." + std::string(navstack::TaskName(id))] =
+        "released " + std::to_string(st.released) + ", late " + std::to_string(st.late) + ", skipped " +
+        std::to_string(st.skipped) + ", mean job " + std::to_string(1e3 * st.MeanCost()) + " ms, max " +
+        std::to_string(1e3 * st.cost_max_s) + " ms";
+  }
+  result.deadline_miss_ratio =
+      result.jobs_released > 0 ? static_cast<double>(result.deadline_misses) / result.jobs_released : 0.0;
+  result.eci = {frame_index > 0 ? eci_min : 0.0, frame_index > 0 ? eci_sum / frame_index : 0.0, eci_max};
+  result.eci_time_ms_mean = frame_index > 0 ? 1e3 * eci_cost_sum / frame_index : 0.0;
+  result.adapter_time_ms_mean = 0.0;
+  result.notes["plan_failures"] = std::to_string(nav.plan_failures());
+  return result;
+}
+
+}  // namespace enavi::sim

@@ -1,0 +1,43 @@
+#pragma once
+// One flight episode (DESIGN.md section 3): world -> depth camera -> navigation stack under the
+// board's executor -> controller -> physics, in sim time, with the measured results.
+
+#include <functional>
+#include <memory>
+
+#include "api/episode.h"
+#include "worlds/world.h"
+
+namespace enavi::sim {
+
+class EmbreeScene;
+class StaticCollisionWorld;
+
+/// A world ready to fly: its geometry as an Embree scene and a Bullet shape, built once and
+/// shared read-only by every episode flown in it.
+struct PreparedWorld {
+  worlds::World world;
+  std::shared_ptr<const EmbreeScene> scene;
+  std::shared_ptr<const StaticCollisionWorld> collision;
+  std::size_t triangles = 0;
+};
+std::shared_ptr<const PreparedWorld> PrepareWorld(worlds::World world);
+
+struct EpisodeOptions {
+  double physics_dt = 0.001;  ///< 1 kHz
+  double control_dt = 0.005;  ///< 200 Hz, on the flight controller (not the board)
+  double series_dt = 0.1;     ///< time-series sampling for plots
+  double goal_radius = 0.5;   ///< m
+  /// Called about once per simulated second with the sim time and the distance to the goal.
+  std::function<void(double t, double distance_to_goal)> progress;
+};
+
+/// Flies `spec` in `world`. Bad specs (unknown board/method, bad overrides) throw
+/// std::invalid_argument; a flight that fails (collision, timeout) is a result, not an error.
+api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld& world,
+                              const EpisodeOptions& options = {});
+
+/// Resolves the spec's world (generator id, .yaml or .obj), prepares it and flies.
+api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const EpisodeOptions& options = {});
+
+}  // namespace enavi::sim

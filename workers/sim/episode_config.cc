@@ -1,0 +1,98 @@
+#include "workers/sim/episode_config.h"
+
+#include <cmath>
+#include <functional>
+#include <stdexcept>
+
+namespace enavi::sim {
+namespace {
+
+struct Setter {
+  Tunable tunable;
+  std::function<void(EpisodeConfig&, double)> set;
+};
+
+const std::vector<Setter>& Setters() {
+  static const std::vector<Setter> setters = {
+      {{"planner.v_max", 0.2, 10.0, false, "maximum speed, m/s"},
+       [](EpisodeConfig& c, double v) { c.nav.planner.v_max = v; }},
+      {{"planner.a_max", 0.5, 20.0, false, "maximum acceleration, m/s^2"},
+       [](EpisodeConfig& c, double v) { c.nav.planner.a_max = v; }},
+      {{"planner.robot_radius", 0.1, 2.0, false, "obstacle inflation radius, m"},
+       [](EpisodeConfig& c, double v) { c.nav.planner.robot_radius = v; }},
+      {{"perception.stride", 1, 64, true, "depth pixel stride for mapping"},
+       [](EpisodeConfig& c, double v) { c.nav.perception.stride = static_cast<int>(v); }},
+      {{"perception.max_range", 1.0, 10.0, false, "mapping range, m"},
+       [](EpisodeConfig& c, double v) { c.nav.perception.max_range = v; }},
+      {{"rates.f_per", 1.0, 30.0, false, "baseline perception rate, Hz"},
+       [](EpisodeConfig& c, double v) { c.nav.rates.f_per = v; }},
+      {{"rates.f_plan", 0.0, 50.0, false, "baseline planning timer, Hz (0: triggered)"},
+       [](EpisodeConfig& c, double v) { c.nav.rates.f_plan = v; }},
+      {{"rates.f_dif", 0.0, 30.0, false, "difference detection rate, Hz"},
+       [](EpisodeConfig& c, double v) { c.nav.rates.f_dif = v; }},
+      {{"map.resolution", 0.05, 1.0, false, "baseline map resolution, m"},
+       [](EpisodeConfig& c, double v) {
+         c.nav.rates.resolution = v;
+         c.nav.map.resolution = v;
+       }},
+      {{"camera.noise_k", 0.0, 0.05, false, "depth noise sigma = k d^2, 1/m"},
+       [](EpisodeConfig& c, double v) { c.noise.k = v; }},
+  };
+  return setters;
+}
+
+}  // namespace
+
+const std::vector<Tunable>& Tunables() {
+  static const std::vector<Tunable> list = [] {
+    std::vector<Tunable> out;
+    for (const auto& s : Setters()) out.push_back(s.tunable);
+    return out;
+  }();
+  return list;
+}
+
+navstack::TaskRates BaselineRates() {
+  navstack::TaskRates r;
+  r.f_per = 30.0;
+  r.f_plan = 20.0;
+  r.f_col = 0.0;
+  r.collision_on_map_update = true;
+  r.f_dif = 0.0;
+  r.resolution = 0.1;
+  return r;
+}
+
+EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
+  EpisodeConfig config;
+  if (spec.method == "baseline") {
+    config.nav.rates = BaselineRates();
+    config.nav.map.resolution = config.nav.rates.resolution;
+  } else if (spec.method == "enavi") {
+    throw std::invalid_argument(
+        "method: 'enavi' is not available in this build yet: its strategy controller and trained "
+        "policy are not integrated (use --method baseline)");
+  } else {
+    throw std::invalid_argument("method: unknown method '" + spec.method + "' (known: baseline, enavi)");
+  }
+  config.nav.seed = spec.seed;
+  for (const auto& [name, value] : spec.overrides) {
+    const Setter* found = nullptr;
+    for (const auto& s : Setters())
+      if (s.tunable.name == name) found = &s;
+    if (!found) {
+      std::string known;
+      for (const auto& s : Setters()) known += (known.empty() ? "" : ", ") + s.tunable.name;
+      throw std::invalid_argument("overrides." + name + ": unknown parameter (known: " + known + ")");
+    }
+    const Tunable& t = found->tunable;
+    if (!std::isfinite(value) || value < t.min || value > t.max || (t.integer && value != std::floor(value)))
+      throw std::invalid_argument("overrides." + name + ": " + std::to_string(value) + " is outside [" +
+                                  std::to_string(t.min) + ", " + std::to_string(t.max) + "]" +
+                                  (t.integer ? " or not an integer" : ""));
+    found->set(config, value);
+  }
+  return config;
+}
+
+}  // namespace enavi::sim

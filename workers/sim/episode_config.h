@@ -1,0 +1,37 @@
+#pragma once
+// From an episode spec to the navigation stack's configuration: the method's task rates and the
+// named tunables a job spec may override (STYLE.md rule 10: names and ranges).
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "api/episode.h"
+#include "navstack/stack/nav_stack.h"
+#include "workers/sim/depth_camera.h"
+
+namespace enavi::sim {
+
+struct EpisodeConfig {
+  navstack::NavStackOptions nav;
+  DepthNoise noise;
+};
+
+/// One overridable parameter: its name in job specs, allowed range, and what it sets.
+struct Tunable {
+  std::string name;
+  double min = 0, max = 0;
+  bool integer = false;
+  std::string help;
+};
+const std::vector<Tunable>& Tunables();
+
+/// The baseline's configuration (paper Sec. VI): perception 30 Hz, planning on a 20 Hz timer,
+/// collision check after every map update, no difference detection, 0.1 m map, no adaptation.
+navstack::TaskRates BaselineRates();
+
+/// Builds the configuration for `spec.method` and applies `spec.overrides`. Throws
+/// std::invalid_argument naming an unknown override or an out-of-range value with its range.
+EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec);
+
+}  // namespace enavi::sim
