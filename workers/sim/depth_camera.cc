@@ -239,23 +239,29 @@ void ApplyDepthNoise(const DepthNoise& noise, const CameraIntrinsics& intrinsics
                      std::uint64_t seed, DepthImage* image) {
   if (noise.k == 0.0) return;
   std::mt19937_64 rng(seed);
-  const double two_pi = 2.0 * M_PI;
+  const float min_range = static_cast<float>(intrinsics.min_range);
+  const float max_range = static_cast<float>(intrinsics.max_range);
   const std::size_t n = image->data.size();
-  // Box-Muller on raw 64-bit draws: two standard normals per pair of pixels.
+  // Marsaglia's polar form of Box-Muller on raw 64-bit draws: two standard normals per pair of
+  // pixels, no sin/cos. The point in the unit disc is drawn for every pair, valid or not, so a
+  // pixel's noise does not depend on which other pixels had a return.
   for (std::size_t i = 0; i < n; i += 2) {
-    const std::uint64_t bits_r = rng(), bits_phi = rng();
+    double x, y, s;
+    do {
+      x = 2.0 * UnitOpenClosed(rng()) - 1.0;
+      y = 2.0 * UnitOpenClosed(rng()) - 1.0;
+      s = x * x + y * y;
+    } while (s >= 1.0 || s == 0.0);
     const bool any_valid =
         DepthImage::Valid(image->data[i]) || (i + 1 < n && DepthImage::Valid(image->data[i + 1]));
-    if (!any_valid) continue;  // draws consumed all the same: noise stays tied to the pixel
-    const double r = std::sqrt(-2.0 * std::log(UnitOpenClosed(bits_r)));
-    const double phi = two_pi * static_cast<double>(bits_phi >> 11) * 0x1.0p-53;
-    const double g[2] = {r * std::cos(phi), r * std::sin(phi)};
+    if (!any_valid) continue;
+    const double f = std::sqrt(-2.0 * std::log(s) / s);
+    const double g[2] = {x * f, y * f};
     for (std::size_t j = 0; j < 2 && i + j < n; ++j) {
       float& d = image->data[i + j];
       if (!DepthImage::Valid(d)) continue;
       const double noisy = d + noise.k * double(d) * d * g[j];
-      d = DepthOrNoReturn(true, static_cast<float>(noisy), static_cast<float>(intrinsics.min_range),
-                          static_cast<float>(intrinsics.max_range));
+      d = DepthOrNoReturn(true, static_cast<float>(noisy), min_range, max_range);
     }
   }
 }
