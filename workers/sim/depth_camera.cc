@@ -1,0 +1,286 @@
+#include "workers/sim/depth_camera.h"
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
+
+#include "workers/sim/camera_rays.h"
+#include "workers/sim/embree_impl.h"
+
+namespace enavi::sim {
+namespace {
+
+using navstack::CameraIntrinsics;
+using navstack::DepthImage;
+
+// Embree is slow on denormals; flush them to zero while rendering only, and restore the
+// caller's floating-point mode afterwards so other code on this thread is unaffected.
+class FlushDenormalsScope {
+ public:
+#if defined(__SSE__)
+  FlushDenormalsScope() : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | 0x8040u); }  // FTZ | DAZ
+  ~FlushDenormalsScope() { _mm_setcsr(saved_); }
+
+ private:
+  unsigned saved_;
+#endif
+};
+
+struct RenderSetup {
+  RTCScene scene;
+  const PixelRays& rays;
+  CameraRayFrame frame;
+  int width, height;
+  float min_range, max_range;
+  float* depth;
+};
+
+RTCIntersectContext CoherentContext() {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  return context;
+}
+
+void FillRay(const RenderSetup& s, int u, int v, RTCRay* ray) {
+  const Eigen::Vector3f d = s.frame.Direction(s.rays.x_of_u[u], s.rays.y_of_v[v]);
+  ray->org_x = s.frame.origin.x();
+  ray->org_y = s.frame.origin.y();
+  ray->org_z = s.frame.origin.z();
+  ray->dir_x = d.x();
+  ray->dir_y = d.y();
+  ray->dir_z = d.z();
+  // From the camera centre: a surface nearer than min_range must hide what is behind it.
+  ray->tnear = 0.0f;
+  ray->tfar = s.max_range;
+  ray->time = 0.0f;
+  ray->mask = 0xFFFFFFFFu;
+  ray->id = 0;
+  ray->flags = 0;
+}
+
+void RenderSingle(const RenderSetup& s) {
+  RTCIntersectContext context = CoherentContext();
+  RTCRayHit rh;
+  for (int v = 0; v < s.height; ++v) {
+    for (int u = 0; u < s.width; ++u) {
+      FillRay(s, u, v, &rh.ray);
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(s.scene, &context, &rh);
+      s.depth[v * s.width + u] = DepthOrNoReturn(rh.hit.geomID != RTC_INVALID_GEOMETRY_ID,
+                                                 rh.ray.tfar, s.min_range, s.max_range);
+    }
+  }
+}
+
+// Packets of N = TW x TH rays over pixel tiles; lanes outside the image are masked off.
+template <int TW, int TH, typename RayHitN, typename IntersectN>
+void RenderPackets(const RenderSetup& s, IntersectN intersect) {
+  constexpr int N = TW * TH;
+  RTCIntersectContext context = CoherentContext();
+  alignas(64) RayHitN rh;
+  alignas(64) int valid[N];
+  const float ox = s.frame.origin.x(), oy = s.frame.origin.y(), oz = s.frame.origin.z();
+  for (int v0 = 0; v0 < s.height; v0 += TH) {
+    for (int u0 = 0; u0 < s.width; u0 += TW) {
+      for (int j = 0; j < N; ++j) {
+        const int u = u0 + j % TW, v = v0 + j / TW;
+        const bool inside = u < s.width && v < s.height;
+        valid[j] = inside ? -1 : 0;
+        const Eigen::Vector3f d =
+            inside ? s.frame.Direction(s.rays.x_of_u[u], s.rays.y_of_v[v]) : s.frame.ez;
+        rh.ray.org_x[j] = ox;
+        rh.ray.org_y[j] = oy;
+        rh.ray.org_z[j] = oz;
+        rh.ray.dir_x[j] = d.x();
+        rh.ray.dir_y[j] = d.y();
+        rh.ray.dir_z[j] = d.z();
+        rh.ray.tnear[j] = 0.0f;
+        rh.ray.tfar[j] = s.max_range;
+        rh.ray.time[j] = 0.0f;
+        rh.ray.mask[j] = 0xFFFFFFFFu;
+        rh.ray.id[j] = 0;
+        rh.ray.flags[j] = 0;
+        rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+      }
+      intersect(valid, s.scene, &context, &rh);
+      for (int j = 0; j < N; ++j) {
+        if (!valid[j]) continue;
+        const int u = u0 + j % TW, v = v0 + j / TW;
+        s.depth[v * s.width + u] = DepthOrNoReturn(rh.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID,
+                                                   rh.ray.tfar[j], s.min_range, s.max_range);
+      }
+    }
+  }
+}
+
+// Ray streams of up to 16x16 coherent rays; Embree forms its own packets from them.
+void RenderStream(const RenderSetup& s) {
+  constexpr int kTile = 16;
+  RTCIntersectContext context = CoherentContext();
+  std::vector<RTCRayHit> rh(kTile * kTile);
+  for (int v0 = 0; v0 < s.height; v0 += kTile) {
+    for (int u0 = 0; u0 < s.width; u0 += kTile) {
+      const int tw = std::min(kTile, s.width - u0), th = std::min(kTile, s.height - v0);
+      int m = 0;
+      for (int dv = 0; dv < th; ++dv) {
+        for (int du = 0; du < tw; ++du, ++m) {
+          FillRay(s, u0 + du, v0 + dv, &rh[m].ray);
+          rh[m].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+          rh[m].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        }
+      }
+      rtcIntersect1M(s.scene, &context, rh.data(), static_cast<unsigned>(m), sizeof(RTCRayHit));
+      m = 0;
+      for (int dv = 0; dv < th; ++dv) {
+        for (int du = 0; du < tw; ++du, ++m) {
+          s.depth[(v0 + dv) * s.width + u0 + du] =
+              DepthOrNoReturn(rh[m].hit.geomID != RTC_INVALID_GEOMETRY_ID, rh[m].ray.tfar,
+                              s.min_range, s.max_range);
+        }
+      }
+    }
+  }
+}
+
+// Uniform double in (0, 1] from the top 53 bits of a raw 64-bit draw.
+double UnitOpenClosed(std::uint64_t bits) {
+  return static_cast<double>((bits >> 11) + 1) * 0x1.0p-53;
+}
+
+}  // namespace
+
+const char* ToString(EmbreeRayMode mode) {
+  switch (mode) {
+    case EmbreeRayMode::kSingle: return "single";
+    case EmbreeRayMode::kPacket4: return "packet4";
+    case EmbreeRayMode::kPacket8: return "packet8";
+    case EmbreeRayMode::kPacket16: return "packet16";
+    case EmbreeRayMode::kStream: return "stream";
+  }
+  return "?";
+}
+
+void CheckIntrinsics(const CameraIntrinsics& k) {
+  auto fail = [](const std::string& field, const std::string& reason) {
+    throw std::invalid_argument("CameraIntrinsics." + field + ": " + reason);
+  };
+  if (k.width <= 0) fail("width", "must be > 0, got " + std::to_string(k.width));
+  if (k.height <= 0) fail("height", "must be > 0, got " + std::to_string(k.height));
+  if (!(k.fx > 0.0) || !std::isfinite(k.fx)) fail("fx", "must be finite and > 0, got " + std::to_string(k.fx));
+  if (!(k.fy > 0.0) || !std::isfinite(k.fy)) fail("fy", "must be finite and > 0, got " + std::to_string(k.fy));
+  if (!std::isfinite(k.cx)) fail("cx", "must be finite");
+  if (!std::isfinite(k.cy)) fail("cy", "must be finite");
+  if (!(k.min_range >= 0.0)) fail("min_range", "must be >= 0, got " + std::to_string(k.min_range));
+  if (!(k.max_range > k.min_range) || !std::isfinite(k.max_range)) {
+    fail("max_range", "must be finite and > min_range (" + std::to_string(k.min_range) +
+                          "), got " + std::to_string(k.max_range));
+  }
+}
+
+DepthCamera::DepthCamera(const CameraIntrinsics& intrinsics, const DepthNoise& noise,
+                         EmbreeRayMode mode)
+    : intrinsics_(intrinsics), noise_(noise), mode_(mode) {
+  CheckIntrinsics(intrinsics_);
+  if (!(noise_.k >= 0.0) || !std::isfinite(noise_.k)) {
+    throw std::invalid_argument("DepthNoise.k: must be finite and >= 0, got " +
+                                std::to_string(noise_.k));
+  }
+}
+
+void DepthCamera::Render(const EmbreeScene& scene, const Eigen::Isometry3d& X_WC,
+                         DepthImage* out, std::uint64_t noise_seed) const {
+  if (out == nullptr) throw std::invalid_argument("DepthCamera::Render: out is null");
+  if (!X_WC.matrix().allFinite()) {
+    throw std::invalid_argument("DepthCamera::Render: X_WC is not finite");
+  }
+  const CameraIntrinsics& k = intrinsics_;
+  out->width = k.width;
+  out->height = k.height;
+  out->data.assign(static_cast<std::size_t>(k.width) * k.height, DepthImage::kNoReturn);
+
+  // Ray directions per column/row are rebuilt per call (cheap next to tracing) so that the
+  // camera holds no buffers and can render from several threads.
+  const PixelRays rays(k);
+  const RenderSetup setup{scene.impl().scene,
+                          rays,
+                          CameraRayFrame(X_WC),
+                          k.width,
+                          k.height,
+                          static_cast<float>(k.min_range),
+                          static_cast<float>(k.max_range),
+                          out->data.data()};
+  {
+    FlushDenormalsScope flush;
+    switch (mode_) {
+      case EmbreeRayMode::kSingle: RenderSingle(setup); break;
+      case EmbreeRayMode::kPacket4: RenderPackets<2, 2, RTCRayHit4>(setup, &rtcIntersect4); break;
+      case EmbreeRayMode::kPacket8: RenderPackets<4, 2, RTCRayHit8>(setup, &rtcIntersect8); break;
+      case EmbreeRayMode::kPacket16:
+        RenderPackets<4, 4, RTCRayHit16>(setup, &rtcIntersect16);
+        break;
+      case EmbreeRayMode::kStream: RenderStream(setup); break;
+    }
+  }
+  ThrowIfEmbreeError(EmbreeDevice::Get().impl().device, "rtcIntersect");
+  ApplyDepthNoise(noise_, k, noise_seed, out);
+}
+
+void ApplyDepthNoise(const DepthNoise& noise, const CameraIntrinsics& intrinsics,
+                     std::uint64_t seed, DepthImage* image) {
+  if (noise.k == 0.0) return;
+  std::mt19937_64 rng(seed);
+  const float min_range = static_cast<float>(intrinsics.min_range);
+  const float max_range = static_cast<float>(intrinsics.max_range);
+  const std::size_t n = image->data.size();
+  // Marsaglia's polar form of Box-Muller on raw 64-bit draws: two standard normals per pair of
+  // pixels, no sin/cos. The point in the unit disc is drawn for every pair, valid or not, so a
+  // pixel's noise does not depend on which other pixels had a return.
+  for (std::size_t i = 0; i < n; i += 2) {
+    double x, y, s;
+    do {
+      x = 2.0 * UnitOpenClosed(rng()) - 1.0;
+      y = 2.0 * UnitOpenClosed(rng()) - 1.0;
+      s = x * x + y * y;
+    } while (s >= 1.0 || s == 0.0);
+    const bool any_valid =
+        DepthImage::Valid(image->data[i]) || (i + 1 < n && DepthImage::Valid(image->data[i + 1]));
+    if (!any_valid) continue;
+    const double f = std::sqrt(-2.0 * std::log(s) / s);
+    const double g[2] = {x * f, y * f};
+    for (std::size_t j = 0; j < 2 && i + j < n; ++j) {
+      float& d = image->data[i + j];
+      if (!DepthImage::Valid(d)) continue;
+      const double noisy = d + noise.k * double(d) * d * g[j];
+      d = DepthOrNoReturn(true, static_cast<float>(noisy), min_range, max_range);
+    }
+  }
+}
+
+Eigen::Matrix3d CameraRotationInBody() {
+  Eigen::Matrix3d R_BC;
+  // Columns: the optical axes x, y, z expressed in B.
+  R_BC.col(0) = -Eigen::Vector3d::UnitY();
+  R_BC.col(1) = -Eigen::Vector3d::UnitZ();
+  R_BC.col(2) = Eigen::Vector3d::UnitX();
+  return R_BC;
+}
+
+Eigen::Isometry3d CameraPoseInWorld(const Eigen::Isometry3d& X_WB,
+                                    const navstack::VehicleParams& vehicle) {
+  Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();
+  X_BC.linear() = CameraRotationInBody();
+  X_BC.translation() = vehicle.p_BC;
+  return X_WB * X_BC;
+}
+
+}  // namespace enavi::sim

@@ -1,0 +1,25 @@
+#pragma once
+// Private to enavi_sim: the Embree handles behind EmbreeDevice and EmbreeScene.
+
+#include <embree3/rtcore.h>
+
+#include "workers/sim/embree_scene.h"
+
+namespace enavi::sim {
+
+struct EmbreeDevice::Impl {
+  RTCDevice device = nullptr;
+};
+
+struct EmbreeScene::Impl {
+  RTCScene scene = nullptr;
+  std::size_t triangle_count = 0;
+  Eigen::AlignedBox3f bounds;
+  ~Impl();
+};
+
+/// Throws std::runtime_error naming `call` and Embree's message if the device has a pending
+/// error (recorded by the device's error callback on this thread).
+void ThrowIfEmbreeError(RTCDevice device, const char* call);
+
+}  // namespace enavi::sim

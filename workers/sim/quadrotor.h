@@ -1,0 +1,91 @@
+#pragma once
+// Quadrotor rigid body in a per-episode Bullet world over the shared static collision world.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+
+#include <Eigen/Core>
+
+#include "navstack/common/state.h"
+#include "navstack/control/vehicle.h"
+#include "workers/sim/static_world.h"
+
+namespace enavi::sim {
+
+struct QuadrotorOptions {
+  navstack::VehicleParams vehicle;
+  double dt = 0.001;  ///< s; every Step() advances exactly this much (1 kHz physics)
+  /// Rotors spinning at hover speed and a hover command at t = 0, so the vehicle hangs still
+  /// until the controller takes over; false starts with rotors at rest (free fall).
+  bool start_at_hover = true;
+  /// The vehicle collides as a cylinder (axis = body z) of this half height whose rim lies on
+  /// the sphere of radius vehicle.collision_radius, i.e. radius sqrt(r^2 - h^2): frame and
+  /// propellers, never larger than the radius the planner inflates obstacles by.
+  double collision_half_height = 0.06;
+  /// A contact point with signed separation below this (m) is a collision.
+  double contact_tolerance = 1e-3;
+};
+
+/// First touch of the vehicle with the world. Flight ends there; the episode runner stops.
+struct ContactEvent {
+  double t = 0.0;                                       ///< s, sim time of the touching state
+  Eigen::Vector3d point_W = Eigen::Vector3d::Zero();    ///< on the world's surface
+  Eigen::Vector3d normal_W = Eigen::Vector3d::UnitZ();  ///< surface normal, world -> vehicle
+  double distance = 0.0;  ///< m, signed separation (< 0: penetration)
+};
+
+/// Rotor speed at which the four rotors together carry the vehicle's weight.
+double HoverRotorSpeed(const navstack::VehicleParams& vehicle);
+
+/// Quadrotor flight dynamics (MuJoCo-style split: the static world is the shared model, this is
+/// one episode's mutable data). A btRigidBody with the vehicle's mass and diagonal inertia in
+/// its own btDiscreteDynamicsWorld, which also holds the shared static triangle mesh.
+///
+/// Per Step(): each rotor's speed follows its command through a first-order lag (time constant
+/// up/down) and is clamped to [0, omega_max]; rotor i pushes thrust_coeff * omega_i^2 along
+/// body +z at its position and twists the body by -kSpin[i] * moment_coeff * thrust_i about
+/// body z; linear drag -linear_drag (body axes) * v_B; gravity 9.81 m/s^2. Bullet integrates
+/// one step of exactly dt (no substeps, no interpolation). Bullet's integrator is symplectic
+/// Euler; the body's velocities are read as mid-step values (leapfrog), so positions are
+/// second-order accurate: a free fall matches z0 - g t^2 / 2 up to float rounding.
+/// Deterministic: the same inputs give bit-identical states.
+class QuadrotorSim {
+ public:
+  /// Starts at rest at p0 (body origin in W) with heading yaw0 (rad, about world z).
+  /// @throws std::invalid_argument naming the field for non-positive mass, inertia, dt, time
+  /// constants or omega_max, non-finite p0/yaw0, a collision shape that does not fit, or a
+  /// vehicle that cannot hover when start_at_hover is set.
+  QuadrotorSim(std::shared_ptr<const StaticCollisionWorld> world, const QuadrotorOptions& options,
+               const Eigen::Vector3d& p0, double yaw0);
+  ~QuadrotorSim();
+  QuadrotorSim(QuadrotorSim&&) noexcept;
+  QuadrotorSim& operator=(QuadrotorSim&&) noexcept;
+  QuadrotorSim(const QuadrotorSim&) = delete;
+  QuadrotorSim& operator=(const QuadrotorSim&) = delete;
+
+  /// Commanded rotor speeds (rad/s), held until the next call; clamped to [0, omega_max].
+  /// @throws std::invalid_argument if a command is not finite.
+  void SetCommand(const navstack::RotorCommand& command);
+  /// Advances the simulation by exactly dt.
+  void Step();
+
+  /// Ground truth at time(): position, velocity, acceleration (finite difference of velocity
+  /// over the last step), orientation and body rates.
+  navstack::VehicleState State() const;
+  double time() const;
+  std::int64_t step_count() const;
+  /// Current rotor speeds, rad/s, in the order of VehicleParams::RotorPositions().
+  const std::array<double, 4>& rotor_speeds() const;
+  const navstack::RotorCommand& command() const;
+  /// The first contact with the world, if any; kept once set (flight has ended).
+  std::optional<ContactEvent> contact() const;
+  const QuadrotorOptions& options() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace enavi::sim
