@@ -1,0 +1,183 @@
+#include "navstack/control/geometric_controller.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace enavi::navstack {
+namespace {
+
+Eigen::Matrix3d Hat(const Eigen::Vector3d& w) {
+  Eigen::Matrix3d m;
+  m << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+  return m;
+}
+
+Eigen::Vector3d Vee(const Eigen::Matrix3d& m) { return {m(2, 1), m(0, 2), m(1, 0)}; }
+
+[[noreturn]] void BadOption(const std::string& field, double value, const std::string& range) {
+  std::ostringstream msg;
+  msg << "GeometricControllerOptions." << field << " = " << value << ": must be " << range;
+  throw std::invalid_argument(msg.str());
+}
+
+void RequireNonNegative(const Eigen::Vector3d& v, const std::string& field) {
+  for (int i = 0; i < 3; ++i) {
+    if (!(v[i] >= 0.0) || !std::isfinite(v[i])) {
+      BadOption(field + "[" + std::to_string(i) + "]", v[i], "finite and >= 0");
+    }
+  }
+}
+
+void RequirePositive(const Eigen::Vector3d& v, const std::string& field) {
+  for (int i = 0; i < 3; ++i) {
+    if (!(v[i] > 0.0) || !std::isfinite(v[i])) {
+      BadOption(field + "[" + std::to_string(i) + "]", v[i], "finite and > 0");
+    }
+  }
+}
+
+}  // namespace
+
+GeometricController::GeometricController(const VehicleParams& vehicle,
+                                         const GeometricControllerOptions& options)
+    : vehicle_(vehicle), options_(options) {
+  const auto& o = options_;
+  if (!(o.rate_hz > 0.0) || !std::isfinite(o.rate_hz)) BadOption("rate_hz", o.rate_hz, "> 0");
+  RequirePositive(o.k_position, "k_position");
+  RequirePositive(o.k_velocity, "k_velocity");
+  RequireNonNegative(o.k_integral, "k_integral");
+  RequirePositive(o.k_attitude, "k_attitude");
+  RequirePositive(o.k_rate, "k_rate");
+  if (!(o.integral_limit >= 0.0) || !std::isfinite(o.integral_limit)) {
+    BadOption("integral_limit", o.integral_limit, "finite and >= 0");
+  }
+  if (!(o.integral_error_limit >= 0.0)) {
+    BadOption("integral_error_limit", o.integral_error_limit, ">= 0");
+  }
+  if (!(o.integral_max_speed_error >= 0.0)) {
+    BadOption("integral_max_speed_error", o.integral_max_speed_error, ">= 0");
+  }
+  if (!(o.max_tilt_deg > 0.0 && o.max_tilt_deg < 80.0)) {
+    BadOption("max_tilt_deg", o.max_tilt_deg, "in (0, 80)");
+  }
+  const double weight = vehicle_.mass * vehicle_.Gravity();
+  const double ceiling = 4.0 * vehicle_.MaxThrustPerRotor();
+  if (!(o.max_thrust > weight && o.max_thrust <= ceiling)) {
+    BadOption("max_thrust", o.max_thrust,
+              "in (" + std::to_string(weight) + ", " + std::to_string(ceiling) +
+                  "] N (above the weight, at most 4 x the rotor maximum)");
+  }
+  if (!(o.min_thrust >= 0.0 && o.min_thrust < weight)) {
+    BadOption("min_thrust", o.min_thrust, "in [0, " + std::to_string(weight) + ") N");
+  }
+  if (!(vehicle_.mass > 0.0)) {
+    throw std::invalid_argument("VehicleParams.mass = " + std::to_string(vehicle_.mass) +
+                                ": must be > 0");
+  }
+  RequirePositive(vehicle_.inertia_diag, "(VehicleParams) inertia_diag");
+}
+
+void GeometricController::Reset() { integral_W_.setZero(); }
+
+ControlOutput GeometricController::Compute(const VehicleState& state,
+                                           const TrajectorySample& ref) {
+  if (!state.p_WB.allFinite() || !state.v_WB.allFinite() || !state.q_WB.coeffs().allFinite() ||
+      !state.w_WB_B.allFinite()) {
+    throw std::domain_error("GeometricController::Compute: non-finite vehicle state");
+  }
+  if (!ref.p.allFinite() || !ref.v.allFinite() || !ref.a.allFinite() || !ref.j.allFinite() ||
+      !std::isfinite(ref.yaw) || !std::isfinite(ref.yaw_rate)) {
+    throw std::domain_error("GeometricController::Compute: non-finite trajectory sample");
+  }
+  const auto& o = options_;
+  const double m = vehicle_.mass;
+  const double g = vehicle_.Gravity();
+  const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
+  const Eigen::Matrix3d R_WB = state.q_WB.normalized().toRotationMatrix();
+  const Eigen::Vector3d& w_B = state.w_WB_B;
+  const Eigen::Matrix3d J = vehicle_.inertia_diag.asDiagonal();
+
+  ControlOutput out;
+  out.e_p_W = state.p_WB - ref.p;
+  out.e_v_W = state.v_WB - ref.v;
+
+  // Desired force: PID on translation plus gravity, acceleration and drag feed-forward.
+  Eigen::Vector3d F_W = -o.k_position.cwiseProduct(out.e_p_W) -
+                        o.k_velocity.cwiseProduct(out.e_v_W) + integral_W_ + m * (ref.a + g * e_z);
+  if (o.drag_feedforward) {
+    F_W += R_WB * vehicle_.linear_drag.cwiseProduct(R_WB.transpose() * ref.v);
+  }
+
+  // Limits. Vertical force first (floor keeps rotors spinning, ceiling is the thrust limit),
+  // then the horizontal force gets what the tilt and thrust limits leave.
+  const double tan_tilt = std::tan(o.max_tilt_deg * std::numbers::pi / 180.0);
+  const double cos_tilt = std::cos(o.max_tilt_deg * std::numbers::pi / 180.0);
+  double F_z = std::clamp(F_W.z(), o.min_thrust * cos_tilt, o.max_thrust);
+  if (F_z != F_W.z()) out.thrust_limited = true;
+  Eigen::Vector2d F_xy = F_W.head<2>();
+  double F_xy_max = F_z * tan_tilt;
+  if (F_xy.norm() > F_xy_max) out.tilt_limited = true;
+  const double F_xy_thrust = std::sqrt(std::max(0.0, o.max_thrust * o.max_thrust - F_z * F_z));
+  if (F_xy_thrust < F_xy_max) {
+    F_xy_max = F_xy_thrust;
+    if (F_xy.norm() > F_xy_max) out.thrust_limited = true;
+  }
+  if (F_xy.norm() > F_xy_max) F_xy *= F_xy_max / F_xy.norm();
+  F_W << F_xy, F_z;
+  out.F_W = F_W;
+
+  // Integral with conditional integration (anti-windup): frozen while a limit is active, and
+  // per axis only near steady state (small velocity error), so manoeuvres are left to the PD
+  // part.
+  if (!out.tilt_limited && !out.thrust_limited) {
+    const double dt = 1.0 / o.rate_hz;
+    for (int i = 0; i < 3; ++i) {
+      if (std::abs(out.e_v_W[i]) >= o.integral_max_speed_error) continue;
+      const double e = std::clamp(out.e_p_W[i], -o.integral_error_limit, o.integral_error_limit);
+      integral_W_[i] = std::clamp(integral_W_[i] - o.k_integral[i] * e * dt,
+                                  -o.integral_limit, o.integral_limit);
+    }
+  }
+
+  // Desired attitude: body z along F, heading from yaw (b2 = b3 x b1c, b1 = b2 x b3).
+  const double F_norm = F_W.norm();
+  const Eigen::Vector3d b3 = F_W / F_norm;
+  const Eigen::Vector3d b1c(std::cos(ref.yaw), std::sin(ref.yaw), 0.0);
+  const Eigen::Vector3d y_c(-std::sin(ref.yaw), std::cos(ref.yaw), 0.0);
+  const Eigen::Vector3d b2 = b3.cross(b1c).normalized();  // b3 is never horizontal (tilt < 80)
+  const Eigen::Vector3d b1 = b2.cross(b3);
+  out.R_WD.col(0) = b1;
+  out.R_WD.col(1) = b2;
+  out.R_WD.col(2) = b3;
+
+  // Desired angular velocity from differential flatness: b3_dot = (m/f)(j - (b3.j) b3)
+  // = w_y b1 - w_x b2, and d/dt(b2 . b1c) = 0 gives w_z from the yaw rate.
+  if (o.jerk_feedforward) {
+    const Eigen::Vector3d h = (m / F_norm) * (ref.j - b3.dot(ref.j) * b3);
+    const double w_x = -h.dot(b2);
+    const double w_y = h.dot(b1);
+    const double w_z = (w_x * b3.dot(b1c) + ref.yaw_rate * b2.dot(y_c)) / b1.dot(b1c);
+    out.w_WD_D = Eigen::Vector3d(w_x, w_y, w_z);
+  }
+
+  // Attitude errors (paper eqs. 10, 11) and torque (paper eq. 16 with zero angular
+  // acceleration feed-forward), gains per body axis.
+  const Eigen::Matrix3d R_BD = R_WB.transpose() * out.R_WD;
+  out.e_R = 0.5 * Vee(out.R_WD.transpose() * R_WB - R_WB.transpose() * out.R_WD);
+  const Eigen::Vector3d w_ref_B = R_BD * out.w_WD_D;
+  out.e_w_B = w_B - w_ref_B;
+  out.wrench.torque_B = -o.k_attitude.cwiseProduct(out.e_R) - o.k_rate.cwiseProduct(out.e_w_B) +
+                        w_B.cross(J * w_B) - J * (Hat(w_B) * w_ref_B);
+
+  // Collective thrust: the desired force projected on the current body z.
+  const double f = F_W.dot(R_WB * e_z);
+  out.wrench.thrust = std::clamp(f, o.min_thrust, o.max_thrust);
+  if (out.wrench.thrust != f) out.thrust_limited = true;
+  return out;
+}
+
+}  // namespace enavi::navstack
