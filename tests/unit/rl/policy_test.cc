@@ -2,6 +2,7 @@
 
 #include "navstack/rl/policy.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>

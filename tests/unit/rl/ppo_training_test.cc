@@ -1,6 +1,7 @@
 // A short PPO run on a toy task improves the mean return (fixed seeds); checkpoints resume
 // bit-identically; GAE and the batch builder behave as documented.
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
