@@ -1,0 +1,68 @@
+#include "navstack/rl/frequency_adapter.h"
+
+#include <stdexcept>
+
+namespace enavi::navstack::rl {
+
+FrequencyAdapter::FrequencyAdapter(PolicyFile policy, const ConstraintOptions& constraints,
+                                   const PolicyStateOptions& state)
+    : policy_(std::move(policy)), constraint_options_(constraints), state_options_(state) {
+  if (!policy_.action_grid) {
+    throw std::invalid_argument("frequency adapter: the policy has no action grid");
+  }
+  if (policy_.feature_names != PolicyStateFeatureNames()) {
+    throw std::invalid_argument(
+        "frequency adapter: the policy's observation features do not match policy_state.h");
+  }
+  ws_ = policy_.net.MakeWorkspace();
+  obs_.resize(kPolicyStateDim);
+}
+
+FrequencyDecision FrequencyAdapter::Decide(const ConstraintInputs& constraints,
+                                           const FlightContext& context, ActMode mode, Rng* rng,
+                                           WorkCounts* work, RolloutStep* record) {
+  FrequencyDecision d;
+  // The state sees which constraints the running configuration satisfies.
+  d.current_status = CheckConstraints(constraints, constraints.current, constraint_options_);
+  PolicyStateInputs s;
+  s.eci = context.eci;
+  s.d_eci = context.d_eci;
+  s.constraints_hold = d.current_status.holds;
+  s.current = constraints.current;
+  s.f_sen = constraints.f_sen;
+  s.resolution = context.resolution;
+  s.u_cur = constraints.u_cur;
+  s.u_total = d.current_status.u_total;
+  s.p_WB = context.p_WB;
+  s.v_WB = context.v_WB;
+  s.q_WB = context.q_WB;
+  s.p_goal_W = context.p_goal_W;
+  BuildPolicyState(s, state_options_, obs_);
+
+  const FeasibleSet feasible = ComputeFeasibleSet(grid(), constraints, constraint_options_);
+  d.fallback_used = feasible.fallback_used;
+  d.num_feasible = feasible.num_feasible;
+
+  const bool recording = record != nullptr;
+  const PolicyOutput out =
+      policy_.net.Act(obs_, feasible.mask, mode, rng, &ws_, /*want_log_prob=*/recording,
+                      /*want_value=*/recording);
+  d.action = out.action;
+  d.f = grid().At(out.action);
+  d.log_prob = out.log_prob;
+  d.value = out.value;
+  d.macs = policy_.net.MacsPerDecision(recording) + kMaskMacsPerAction * grid().size();
+  if (work != nullptr) work->Add(WorkUnit::kPolicyFlop, d.macs);
+  if (recording) {
+    record->obs = obs_;
+    record->action = out.action;
+    record->mask = feasible.mask;
+    record->log_prob = out.log_prob;
+    record->value = out.value;
+    record->reward = 0.0;
+    record->done = false;
+  }
+  return d;
+}
+
+}  // namespace enavi::navstack::rl
