@@ -18,7 +18,7 @@ struct PlannerOptions {
   double camera_range = 10.0;       ///< [m], [1, 50]
   double volume_back_margin = 2.0;  ///< [m], [0, 20]
   double volume_height = 6.0;       ///< [m], [1, 50]
-  double min_altitude = 0.5;        ///< [m] lowest z a path may use (above the start if it is lower), [-1e4, 1e4]
+  double min_altitude = 0.5;        ///< [m] lowest z the search may use (a start below climbs first), [-1e4, 1e4]
 
   // Path search (OMPL RRT-Connect + deterministic shortcut).
   double search_margin = 0.1;          ///< [m] search needs clearance >= robot_radius + this, [0, 5]

@@ -256,6 +256,39 @@ TEST_F(PlannerTest, WorkCountsGrowWithGridSize) {
   EXPECT_GT(small.work.Get(WorkUnit::kTrajectorySample), 0);
 }
 
+TEST_F(PlannerTest, ReplanningFromTheReferenceReachesAFarGoal) {
+  // A 30 x 30 m park at 0.2 m; every 0.5 s a new plan over PlanningVolume() from the current
+  // reference, as the navigation loop does. The vehicle must reach the goal 28 m away with
+  // clearance from the full world at all times.
+  testing::AsciiWorld park = testing::ParkWorld(30.0, 4.0, 0.2, 90, 12, 31);
+  const DistanceField full(park.grid);
+  const PlannerOptions o;
+  const Eigen::AlignedBox3d flight = park.grid.Box();
+  std::shared_ptr<const Trajectory> traj;
+  TrajectorySample hover;
+  hover.p = park.start;
+  double t = 0.0, clearance = 1e9;
+  int replans = 0;
+  for (; t < 60.0 && !(traj && (traj->Sample(t).p - park.goal).norm() < 0.2); t += 0.5) {
+    PlanRequest req;
+    req.t_start = t;
+    req.start = traj ? traj->Sample(t) : hover;
+    req.goal_W = park.goal;
+    req.flight_bounds_W = flight;
+    req.grid = std::make_shared<const VoxelGrid>(
+        testing::ExtractBox(park.grid, PlanningVolume(req.start.p, park.goal, flight, o)));
+    req.seed = replans++;
+    const PlanResult r = Plan(req, o);
+    ASSERT_TRUE(r.ok()) << "t = " << t << ": " << ToString(r.status) << ", " << r.message;
+    EXPECT_EQ(r.goal_is_local, (park.goal - req.start.p).norm() > o.camera_range) << "t = " << t;
+    traj = r.trajectory;
+    for (double tt = t; tt < t + 0.5; tt += 0.01) clearance = std::min(clearance, full.Distance(traj->Sample(tt).p));
+  }
+  EXPECT_LT((traj->Sample(t).p - park.goal).norm(), 0.2) << "not at the goal after " << t << " s";
+  EXPECT_LT(t, 28.0 / 1.0) << "slower than 1 m/s on average";
+  EXPECT_GE(clearance, o.robot_radius);
+}
+
 TEST_F(PlannerTest, StartOutsideTheGridIsAStatus) {
   const AsciiWorld w = PillarWorld();
   PlanRequest req = RequestFor(w);

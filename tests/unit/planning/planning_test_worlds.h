@@ -121,4 +121,22 @@ inline AsciiWorld ParkWorld(double size_xy, double height, double resolution, in
   return world;
 }
 
+/// The part of `world` covering `box` (cell-aligned, clipped to the world), as perception would
+/// extract it from the map for PlanningVolume(box).
+inline VoxelGrid ExtractBox(const VoxelGrid& world, const Eigen::AlignedBox3d& box) {
+  const Eigen::Vector3i lo = world.CellOf(box.min()).cwiseMax(0);
+  const Eigen::Vector3i hi = world.CellOf(box.max() - Eigen::Vector3d::Constant(1e-9))
+                                 .cwiseMin(world.dims - Eigen::Vector3i::Ones());
+  VoxelGrid g(world.origin + lo.cast<double>() * world.resolution, world.resolution,
+              (hi - lo + Eigen::Vector3i::Ones()).cwiseMax(0));
+  for (int z = 0; z < g.dims.z(); ++z) {
+    for (int y = 0; y < g.dims.y(); ++y) {
+      for (int x = 0; x < g.dims.x(); ++x) {
+        g.cells[g.Index({x, y, z})] = world.cells[world.Index(lo + Eigen::Vector3i(x, y, z))];
+      }
+    }
+  }
+  return g;
+}
+
 }  // namespace enavi::navstack::testing
