@@ -1,7 +1,6 @@
 #include "navstack/planning/path_search.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
