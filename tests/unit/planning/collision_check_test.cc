@@ -7,7 +7,12 @@
 namespace enavi::navstack {
 namespace {
 
-// A straight 8 m flight along y = 2, z = 1.5 through an empty 10 x 4 x 3 m grid.
+// A straight 8 m flight along y = 2, z = 1.5 through an empty 10 x 4 x 3 m grid; the tests put
+// a 0.4 m box (B) on it or beside it. Plan view, 1 char = 0.5 m:
+//   ....................
+//   .........B..........   <- beside: y in [2.6, 3.0]
+//   ..S=======B=======G.   <- on it:  y in [1.8, 2.2], x in [4.8, 5.2]
+//   ....................
 struct Corridor {
   VoxelGrid grid{Eigen::Vector3d::Zero(), 0.1, {100, 40, 30}, CellState::kFree};
   Trajectory traj{BsplineFromPath(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
