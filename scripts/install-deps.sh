@@ -7,7 +7,7 @@ packages=(
   build-essential cmake pkg-config git ca-certificates
   libbullet-dev libeigen3-dev liboctomap-dev libembree-dev
   cyclonedds-dev cyclonedds-tools
-  libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev
+  libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev liblbfgs-dev
   libboost-program-options-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libsqlite3-dev sqlite3
   libcpp-httplib-dev libpng-dev libcairo2-dev fonts-dejavu-core
