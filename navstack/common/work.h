@@ -18,13 +18,14 @@ enum class WorkUnit : int {
   kPlannerIteration,   ///< one iteration of the sampling-based search
   kOptimizerEval,      ///< one B-spline control point visited in one cost evaluation
   kTrajectorySample,   ///< one trajectory sample checked against the map
+  kCellProbe,          ///< one grid cell read while checking a trajectory sample's clearance
   kPolicyFlop,         ///< one multiply-add in the frequency adapter's network
   kCount
 };
 
 constexpr std::array<std::string_view, static_cast<int>(WorkUnit::kCount)> kWorkUnitNames = {
     "pixel",          "ray_step",           "voxel_update", "grid_cell",  "state_check",
-    "planner_iteration", "optimizer_eval", "trajectory_sample", "policy_flop"};
+    "planner_iteration", "optimizer_eval", "trajectory_sample", "cell_probe", "policy_flop"};
 
 struct WorkCounts {
   std::array<std::int64_t, static_cast<int>(WorkUnit::kCount)> n{};

@@ -73,7 +73,7 @@ CollisionCheckResult CheckTrajectory(const Trajectory& trajectory, double t_from
   }
   if (work != nullptr) {
     work->Add(WorkUnit::kTrajectorySample, samples);
-    work->Add(WorkUnit::kGridCell, cells);
+    work->Add(WorkUnit::kCellProbe, cells);
   }
   return result;
 }

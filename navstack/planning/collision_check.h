@@ -20,7 +20,7 @@ struct CollisionCheckResult {
 /// the trajectory touches an occupied cell of grid (unknown and outside the grid count as free,
 /// as in planning). Samples every resolution / 2 of travel at the trajectory's largest control
 /// speed over the interval, t_to included. Adds one kTrajectorySample per sample and one
-/// kGridCell per cell inspected (cells whose box lies within radius of the sample).
+/// kCellProbe per cell inspected (cells whose box lies within radius of the sample).
 /// @throws std::invalid_argument if radius < 0 or the grid is malformed.
 CollisionCheckResult CheckTrajectory(const Trajectory& trajectory, double t_from, double t_to,
                                      const VoxelGrid& grid, double radius, WorkCounts* work);

@@ -32,7 +32,7 @@ TEST(CollisionCheckTest, FindsABoxPlacedOnTheTrajectory) {
   EXPECT_NEAR(r.p_hit.x(), 4.75 - 0.3, 0.1) << r.p_hit.transpose();
   EXPECT_NEAR((c.traj.Sample(r.t_hit).p - r.p_hit).norm(), 0.0, 1e-9);
   EXPECT_GT(work.Get(WorkUnit::kTrajectorySample), 0);
-  EXPECT_GT(work.Get(WorkUnit::kGridCell), 0);
+  EXPECT_GT(work.Get(WorkUnit::kCellProbe), 0);
 }
 
 TEST(CollisionCheckTest, NoHitOnAClearTrajectory) {
