@@ -63,9 +63,14 @@ struct EciResult {
 /// theta = atan(x/z) and pitch beta = atan(y/z) of the pixel ray, so zones are image rectangles;
 /// M x M zones of equal angle (the field of view / M) with the centre zone centred on the
 /// velocity direction v_C (clamped into the field of view), pixels beyond the outer zones
-/// belonging to the edge zones. Weight of zone (a, k): w = max(0, (d_per - d_k) / d_per) *
+/// belonging to the edge zones; a zone left without pixels by the shift is not observed and is
+/// left out of both sums. Occ(a, k) = 1 when >= min_pixels returns fall in it, or (with
+/// count_occluded) when >= occluded_fraction of the zone's pixels return from nearer layers.
+/// Weight of zone (a, k): w = max(0, (d_per - d_k) / d_per) *
 /// exp(-(theta_a^2 + beta_a^2) / (4 sigma^2)) / (sigma sqrt(2 pi)), theta_a, beta_a in zone
-/// units from the centre zone, d_k the layer's mid-range (d0 / 2, then 2 k d0).
+/// units from the centre zone, d_k the layer's mid-range (d0 / 2, then 2 k d0);
+/// eci = sum(w Occ) / sum(w). The centre falls back to the optical axis when |v_C| <
+/// hover_speed or v_C points away from the view (v_C.z <= 0).
 /// Counts one WorkUnit::kPixel per image pixel.
 /// @param v_C vehicle velocity in the camera frame C (z forward, x right, y down), m/s.
 /// @pre depth matches the intrinsics' size.

@@ -13,12 +13,15 @@ namespace enavi::navstack {
 
 /// How a depth frame is sampled for mapping. Ranges are z-depths (the unit of DepthImage).
 struct PerceptionOptions {
-  /// Pixel stride in u and v: every `stride`-th pixel of every `stride`-th row is used. [1, 64]
+  /// Pixel stride in u and v: every `stride`-th pixel of every `stride`-th row is used. 4 on the
+  /// default camera samples a surface every 4.7 cm at 5 m, still finer than the finest 0.1 m
+  /// map cell, for a quarter of stride 2's rays. [1, 64]
   int stride = 4;
   /// Returns nearer than this are dropped (no information: too close to trust). m, [0, max_range)
   double min_range = 0.2;
   /// Returns farther than this are not inserted as obstacles; their ray (and, if the map is told
-  /// so, the ray of a no-return pixel) only clears space up to this depth. m, (min_range, 100]
+  /// so, the ray of a no-return pixel) only clears space up to this depth. 5 m is close to the
+  /// baseline Ego-Planner's 4.5 m ray length; 10 m costs ~2.6x per frame. m, (min_range, 100]
   double max_range = 5.0;
 
   /// Throws std::invalid_argument naming the field and its allowed range.
