@@ -151,7 +151,7 @@ ENAVI_INLINE void CountAboveThresholds(const Image& im, const int* zone_of_row,
       int last = fe;
       if (fb > fe) {  // the run lies inside one chunk
         const int base = b / L * L;
-        lead = (lane >= b - base) & (lane < e - base) ? V::Load(row_buffer + base) : minus_one;
+        lead = ((lane >= b - base) & (lane < e - base)) ? V::Load(row_buffer + base) : minus_one;
         first = last = 0;
       } else {
         if (b < fb) lead = lane >= b - (fb - L) ? V::Load(row_buffer + fb - L) : minus_one;
