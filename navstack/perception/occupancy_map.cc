@@ -1,0 +1,440 @@
+#include "navstack/perception/occupancy_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include <octomap/OcTree.h>
+
+namespace enavi::navstack {
+namespace {
+
+constexpr int kKeyOffset = 32768;  // OctoMap's tree_max_val for its 16-level trees
+constexpr double kMinResolution = 0.02;
+constexpr double kMaxResolution = 5.0;
+constexpr std::int64_t kMaxGridCells = std::int64_t{1} << 28;
+
+void Require(bool ok, const char* field, double value, const char* range) {
+  if (!ok) {
+    throw std::invalid_argument(std::string("MapOptions.") + field + ": " +
+                                std::to_string(value) + " is out of range " + range);
+  }
+}
+
+void RequireResolution(double res, const char* where) {
+  if (!(res >= kMinResolution && res <= kMaxResolution)) {
+    throw std::invalid_argument(std::string(where) + ": " + std::to_string(res) +
+                                " is out of range [0.02, 5]");
+  }
+}
+
+std::unique_ptr<octomap::OcTree> MakeTree(const MapOptions& o, double resolution) {
+  auto tree = std::make_unique<octomap::OcTree>(resolution);
+  tree->setProbHit(o.prob_hit);
+  tree->setProbMiss(o.prob_miss);
+  tree->setClampingThresMin(o.clamp_min);
+  tree->setClampingThresMax(o.clamp_max);
+  tree->setOccupancyThres(o.occupancy_threshold);
+  return tree;
+}
+
+octomap::OcTreeKey Unpack(std::uint64_t k) {
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(k & 0xFFFF),
+                            static_cast<octomap::key_type>((k >> 16) & 0xFFFF),
+                            static_cast<octomap::key_type>((k >> 32) & 0xFFFF));
+}
+
+// Open-addressing set of packed keys that remembers insertion order, so the keys it hands out
+// come in a deterministic order without sorting. Much cheaper than OctoMap's unordered_set.
+class KeySet {
+ public:
+  explicit KeySet(std::size_t expected) {
+    std::size_t cap = 1024;
+    while (cap < 2 * expected) cap <<= 1;
+    Resize(cap);
+    order_.reserve(expected);
+  }
+  bool Insert(std::uint64_t key) {
+    if (2 * (order_.size() + 1) > slots_.size()) Resize(2 * slots_.size());
+    std::size_t i = Slot(key);
+    while (slots_[i] != kEmpty) {
+      if (slots_[i] == key) return false;
+      i = (i + 1) & mask_;
+    }
+    slots_[i] = key;
+    order_.push_back(key);
+    return true;
+  }
+  bool Contains(std::uint64_t key) const {
+    std::size_t i = Slot(key);
+    while (slots_[i] != kEmpty) {
+      if (slots_[i] == key) return true;
+      i = (i + 1) & mask_;
+    }
+    return false;
+  }
+  const std::vector<std::uint64_t>& keys() const { return order_; }
+  std::vector<std::uint64_t> TakeKeys() { return std::move(order_); }
+
+ private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // packed keys use 48 bits
+  std::size_t Slot(std::uint64_t key) const {
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_) & mask_;
+  }
+  void Resize(std::size_t cap) {
+    slots_.assign(cap, kEmpty);
+    mask_ = cap - 1;
+    shift_ = 64 - static_cast<int>(std::log2(static_cast<double>(cap)));
+    for (std::uint64_t key : order_) {
+      std::size_t i = Slot(key);
+      while (slots_[i] != kEmpty) i = (i + 1) & mask_;
+      slots_[i] = key;
+    }
+  }
+  std::vector<std::uint64_t> slots_;
+  std::vector<std::uint64_t> order_;
+  std::size_t mask_ = 0;
+  int shift_ = 0;
+};
+
+// Voxel traversal (Amanatides & Woo) in OctoMap's key space at one resolution.
+class RayCaster {
+ public:
+  explicit RayCaster(double resolution) : res_(resolution), inv_(1.0 / resolution) {}
+
+  // Key of the voxel containing p, the same formula as OcTree::coordToKey; false if outside the
+  // tree's 16-bit key range.
+  bool KeyOf(const Eigen::Vector3d& p, Eigen::Vector3i* key) const {
+    for (int a = 0; a < 3; ++a) {
+      const double k = std::floor(inv_ * p[a]) + kKeyOffset;
+      if (!(k >= 0.0 && k <= 65535.0)) return false;
+      (*key)[a] = static_cast<int>(k);
+    }
+    return true;
+  }
+  Eigen::Vector3d CenterOf(const Eigen::Vector3i& key) const {
+    return ((key.array() - kKeyOffset).cast<double>() + 0.5) * res_;
+  }
+  static std::uint64_t Pack(const Eigen::Vector3i& k) {
+    return OccupancyMap::PackKey(static_cast<std::uint16_t>(k.x()), static_cast<std::uint16_t>(k.y()),
+                                 static_cast<std::uint16_t>(k.z()));
+  }
+
+  // Visits the voxels from the one containing `from` up to, but excluding, the one containing
+  // `to` (`to_key`). Always ends exactly in to_key's voxel: an axis stops stepping once it has
+  // reached its target index, so rounding cannot overshoot. Returns the voxels visited.
+  template <class Visit>
+  std::int64_t Cast(const Eigen::Vector3d& from, const Eigen::Vector3i& from_key,
+                    const Eigen::Vector3d& to, const Eigen::Vector3i& to_key, Visit&& visit) const {
+    int step[3];
+    int remaining[3];
+    double t_max[3];
+    double t_delta[3];
+    std::int64_t n = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double s0 = inv_ * from[a];
+      const double d = inv_ * to[a] - s0;  // segment length along a, in voxels
+      const int dk = to_key[a] - from_key[a];
+      remaining[a] = std::abs(dk);
+      n += remaining[a];
+      const double inf = std::numeric_limits<double>::infinity();
+      if (dk > 0) {
+        step[a] = 1;
+        t_max[a] = d > 0.0 ? (from_key[a] - kKeyOffset + 1 - s0) / d : 0.0;
+        t_delta[a] = d > 0.0 ? 1.0 / d : 0.0;
+      } else if (dk < 0) {
+        step[a] = -1;
+        t_max[a] = d < 0.0 ? (from_key[a] - kKeyOffset - s0) / d : 0.0;
+        t_delta[a] = d < 0.0 ? -1.0 / d : 0.0;
+      } else {
+        step[a] = 0;
+        t_max[a] = inf;
+        t_delta[a] = inf;
+      }
+    }
+    Eigen::Vector3i k = from_key;
+    for (std::int64_t i = 0; i < n; ++i) {
+      visit(Pack(k));
+      int a = t_max[0] <= t_max[1] ? 0 : 1;
+      if (t_max[2] < t_max[a]) a = 2;
+      k[a] += step[a];
+      if (--remaining[a] == 0) {
+        t_max[a] = std::numeric_limits<double>::infinity();
+      } else {
+        t_max[a] += t_delta[a];
+      }
+    }
+    return n;
+  }
+
+ private:
+  double res_;
+  double inv_;
+};
+
+}  // namespace
+
+void MapOptions::Validate() const {
+  Require(resolution >= kMinResolution && resolution <= kMaxResolution, "resolution", resolution,
+          "[0.02, 5]");
+  Require(occupancy_threshold > 0.0 && occupancy_threshold < 1.0, "occupancy_threshold",
+          occupancy_threshold, "(0, 1)");
+  Require(prob_hit > 0.5 && prob_hit < 1.0, "prob_hit", prob_hit, "(0.5, 1)");
+  Require(prob_miss > 0.0 && prob_miss < 0.5, "prob_miss", prob_miss, "(0, 0.5)");
+  Require(clamp_min > 0.0 && clamp_min < occupancy_threshold, "clamp_min", clamp_min,
+          "(0, occupancy_threshold)");
+  Require(clamp_max > occupancy_threshold && clamp_max < 1.0, "clamp_max", clamp_max,
+          "(occupancy_threshold, 1)");
+  for (int a = 0; a < 3; ++a) {
+    Require(local_half_extent[a] > 0.0 && local_half_extent[a] <= 1000.0, "local_half_extent",
+            local_half_extent[a], "(0, 1000]");
+  }
+  Require(rebuild_frames >= 0 && rebuild_frames <= 1000, "rebuild_frames", rebuild_frames,
+          "[0, 1000]");
+}
+
+OccupancyMap::OccupancyMap(const MapOptions& options) : options_(options) {
+  options_.Validate();
+  tree_ = MakeTree(options_, options_.resolution);
+}
+
+OccupancyMap::~OccupancyMap() = default;
+OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
+OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
+
+MapUpdate OccupancyMap::ComputeUpdate(const DepthFrame& frame, const CameraIntrinsics& intrinsics,
+                                      const PerceptionOptions& perception, WorkCounts* work) const {
+  return ComputeUpdate(std::make_shared<const ScanPoints>(
+                           BackProject(frame, intrinsics, perception, work)),
+                       work);
+}
+
+MapUpdate OccupancyMap::ComputeUpdate(std::shared_ptr<const ScanPoints> scan,
+                                      WorkCounts* work) const {
+  if (scan == nullptr) throw std::logic_error("OccupancyMap::ComputeUpdate: null scan");
+  MapUpdate update;
+  update.resolution = options_.resolution;
+  const RayCaster caster(options_.resolution);
+  const Eigen::Vector3d o = scan->origin_W;
+  Eigen::Vector3i o_key;
+  if (!caster.KeyOf(o, &o_key)) {
+    update.scan = std::move(scan);
+    return update;  // sensor outside the map's key range: nothing to insert
+  }
+
+  const std::size_t rays = scan->hits_W.size() + scan->far_W.size() +
+                           (options_.clear_no_return ? scan->no_return_W.size() : 0);
+  KeySet occupied(scan->hits_W.size());
+  KeySet free(rays * 2);
+  KeySet free_ends(options_.discretize_endpoints ? rays : 0);
+  auto mark_free = [&free](std::uint64_t key) { free.Insert(key); };
+
+  // Fraction of the segment o -> p inside the local update box centred on the sensor.
+  const Eigen::Vector3d& h = options_.local_half_extent;
+  auto inside_fraction = [&](const Eigen::Vector3d& d) {
+    double t = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      if (std::abs(d[a]) > h[a]) t = std::min(t, h[a] / std::abs(d[a]));
+    }
+    return t;
+  };
+
+  // Rays that only clear space: cut returns, far returns, no-returns.
+  auto cast_free = [&](const Eigen::Vector3d& end) {
+    Eigen::Vector3i key;
+    if (!caster.KeyOf(end, &key)) return;
+    Eigen::Vector3d target = end;
+    if (options_.discretize_endpoints) {
+      if (!free_ends.Insert(RayCaster::Pack(key))) return;
+      target = caster.CenterOf(key);
+    }
+    update.ray_steps += caster.Cast(o, o_key, target, key, mark_free);
+  };
+
+  for (const Eigen::Vector3f& p_f : scan->hits_W) {
+    const Eigen::Vector3d p = p_f.cast<double>();
+    const Eigen::Vector3d d = p - o;
+    const double t = inside_fraction(d);
+    if (t < 1.0) {
+      cast_free(o + t * d);
+      continue;
+    }
+    Eigen::Vector3i key;
+    if (!caster.KeyOf(p, &key)) continue;
+    const bool new_end = occupied.Insert(RayCaster::Pack(key));
+    if (options_.discretize_endpoints) {
+      if (!new_end) continue;
+      update.ray_steps += caster.Cast(o, o_key, caster.CenterOf(key), key, mark_free);
+    } else {
+      update.ray_steps += caster.Cast(o, o_key, p, key, mark_free);
+    }
+  }
+  auto cast_all_free = [&](const std::vector<Eigen::Vector3f>& points) {
+    for (const Eigen::Vector3f& p_f : points) {
+      const Eigen::Vector3d d = p_f.cast<double>() - o;
+      cast_free(o + inside_fraction(d) * d);
+    }
+  };
+  cast_all_free(scan->far_W);
+  if (options_.clear_no_return) cast_all_free(scan->no_return_W);
+
+  // Occupied wins over free (OctoMap's computeUpdate rule).
+  update.free_keys.reserve(free.keys().size());
+  for (std::uint64_t key : free.keys()) {
+    if (!occupied.Contains(key)) update.free_keys.push_back(key);
+  }
+  update.occupied_keys = occupied.TakeKeys();
+  update.scan = std::move(scan);
+  if (work != nullptr) work->Add(WorkUnit::kRayStep, update.ray_steps);
+  return update;
+}
+
+ApplyResult OccupancyMap::Apply(const MapUpdate& update, WorkCounts* work) {
+  ApplyResult result;
+  const MapUpdate* use = &update;
+  MapUpdate recomputed;
+  if (update.resolution != options_.resolution) {
+    if (update.scan == nullptr) {
+      throw std::logic_error(
+          "OccupancyMap::Apply: update at another resolution carries no points to recompute from");
+    }
+    recomputed = ComputeUpdate(update.scan, work);
+    use = &recomputed;
+    result.recomputed = true;
+  }
+  for (std::uint64_t key : use->free_keys) tree_->updateNode(Unpack(key), false);
+  for (std::uint64_t key : use->occupied_keys) tree_->updateNode(Unpack(key), true);
+  result.voxel_updates =
+      static_cast<std::int64_t>(use->free_keys.size() + use->occupied_keys.size());
+  if (work != nullptr) work->Add(WorkUnit::kVoxelUpdate, result.voxel_updates);
+
+  if (use->scan != nullptr && options_.rebuild_frames > 0) {
+    history_.push_back(use->scan);
+    while (static_cast<int>(history_.size()) > options_.rebuild_frames) history_.pop_front();
+  }
+  return result;
+}
+
+void OccupancyMap::Insert(const DepthFrame& frame, const CameraIntrinsics& intrinsics,
+                          const PerceptionOptions& perception, WorkCounts* work) {
+  Apply(ComputeUpdate(frame, intrinsics, perception, work), work);
+}
+
+void OccupancyMap::SetResolution(double resolution, WorkCounts* work) {
+  RequireResolution(resolution, "OccupancyMap::SetResolution resolution");
+  if (resolution == options_.resolution) return;
+  options_.resolution = resolution;
+  tree_ = MakeTree(options_, resolution);
+  // Replay the kept frames, oldest first, exactly as they were inserted.
+  std::deque<std::shared_ptr<const ScanPoints>> frames;
+  frames.swap(history_);
+  for (const auto& scan : frames) Apply(ComputeUpdate(scan, work), work);
+}
+
+namespace {
+
+// Key range [lo, hi] of the cells overlapping `box`; false if it misses the key range.
+struct KeyBox {
+  Eigen::Vector3i lo, hi;
+  std::int64_t Cells() const {
+    return std::int64_t{hi.x() - lo.x() + 1} * (hi.y() - lo.y() + 1) * (hi.z() - lo.z() + 1);
+  }
+};
+
+KeyBox KeyBoxOf(const Eigen::AlignedBox3d& box, double resolution, const char* where) {
+  if (box.isEmpty() || !box.min().allFinite() || !box.max().allFinite()) {
+    throw std::invalid_argument(std::string(where) + ": box is empty or not finite");
+  }
+  const double inv = 1.0 / resolution;
+  KeyBox kb;
+  for (int a = 0; a < 3; ++a) {
+    const double lo = std::floor(inv * box.min()[a]);
+    // A max exactly on a cell face does not reach into the next cell.
+    double hi = std::ceil(inv * box.max()[a] - 1e-9) - 1.0;
+    hi = std::max(hi, lo);
+    kb.lo[a] = static_cast<int>(std::clamp(lo + kKeyOffset, 0.0, 65535.0));
+    kb.hi[a] = static_cast<int>(std::clamp(hi + kKeyOffset, 0.0, 65535.0));
+  }
+  if (kb.Cells() > kMaxGridCells) {
+    throw std::invalid_argument(std::string(where) + ": box of " + std::to_string(kb.Cells()) +
+                                " cells exceeds the limit of 2^28 cells");
+  }
+  return kb;
+}
+
+// Calls fill(lo, hi, occupied) for each known octree leaf clipped to the key box.
+template <class Fill>
+void ForEachLeafBlock(const octomap::OcTree& tree, const KeyBox& kb, Fill&& fill) {
+  const octomap::OcTreeKey kmin(kb.lo.x(), kb.lo.y(), kb.lo.z());
+  const octomap::OcTreeKey kmax(kb.hi.x(), kb.hi.y(), kb.hi.z());
+  const int depth = static_cast<int>(tree.getTreeDepth());
+  for (auto it = tree.begin_leafs_bbx(kmin, kmax), end = tree.end_leafs_bbx(); it != end; ++it) {
+    const int size = 1 << (depth - static_cast<int>(it.getDepth()));
+    const octomap::OcTreeKey base = it.getIndexKey();
+    Eigen::Vector3i lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max<int>(base[a], kb.lo[a]);
+      hi[a] = std::min<int>(base[a] + size - 1, kb.hi[a]);
+    }
+    if ((lo.array() > hi.array()).any()) continue;
+    fill(lo, hi, tree.isNodeOccupied(*it));
+  }
+}
+
+}  // namespace
+
+VoxelGrid OccupancyMap::ExtractGrid(const Eigen::AlignedBox3d& box, WorkCounts* work) const {
+  const double res = options_.resolution;
+  const KeyBox kb = KeyBoxOf(box, res, "OccupancyMap::ExtractGrid");
+  const Eigen::Vector3d origin = (kb.lo.array() - kKeyOffset).cast<double>() * res;
+  VoxelGrid grid(origin, res, kb.hi - kb.lo + Eigen::Vector3i::Ones(), CellState::kUnknown);
+  const std::size_t nx = grid.dims.x();
+  const std::size_t nxy = nx * grid.dims.y();
+  ForEachLeafBlock(*tree_, kb, [&](const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, bool occ) {
+    const CellState state = occ ? CellState::kOccupied : CellState::kFree;
+    const Eigen::Vector3i c0 = lo - kb.lo;
+    const Eigen::Vector3i c1 = hi - kb.lo;
+    for (int z = c0.z(); z <= c1.z(); ++z) {
+      for (int y = c0.y(); y <= c1.y(); ++y) {
+        CellState* row = grid.cells.data() + z * nxy + y * nx;
+        std::fill(row + c0.x(), row + c1.x() + 1, state);
+      }
+    }
+  });
+  if (work != nullptr) work->Add(WorkUnit::kGridCell, kb.Cells());
+  return grid;
+}
+
+OccupancyStats OccupancyMap::Stats(const Eigen::AlignedBox3d& box, WorkCounts* work) const {
+  const KeyBox kb = KeyBoxOf(box, options_.resolution, "OccupancyMap::Stats");
+  OccupancyStats stats;
+  stats.total = kb.Cells();
+  ForEachLeafBlock(*tree_, kb, [&](const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, bool occ) {
+    const std::int64_t n =
+        std::int64_t{hi.x() - lo.x() + 1} * (hi.y() - lo.y() + 1) * (hi.z() - lo.z() + 1);
+    (occ ? stats.occupied : stats.free) += n;
+  });
+  stats.unknown = stats.total - stats.occupied - stats.free;
+  if (work != nullptr) work->Add(WorkUnit::kGridCell, stats.total);
+  return stats;
+}
+
+CellState OccupancyMap::Query(const Eigen::Vector3d& p_W) const {
+  Eigen::Vector3i k;
+  if (!RayCaster(options_.resolution).KeyOf(p_W, &k)) return CellState::kUnknown;
+  const octomap::OcTreeNode* node = tree_->search(octomap::OcTreeKey(k.x(), k.y(), k.z()));
+  if (node == nullptr) return CellState::kUnknown;
+  return tree_->isNodeOccupied(node) ? CellState::kOccupied : CellState::kFree;
+}
+
+void OccupancyMap::Clear() {
+  tree_->clear();
+  history_.clear();
+}
+
+std::size_t OccupancyMap::num_leaves() const { return tree_->getNumLeafNodes(); }
+
+}  // namespace enavi::navstack

@@ -1,0 +1,144 @@
+#pragma once
+// Probabilistic occupancy map of the perception task: an OctoMap octree fed by depth frames,
+// updated in two phases so the simulated scheduler can apply a job's output at its finish time
+// (DESIGN.md section 4), and rebuilt when the resolution adapter changes `res` (paper Sec. V.A).
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "navstack/common/camera.h"
+#include "navstack/common/work.h"
+#include "navstack/map/voxel_grid.h"
+#include "navstack/perception/points.h"
+
+namespace octomap {
+class OcTree;
+}
+
+namespace enavi::navstack {
+
+/// Map parameters. Probabilities follow OctoMap's defaults (one hit marks a cell occupied, one
+/// miss marks unknown space free, three misses clear a once-hit cell).
+struct MapOptions {
+  double resolution = 0.1;           ///< m, leaf edge length. [0.02, 5]
+  double prob_hit = 0.7;             ///< P(occ | return in cell). (0.5, 1)
+  double prob_miss = 0.4;            ///< P(occ | ray through cell). (0, 0.5)
+  double clamp_min = 0.12;           ///< lower clamping probability. (0, occupancy_threshold)
+  double clamp_max = 0.97;           ///< upper clamping probability. (occupancy_threshold, 1)
+  double occupancy_threshold = 0.5;  ///< cells at or above are occupied, below free. (0, 1)
+  /// Half-size of the box around the sensor that one frame may update (Ego-Planner's local
+  /// update range): rays are cut at its faces, returns outside it only clear space. m, each > 0
+  Eigen::Vector3d local_half_extent{8.0, 8.0, 4.0};
+  /// Frames kept (as points) to rebuild the map when the resolution changes. [0, 1000]
+  int rebuild_frames = 10;
+  /// No-return pixels clear free space up to PerceptionOptions::max_range. Right for the farm's
+  /// simulated camera, whose no-return means "nothing within range" (Fast-/Ego-Planner do the
+  /// same); turn off for a real sensor whose dropouts can hide surfaces.
+  bool clear_no_return = true;
+  /// Cast one ray per distinct end voxel (to its centre) instead of one per point, as OctoMap's
+  /// discretised insertion does: far returns share voxels, so this cuts ray steps several-fold.
+  bool discretize_endpoints = true;
+
+  /// Throws std::invalid_argument naming the field and its allowed range.
+  void Validate() const;
+};
+
+/// The expensive half of a map update, computed without touching the map: deduplicated octree
+/// keys to mark free and occupied (a key in both is occupied, as in OctoMap's computeUpdate).
+struct MapUpdate {
+  double resolution = 0.0;                   ///< map resolution the keys were computed at
+  std::shared_ptr<const ScanPoints> scan;    ///< the frame's points (kept for rebuilds)
+  std::vector<std::uint64_t> free_keys;      ///< packed octree keys (see OccupancyMap::PackKey)
+  std::vector<std::uint64_t> occupied_keys;  ///< packed octree keys
+  std::int64_t ray_steps = 0;                ///< voxels traversed while casting
+};
+
+/// What Apply did.
+struct ApplyResult {
+  /// The update was computed at another resolution than the map's (the map was rebuilt in
+  /// between); its keys were recomputed from its points at the current resolution.
+  bool recomputed = false;
+  std::int64_t voxel_updates = 0;
+};
+
+/// Cell counts over a box at the map resolution: rho_c = occupied, rho*_c = total (Sec. V.A).
+struct OccupancyStats {
+  std::int64_t occupied = 0;
+  std::int64_t free = 0;
+  std::int64_t unknown = 0;
+  std::int64_t total = 0;
+};
+
+/// OctoMap occupancy octree with two-phase updates, rebuild-on-resolution-change and dense
+/// extraction. Not thread-safe for writes; const members may run concurrently with each other.
+class OccupancyMap {
+ public:
+  explicit OccupancyMap(const MapOptions& options = {});
+  ~OccupancyMap();
+  OccupancyMap(OccupancyMap&&) noexcept;
+  OccupancyMap& operator=(OccupancyMap&&) noexcept;
+  OccupancyMap(const OccupancyMap&) = delete;
+  OccupancyMap& operator=(const OccupancyMap&) = delete;
+
+  /// Phase 1: back-projects `frame` and casts its rays at the current resolution. Does not
+  /// modify the map. Counts kPixel (sampled pixels) and kRayStep (voxels traversed, with
+  /// repeats: the cost of casting, before deduplication).
+  MapUpdate ComputeUpdate(const DepthFrame& frame, const CameraIntrinsics& intrinsics,
+                          const PerceptionOptions& perception, WorkCounts* work = nullptr) const;
+  /// Phase 1 from points already back-projected.
+  MapUpdate ComputeUpdate(std::shared_ptr<const ScanPoints> scan, WorkCounts* work = nullptr) const;
+
+  /// Phase 2: integrates `update` (free first, then occupied, like OctoMap) and keeps its points
+  /// for rebuilds. An update computed at another resolution is recomputed from its points first
+  /// (counted as phase 1 work): a frame is never silently lost. Counts kVoxelUpdate.
+  ApplyResult Apply(const MapUpdate& update, WorkCounts* work = nullptr);
+
+  /// Both phases at once.
+  void Insert(const DepthFrame& frame, const CameraIntrinsics& intrinsics,
+              const PerceptionOptions& perception, WorkCounts* work = nullptr);
+
+  /// Rebuilds the map at `resolution` from the last MapOptions::rebuild_frames frames (older
+  /// content is dropped, as the paper's resolution switch does). No-op if unchanged. Counts the
+  /// rebuild's kRayStep and kVoxelUpdate. Throws std::invalid_argument if out of range.
+  void SetResolution(double resolution, WorkCounts* work = nullptr);
+
+  /// Dense snapshot of the cells overlapping `box`, aligned to the octree keys (the grid origin is
+  /// a cell corner of the map). Filled from the octree leaves in the box (pruned leaves fill
+  /// whole blocks). Counts kGridCell (cells in the grid). Throws std::invalid_argument for an
+  /// empty box or one of more than 2^28 cells.
+  VoxelGrid ExtractGrid(const Eigen::AlignedBox3d& box, WorkCounts* work = nullptr) const;
+
+  /// Occupancy counts over the cells overlapping `box` (same cells as ExtractGrid). Counts
+  /// kGridCell (cells in the box).
+  OccupancyStats Stats(const Eigen::AlignedBox3d& box, WorkCounts* work = nullptr) const;
+
+  /// State of the cell containing `p_W`; outside the map's key range is unknown.
+  CellState Query(const Eigen::Vector3d& p_W) const;
+
+  /// Drops all content and the rebuild history.
+  void Clear();
+
+  double resolution() const { return options_.resolution; }
+  const MapOptions& options() const { return options_; }
+  /// Frames currently kept for a rebuild.
+  int history_size() const { return static_cast<int>(history_.size()); }
+  /// Octree leaves (memory footprint).
+  std::size_t num_leaves() const;
+
+  /// Packs an octree key (16 bits per axis) into the integer stored in a MapUpdate.
+  static std::uint64_t PackKey(std::uint16_t kx, std::uint16_t ky, std::uint16_t kz) {
+    return std::uint64_t{kx} | (std::uint64_t{ky} << 16) | (std::uint64_t{kz} << 32);
+  }
+
+ private:
+  MapOptions options_;
+  std::unique_ptr<octomap::OcTree> tree_;
+  std::deque<std::shared_ptr<const ScanPoints>> history_;
+};
+
+}  // namespace enavi::navstack
