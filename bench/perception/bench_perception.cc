@@ -77,7 +77,7 @@ void BM_BackProject(benchmark::State& state) {
   p.stride = static_cast<int>(state.range(0));
   WorkCounts w;
   for (auto _ : state) benchmark::DoNotOptimize(BackProject(Frames()[0], k, p, &w));
-  ReportPerUnit(state, w, WorkUnit::kPixel, "pixels");
+  ReportPerUnit(state, w, WorkUnit::kBackProjection, "pixels");
 }
 BENCHMARK(BM_BackProject)->Arg(4)->Unit(benchmark::kMicrosecond);
 
@@ -106,7 +106,7 @@ void BM_MapUpdate(benchmark::State& state) {
     map.Apply(map.ComputeUpdate(Frames()[i], k, p, &w), &w);
     i = (i + 1) % Frames().size();
   }
-  ReportPerUnit(state, w, WorkUnit::kPixel, "pixels");
+  ReportPerUnit(state, w, WorkUnit::kBackProjection, "pixels");
   ReportPerUnit(state, w, WorkUnit::kRayStep, "ray_steps");
   ReportPerUnit(state, w, WorkUnit::kVoxelUpdate, "voxel_updates");
 }
@@ -208,7 +208,7 @@ void BM_Difference(benchmark::State& state) {
     r = DetectDifference(Frames()[i - 1], Frames()[i], k, {}, &w);
     i = i % (Frames().size() - 1) + 1;
   }
-  ReportPerUnit(state, w, WorkUnit::kPixel, "pixels");
+  ReportPerUnit(state, w, WorkUnit::kWarpPixel, "pixels");
   state.counters["changed"] = r.changed_fraction;
 }
 BENCHMARK(BM_Difference)->Unit(benchmark::kMicrosecond);

@@ -10,7 +10,9 @@
 namespace enavi::navstack {
 
 enum class WorkUnit : int {
-  kPixel = 0,          ///< depth pixel read and classified (eci, difference, point projection)
+  kPixel = 0,          ///< depth pixel binned by the eci (read, range, zone and layer)
+  kBackProjection,     ///< depth pixel back-projected into a world point (perception)
+  kWarpPixel,          ///< depth pixel warped into another frame and compared (difference)
   kRayStep,            ///< one voxel traversed by a ray during map insertion
   kVoxelUpdate,        ///< one octree leaf updated (log-odds, with tree descent)
   kGridCell,           ///< one cell of a dense grid extracted from the map or distance-transformed
@@ -24,7 +26,7 @@ enum class WorkUnit : int {
 };
 
 constexpr std::array<std::string_view, static_cast<int>(WorkUnit::kCount)> kWorkUnitNames = {
-    "pixel",          "ray_step",           "voxel_update", "grid_cell",  "state_check",
+    "pixel",          "back_projection", "warp_pixel", "ray_step",           "voxel_update", "grid_cell",  "state_check",
     "planner_iteration", "optimizer_eval", "trajectory_sample", "cell_probe", "policy_flop"};
 
 struct WorkCounts {

@@ -15,8 +15,8 @@
 // scores 0.40: eci would fall as an obstacle comes closer. Counting a zone of layer k occupied
 // when most of its pixels already returned from nearer layers (the vehicle cannot pass through,
 // the camera cannot see into it) restores the paper's intent: the same wall scores 1.0 inside
-// d_min, 0.68 at 1 m, 0.54 at 1.5 m, 0.40 at 2 m, 0.32 at 3 m and 0 beyond d_per / 3 (Lay = 1,
-// only the empty layer 0 fits).
+// d_min, 0.68 at 1 m, 0.54 at 1.5 m, 0.40 at 2 m, 0.32 at 3 m, lower beyond, and 0 from
+// d_per / 2 on (the mid-depth 2 d0 of the obstacle's layer reaches d_per: weight 0).
 
 namespace enavi::navstack {
 namespace {
@@ -299,7 +299,10 @@ EciResult ComputeEciWith(const Kernels& kernels, const DepthImage& depth,
   result.status = EciResult::Status::kOk;
   const double nearest = std::sqrt(static_cast<double>(nearest2));
   const double d0 = std::clamp(nearest, options.d_min, d_per);
-  const int lay = static_cast<int>(std::floor((d_per - d0) / (2.0 * d0))) + 1;
+  // Lay = floor((d_per - d0) / (2 d0)) + 1 (paper Eq. 2), but at least 2: layer 0 = [0, d0) is
+  // empty by construction, so the layer holding the nearest obstacle must exist, or every
+  // obstacle beyond d_per / 3 would score 0 (our reading, DESIGN.md section 5).
+  const int lay = std::max(2, static_cast<int>(std::floor((d_per - d0) / (2.0 * d0))) + 1);
   result.d0 = d0;
   result.layers = lay;
 

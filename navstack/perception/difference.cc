@@ -110,7 +110,7 @@ DifferenceResult DetectDifference(const DepthFrame& previous, const DepthFrame& 
   }
   result.changed_fraction = static_cast<double>(result.changed) / static_cast<double>(result.sampled);
   result.trigger = result.changed_fraction >= options.trigger_fraction;
-  if (work != nullptr) work->Add(WorkUnit::kPixel, 2 * result.sampled);
+  if (work != nullptr) work->Add(WorkUnit::kWarpPixel, 2 * result.sampled);
   return result;
 }
 

@@ -35,7 +35,7 @@ struct DifferenceResult {
 /// nearer than relevant_depth that is markedly closer than the nearest prediction in its 3x3
 /// neighbourhood of samples, or where the previous frame predicted no return there (a new
 /// surface). Pixels with no prediction (entering the view, disocclusions) do not count; surfaces
-/// moving away do not count. Counts kPixel for the sampled pixels of both frames.
+/// moving away do not count. Counts kWarpPixel for the sampled pixels of both frames.
 /// @pre both images match the intrinsics.
 DifferenceResult DetectDifference(const DepthFrame& previous, const DepthFrame& current,
                                   const CameraIntrinsics& intrinsics,

@@ -86,7 +86,7 @@ class OccupancyMap {
   OccupancyMap& operator=(const OccupancyMap&) = delete;
 
   /// Phase 1: back-projects `frame` and casts its rays at the current resolution. Does not
-  /// modify the map. Counts kPixel (sampled pixels) and kRayStep (voxels traversed, with
+  /// modify the map. Counts kBackProjection (sampled pixels) and kRayStep (voxels traversed, with
   /// repeats: the cost of casting, before deduplication).
   MapUpdate ComputeUpdate(const DepthFrame& frame, const CameraIntrinsics& intrinsics,
                           const PerceptionOptions& perception, WorkCounts* work = nullptr) const;

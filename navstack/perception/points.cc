@@ -72,7 +72,7 @@ ScanPoints BackProject(const DepthFrame& frame, const CameraIntrinsics& intrinsi
       out->push_back((p_WC + R_WC * p_C).cast<float>());
     }
   }
-  if (work != nullptr) work->Add(WorkUnit::kPixel, static_cast<std::int64_t>(cols) * rows);
+  if (work != nullptr) work->Add(WorkUnit::kBackProjection, static_cast<std::int64_t>(cols) * rows);
   return scan;
 }
 

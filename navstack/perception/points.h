@@ -41,7 +41,7 @@ struct ScanPoints {
 };
 
 /// Back-projects the pixels of `frame` on the stride grid (u, v = 0, stride, 2 stride, ...) with
-/// the pinhole model and `frame.X_WC`. Counts one WorkUnit::kPixel per sampled pixel.
+/// the pinhole model and `frame.X_WC`. Counts one WorkUnit::kBackProjection per sampled pixel.
 /// @pre frame.image matches intrinsics.width x intrinsics.height.
 ScanPoints BackProject(const DepthFrame& frame, const CameraIntrinsics& intrinsics,
                        const PerceptionOptions& options = {}, WorkCounts* work = nullptr);

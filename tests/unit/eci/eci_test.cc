@@ -81,15 +81,18 @@ TEST(EciTest, WallScoreMatchesTheWeightsByHand) {
 
 TEST(EciTest, WallScoreFallsWithDistance) {
   double previous = 1.1;
-  for (double d : {0.4, 1.0, 2.0, 3.0}) {
+  for (double d : {0.4, 1.0, 2.0, 3.0, 4.0}) {
     const double eci = Eci(WallAt(d)).eci;
     EXPECT_LT(eci, previous) << "wall at " << d << " m must score below the nearer one";
     previous = eci;
   }
-  // Beyond d_per / 3 only layer 0 = [0, d0) fits (Lay = 1), and it is empty by construction.
+  // Beyond d_per / 3 the formula gives Lay = 1, only the empty layer 0 = [0, d0); the layer
+  // holding the wall is kept (Lay >= 2), so a far wall still scores, lower than a near one.
   const EciResult far = Eci(WallAt(4.0));
-  EXPECT_EQ(far.layers, 1);
-  EXPECT_EQ(far.eci, 0.0);
+  EXPECT_EQ(far.layers, 2);
+  EXPECT_GT(far.eci, 0.05);
+  // The wall's layer [d0, 3 d0) has its mid-depth 2 d0 beyond d_per from d0 = 5 m: weight 0.
+  EXPECT_EQ(Eci(WallAt(6.0)).eci, 0.0);
 }
 
 TEST(EciTest, OffAxisObstacleScoresLower) {
@@ -146,7 +149,7 @@ TEST(EciTest, LayerCountFollowsFormula) {
     const EciResult r = Eci(WallAt(d));
     // The nearest return is the pixel next to the principal point, a hair beyond d.
     EXPECT_NEAR(r.d0, d, 1e-4 * d);
-    EXPECT_EQ(r.layers, static_cast<int>(std::floor((10.0 - r.d0) / (2.0 * r.d0))) + 1) << d;
+    EXPECT_EQ(r.layers, std::max(2, static_cast<int>(std::floor((10.0 - r.d0) / (2.0 * r.d0))) + 1)) << d;
   }
   EXPECT_EQ(Eci(WallAt(0.3)).layers, 10) << "d0 clamped to d_min = 0.5: floor(9.5 / 1) + 1";
   EciOptions o;

@@ -39,7 +39,7 @@ TEST(DifferenceTest, StaticSceneUnderEgoMotionDoesNotTrigger) {
   EXPECT_LT(r.changed_fraction, 0.001);
   EXPECT_GT(r.compared, r.sampled * 8 / 10) << "most of the view has a prediction";
   EXPECT_EQ(r.sampled, 160 * 120);
-  EXPECT_EQ(work.Get(WorkUnit::kPixel), 2 * 160 * 120);
+  EXPECT_EQ(work.Get(WorkUnit::kWarpPixel), 2 * 160 * 120);
 }
 
 TEST(DifferenceTest, IdenticalFramesDoNotTrigger) {

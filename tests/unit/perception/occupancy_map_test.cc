@@ -242,7 +242,7 @@ TEST(OccupancyMapTest, WorkCountsScaleWithStride) {
   p4.stride = 4;
   map.Apply(map.ComputeUpdate(f, kCam, p2, &fine), &fine);
   map.Apply(map.ComputeUpdate(f, kCam, p4, &coarse), &coarse);
-  EXPECT_EQ(fine.Get(WorkUnit::kPixel), 4 * coarse.Get(WorkUnit::kPixel));
+  EXPECT_EQ(fine.Get(WorkUnit::kBackProjection), 4 * coarse.Get(WorkUnit::kBackProjection));
   const double ratio = static_cast<double>(fine.Get(WorkUnit::kRayStep)) /
                        static_cast<double>(coarse.Get(WorkUnit::kRayStep));
   EXPECT_NEAR(ratio, 4.0, 0.3) << "four times the rays, same lengths";

@@ -24,7 +24,7 @@ TEST(BackProjectTest, WallPointsLieOnTheWallInWorld) {
   const Eigen::Isometry3d X_WC = CameraPose({0, 0, 1});
   WorkCounts work;
   const ScanPoints scan = BackProject(RenderFrame(WallAt(3.05), kCam, X_WC), kCam, {}, &work);
-  EXPECT_EQ(work.Get(WorkUnit::kPixel), 160 * 120) << "stride 4 on 640 x 480";
+  EXPECT_EQ(work.Get(WorkUnit::kBackProjection), 160 * 120) << "stride 4 on 640 x 480";
   EXPECT_TRUE(scan.origin_W.isApprox(Eigen::Vector3d(0, 0, 1)));
   ASSERT_GT(scan.hits_W.size(), 1000u);
   for (const Eigen::Vector3f& p : scan.hits_W) {
@@ -74,7 +74,7 @@ TEST(BackProjectTest, StrideSetsTheSampleCount) {
     o.stride = stride;
     WorkCounts work;
     BackProject(frame, kCam, o, &work);
-    EXPECT_EQ(work.Get(WorkUnit::kPixel), ((640 + stride - 1) / stride) * ((480 + stride - 1) / stride));
+    EXPECT_EQ(work.Get(WorkUnit::kBackProjection), ((640 + stride - 1) / stride) * ((480 + stride - 1) / stride));
   }
 }
 
