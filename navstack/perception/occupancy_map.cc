@@ -326,12 +326,17 @@ void OccupancyMap::Insert(const DepthFrame& frame, const CameraIntrinsics& intri
 void OccupancyMap::SetResolution(double resolution, WorkCounts* work) {
   RequireResolution(resolution, "OccupancyMap::SetResolution resolution");
   if (resolution == options_.resolution) return;
-  options_.resolution = resolution;
-  tree_ = MakeTree(options_, resolution);
+  *this = std::move(*Rebuilt(resolution, work));
+}
+
+std::shared_ptr<OccupancyMap> OccupancyMap::Rebuilt(double resolution, WorkCounts* work) const {
+  RequireResolution(resolution, "OccupancyMap::Rebuilt resolution");
+  MapOptions options = options_;
+  options.resolution = resolution;
+  auto map = std::make_shared<OccupancyMap>(options);
   // Replay the kept frames, oldest first, exactly as they were inserted.
-  std::deque<std::shared_ptr<const ScanPoints>> frames;
-  frames.swap(history_);
-  for (const auto& scan : frames) Apply(ComputeUpdate(scan, work), work);
+  for (const auto& scan : history_) map->Apply(map->ComputeUpdate(scan, work), work);
+  return map;
 }
 
 namespace {

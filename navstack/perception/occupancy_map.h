@@ -106,6 +106,9 @@ class OccupancyMap {
   /// content is dropped, as the paper's resolution switch does). No-op if unchanged. Counts the
   /// rebuild's kRayStep and kVoxelUpdate. Throws std::invalid_argument if out of range.
   void SetResolution(double resolution, WorkCounts* work = nullptr);
+  /// The same rebuild into a new map, leaving this one untouched: the perception job builds it
+  /// when it starts and swaps it in when it finishes.
+  std::shared_ptr<OccupancyMap> Rebuilt(double resolution, WorkCounts* work = nullptr) const;
 
   /// Dense snapshot of the cells overlapping `box`, aligned to the octree keys (the grid origin is
   /// a cell corner of the map). Filled from the octree leaves in the box (pruned leaves fill

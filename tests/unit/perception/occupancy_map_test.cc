@@ -148,6 +148,22 @@ TEST(OccupancyMapTest, SetResolutionRebuildKeepsTheWall) {
   EXPECT_THROW(map.SetResolution(0.0), std::invalid_argument);
 }
 
+TEST(OccupancyMapTest, RebuiltLeavesTheOriginalUntouched) {
+  OccupancyMap map;
+  for (int i = 0; i < 3; ++i) map.Insert(WallFrame({0.1 * i, 0, 0}), kCam, {});
+  const std::size_t leaves = map.num_leaves();
+  WorkCounts work;
+  const std::shared_ptr<OccupancyMap> coarse = map.Rebuilt(0.2, &work);
+  EXPECT_DOUBLE_EQ(map.resolution(), 0.1);
+  EXPECT_EQ(map.num_leaves(), leaves);
+  EXPECT_DOUBLE_EQ(coarse->resolution(), 0.2);
+  EXPECT_EQ(coarse->history_size(), 3);
+  EXPECT_GT(work.Get(WorkUnit::kRayStep), 0);
+  EXPECT_EQ(Name(coarse->Query({3.1, 0.0, 0.0})), "occupied");
+  map.SetResolution(0.2);
+  EXPECT_EQ(map.num_leaves(), coarse->num_leaves()) << "SetResolution is the same rebuild in place";
+}
+
 TEST(OccupancyMapTest, RebuildUsesOnlyTheKeptFrames) {
   MapOptions o;
   o.rebuild_frames = 1;
