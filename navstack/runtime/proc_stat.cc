@@ -63,8 +63,11 @@ std::optional<ThreadCpuTimes> ReadThreadCpu(pid_t pid, pid_t tid) {
   }
   // schedstat: "sum_exec_runtime_ns run_delay_ns timeslices" (CONFIG_SCHED_INFO).
   std::ifstream schedstat(dir + "/schedstat");
-  long long exec_ns = -1;
-  if (schedstat >> exec_ns) t.sum_exec_ns = exec_ns;
+  long long exec_ns = -1, delay_ns = -1;
+  if (schedstat >> exec_ns >> delay_ns) {
+    t.sum_exec_ns = exec_ns;
+    t.run_delay_ns = delay_ns;
+  }
   return t;
 }
 
@@ -95,6 +98,13 @@ double CpuPercent(const ThreadCpuTimes& a, const ThreadCpuTimes& b) {
   return 100.0 * cpu / wall;
 }
 
+double WaitPercent(const ThreadCpuTimes& a, const ThreadCpuTimes& b) {
+  const double wall = static_cast<double>(b.sampled_ns - a.sampled_ns) * 1e-9;
+  if (a.run_delay_ns < 0 || b.run_delay_ns < 0) return -1.0;
+  if (wall <= 0.0) return 0.0;
+  return 100.0 * static_cast<double>(b.run_delay_ns - a.run_delay_ns) * 1e-9 / wall;
+}
+
 ThreadCpuMonitor::ThreadCpuMonitor(pid_t pid) : pid_(pid) {}
 
 std::vector<ThreadUtilisation> ThreadCpuMonitor::Sample() {
@@ -112,7 +122,7 @@ std::vector<ThreadUtilisation> ThreadCpuMonitor::Sample() {
     // A tid reused by a new thread shows less CPU time than before: baseline it afresh.
     if (cur.CpuSeconds() < prev->CpuSeconds()) continue;
     const double pct = CpuPercent(*prev, cur);
-    out.push_back(ThreadUtilisation{cur.tid, cur.comm, pct});
+    out.push_back(ThreadUtilisation{cur.tid, cur.comm, pct, WaitPercent(*prev, cur)});
     total_percent_ += pct;
   }
   previous_ = std::move(current);

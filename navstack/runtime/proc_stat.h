@@ -21,6 +21,9 @@ struct ThreadCpuTimes {
   /// Nanoseconds on CPU from /proc/.../schedstat (sum_exec_runtime); -1 when the kernel has no
   /// schedstat file, then the tick counts (1 / sysconf(_SC_CLK_TCK) s) are all there is.
   std::int64_t sum_exec_ns = -1;
+  /// Nanoseconds spent runnable but waiting for a CPU (schedstat run_delay); -1 if unknown.
+  /// A starved thread (busy host) shows here, not in its CPU time.
+  std::int64_t run_delay_ns = -1;
   std::int64_t sampled_ns = 0;  ///< CLOCK_MONOTONIC time of the sample
 
   /// CPU time in seconds at the best resolution available.
@@ -39,11 +42,17 @@ std::vector<pid_t> ListThreads(pid_t pid);
 /// samples have them, else clock ticks. 0 when no time elapsed.
 double CpuPercent(const ThreadCpuTimes& a, const ThreadCpuTimes& b);
 
+/// Percent of the interval the thread was runnable but not running (schedstat run_delay);
+/// -1 when a sample lacks schedstat. CPU percent + wait percent ~ 100 for a thread that never
+/// sleeps, whatever the host load.
+double WaitPercent(const ThreadCpuTimes& a, const ThreadCpuTimes& b);
+
 /// Utilisation of one thread over an interval.
 struct ThreadUtilisation {
   pid_t tid = 0;
   std::string comm;
-  double percent = 0.0;  ///< of one core
+  double percent = 0.0;       ///< of one core
+  double wait_percent = -1.0; ///< runnable but waiting for a CPU, -1 if unknown
 };
 
 /// Samples all threads of a process and reports each thread's utilisation since the previous

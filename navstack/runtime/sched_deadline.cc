@@ -2,6 +2,7 @@
 
 #include <sched.h>
 #include <sys/syscall.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -156,6 +157,12 @@ DeadlineResult EnterDeadline(const DeadlineParams& params, const DeadlineOptions
 // EdfReadyQueue
 
 namespace {
+std::int64_t ThreadCpuNs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
 // Heap comparator: true when a is less urgent than b (std heaps keep the "largest" on top).
 bool LessUrgent(const ReadyJob& a, const ReadyJob& b) {
   if (a.deadline != b.deadline) return a.deadline > b.deadline;
@@ -307,7 +314,9 @@ void EdfDispatcher::WorkerLoop(int worker_index) {
     const PeriodicTask& spec = tasks_[static_cast<std::size_t>(job.task)].spec;
     auto body = spec.body;  // copy: AddTask may grow tasks_ while the job runs
     lock.unlock();
+    const std::int64_t cpu0 = ThreadCpuNs();
     body(job);
+    const std::int64_t cpu_used = ThreadCpuNs() - cpu0;
     const auto done = std::chrono::steady_clock::now();
     lock.lock();
     TaskState& t = tasks_[static_cast<std::size_t>(job.task)];
@@ -317,6 +326,7 @@ void EdfDispatcher::WorkerLoop(int worker_index) {
     const auto response = std::chrono::duration_cast<std::chrono::nanoseconds>(done - job.release);
     t.stats.max_response = std::max(t.stats.max_response, response);
     t.stats.total_response += response;
+    t.stats.cpu_time += std::chrono::nanoseconds(cpu_used);
   }
 }
 

@@ -58,8 +58,8 @@ std::optional<SchedAttr> GetSchedAttr(pid_t tid = 0);
 struct DeadlineOptions {
   /// EBUSY from admission control can be transient: the bandwidth of a DL task that exited or
   /// left SCHED_DEADLINE is returned only at its 0-lag time. Retry this many times.
-  int ebusy_retries = 3;
-  std::chrono::milliseconds retry_delay{50};
+  int ebusy_retries = 5;
+  std::chrono::milliseconds retry_delay{100};
 };
 
 /// Outcome of asking for SCHED_DEADLINE. `deadline` false means the thread runs SCHED_OTHER
@@ -106,6 +106,9 @@ struct PeriodicTaskStats {
   std::int64_t skipped = 0;    ///< releases dropped because the previous job was still pending
   std::chrono::nanoseconds max_response{0};  ///< release -> completion
   std::chrono::nanoseconds total_response{0};
+  /// CPU time the task's jobs used (CLOCK_THREAD_CPUTIME_ID around each job): the per-task
+  /// utilisation numerator, since tasks share the worker threads.
+  std::chrono::nanoseconds cpu_time{0};
 };
 
 /// Ready queue of an EDF scheduler: earliest absolute deadline first, ties broken by release

@@ -68,4 +68,8 @@ double ExpectedSlowdown(const BoardQuota& quota, int threads, double host_cpus) 
   return 1.0 / rate;
 }
 
+double HostToBoardPercent(double host_percent, const BoardQuota& quota) {
+  return host_percent / quota.CoreCpus();
+}
+
 }  // namespace enavi::board

@@ -23,9 +23,10 @@ struct BoardCpu {
 struct QuotaOptions {
   double dilation = 1.0;  ///< k >= 1: 1 sim second = k wall seconds
   /// CFS bandwidth period, microseconds, [1000, 1000000]. Short periods keep the throttled
-  /// thread close to a fluid rate (a 10 ms job is not held back for a whole 100 ms period);
-  /// bench_throttle_sweep measures fidelity against this value.
-  std::int64_t period_us = 10'000;
+  /// thread close to a fluid rate (a 10 ms job is not held back for a whole 100 ms period), but
+  /// at 5 ms the kernel (HZ 250 here) loses ~15 % of the quota; 20 ms is within ~5 % on every
+  /// board measured (bench_throttle_sweep, workers/board/EMULATION.md).
+  std::int64_t period_us = 20'000;
 };
 
 /// Quotas of one emulated board, rounded to what the kernel is given.
@@ -33,7 +34,7 @@ struct BoardQuota {
   int cores = 1;
   double core_speed = 1.0;
   double dilation = 1.0;
-  std::int64_t period_us = 10'000;
+  std::int64_t period_us = 20'000;
   std::int64_t board_quota_us = 0;  ///< per period, for the board group
   std::int64_t core_quota_us = 0;   ///< per period, for each thread group
 
@@ -61,5 +62,11 @@ double MinimumDilation(const BoardCpu& board, double host_cpus_free);
 ///   rate = min(core_cpus, board_cpus / threads, host_cpus / threads),  slowdown = 1 / rate.
 /// With threads <= cores and the board fitting the host this is k / speed.
 double ExpectedSlowdown(const BoardQuota& quota, int threads, double host_cpus);
+
+/// Converts a utilisation measured on the host during emulation (percent of one HOST core over
+/// wall time, e.g. from /proc) into the figure the board would report (percent of one BOARD
+/// core over board time): x k / speed. A thread busy all the time is held at speed / k of a
+/// host core, i.e. 100 % of a board core.
+double HostToBoardPercent(double host_percent, const BoardQuota& quota);
 
 }  // namespace enavi::board

@@ -42,8 +42,10 @@ struct CgroupOptions {
   bool use_memory = true;  ///< require and configure the memory controller
   /// Weight of the `enavi` parent against its siblings (v2 cpu.weight, [1, 10000]; v1
   /// cpu.shares = weight x 1024 / 100). A quota is only a ceiling; the weight makes it close to
-  /// a floor when the host is busy with other work, which the fidelity of the emulation needs.
-  int parent_cpu_weight = 1000;
+  /// a floor when the host is busy with other work, which the fidelity of the emulation needs:
+  /// each busy login session is an autogroup of weight 1024, and at weight 1000 (shares 10240)
+  /// a 1.4-CPU board lost ~7 % of its quota on this host to four busy sessions.
+  int parent_cpu_weight = 10000;
   /// Host CPUs that admission keeps free for the (unthrottled) simulator.
   double host_reserve_cpus = 0.25;
 };

@@ -133,7 +133,9 @@ class ShmChannel {
   /// the timeout passes.
   WaitStatus WaitFrame(std::chrono::nanoseconds timeout);
 
-  // --- latest-value slots. Read*() returns false if nothing new since `*seq`, which it updates.
+  // --- latest-value slots, one writer thread each. Read*() returns false if nothing is new since
+  // `*seq` (which it updates on success), or if no consistent copy could be taken because the
+  // writer kept rewriting the slot or died in the middle of a write (check Peer()).
   void PublishOdometry(const OdometryMsg& msg);
   bool ReadOdometry(OdometryMsg* msg, std::uint32_t* seq);
   WaitStatus WaitOdometry(std::uint32_t seq, std::chrono::nanoseconds timeout);

@@ -83,6 +83,14 @@ TEST(BoardQuotaTest, PerThreadQuotaBelowKernelMinimumSuggestsAPeriod) {
   EXPECT_EQ(ComputeBoardQuota({4, 0.2}, o).core_quota_us, kMinQuotaUs);
 }
 
+TEST(BoardQuotaTest, HostUtilisationScalesToBoardCores) {
+  QuotaOptions o;
+  o.dilation = 2.0;
+  const BoardQuota q = ComputeBoardQuota({4, 0.25}, o);  // a thread gets 0.125 host CPU
+  EXPECT_DOUBLE_EQ(HostToBoardPercent(12.5, q), 100.0) << "always busy = one whole board core";
+  EXPECT_DOUBLE_EQ(HostToBoardPercent(6.25, q), 50.0);
+}
+
 TEST(BoardQuotaTest, MinimumDilationFitsTheBoardIntoFreeHostCpus) {
   EXPECT_DOUBLE_EQ(MinimumDilation({4, 0.3}, 1.75), 1.0) << "1.2 CPUs fit without dilation";
   EXPECT_DOUBLE_EQ(MinimumDilation({6, 0.6}, 1.75), 2.25) << "3.6 / 1.75 = 2.06 -> 2.25";

@@ -167,8 +167,11 @@ TEST_F(FakeCgroupTreeTest, V2WithoutDelegatedControllersSaysWhichFile) {
 
 TEST_F(FakeCgroupTreeTest, UnprivilegedWorkerIsToldWhichPathIsNotWritable) {
   MakeV1();
-  fs::permissions(dir_, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
-                            fs::perms::others_read | fs::perms::others_exec);
+  const auto read_only = fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                         fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec;
+  for (const fs::path& p : {dir_, root_, root_ / "cpu", root_ / "cpuset", root_ / "memory"}) {
+    fs::permissions(p, read_only);  // binds a normal user; root is dropped to nobody below
+  }
   const pid_t child = fork();
   ASSERT_GE(child, 0);
   if (child == 0) {
@@ -181,6 +184,9 @@ TEST_F(FakeCgroupTreeTest, UnprivilegedWorkerIsToldWhichPathIsNotWritable) {
   }
   int status = 0;
   ASSERT_EQ(waitpid(child, &status, 0), child);
+  for (const fs::path& p : {dir_, root_, root_ / "cpu", root_ / "cpuset", root_ / "memory"}) {
+    fs::permissions(p, fs::perms::owner_all);  // so TearDown can remove the tree
+  }
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0) << "10 setresuid, 11 detected usable, 12 message";
 }
@@ -189,7 +195,7 @@ TEST_F(FakeCgroupTreeTest, EpisodeGroupGetsQuotaCpusetAndMemoryAndIsRemoved) {
   MakeV1();
   auto open = CgroupManager::Open(options_);
   ASSERT_TRUE(open.ok()) << open.error;
-  EXPECT_EQ(Read(root_ / "cpu/enavi/cpu.shares"), "10240") << "parent weight 1000 -> shares";
+  EXPECT_EQ(Read(root_ / "cpu/enavi/cpu.shares"), "102400") << "parent weight 10000 -> shares";
   EXPECT_EQ(Read(root_ / "cpuset/enavi/cpuset.cpus"), "0-3") << "copied from the worker's cpuset";
   EXPECT_EQ(Read(root_ / "cpuset/enavi/cpuset.mems"), "0");
 
@@ -204,8 +210,8 @@ TEST_F(FakeCgroupTreeTest, EpisodeGroupGetsQuotaCpusetAndMemoryAndIsRemoved) {
   EXPECT_EQ(name.rfind("ep-" + std::to_string(getpid()) + "-" + OwnStartTime() + "-", 0), 0u) << name;
   const fs::path cpu = root_ / "cpu/enavi" / name;
   EXPECT_EQ(created.group->cpu_dir(), cpu.string());
-  EXPECT_EQ(Read(cpu / "cpu.cfs_period_us"), "10000");
-  EXPECT_EQ(Read(cpu / "cpu.cfs_quota_us"), "10000") << "4 x 0.5 / 2 = 1.0 CPU";
+  EXPECT_EQ(Read(cpu / "cpu.cfs_period_us"), "20000");
+  EXPECT_EQ(Read(cpu / "cpu.cfs_quota_us"), "20000") << "4 x 0.5 / 2 = 1.0 CPU";
   EXPECT_EQ(Read(root_ / "cpuset/enavi" / name / "cpuset.cpus"), "0-3");
   EXPECT_EQ(Read(root_ / "cpuset/enavi" / name / "cpuset.mems"), "0");
   EXPECT_EQ(Read(root_ / "memory/enavi" / name / "memory.limit_in_bytes"), "1073741824");
@@ -214,7 +220,7 @@ TEST_F(FakeCgroupTreeTest, EpisodeGroupGetsQuotaCpusetAndMemoryAndIsRemoved) {
   EXPECT_EQ(Read(cpu / "cgroup.procs"), "4242");
   EXPECT_EQ(Read(root_ / "memory/enavi" / name / "cgroup.procs"), "4242");
   ASSERT_TRUE(created.group->AddThread(4243).ok);
-  EXPECT_EQ(Read(cpu / "t-4243/cpu.cfs_quota_us"), "2500") << "one core: 0.5 / 2 of 10 ms";
+  EXPECT_EQ(Read(cpu / "t-4243/cpu.cfs_quota_us"), "5000") << "one core: 0.5 / 2 of 20 ms";
   EXPECT_EQ(Read(cpu / "t-4243/tasks"), "4243");
 
   const CgroupStatus removed = created.group->Remove();
@@ -240,8 +246,8 @@ TEST_F(FakeCgroupTreeTest, SweepGivesEveryThreadOfTheBoardGroupItsOwnGroup) {
   EXPECT_EQ(created.group->SweepThreads(&status), 2);
   EXPECT_TRUE(status.ok) << status.message;
   for (const char* t : {"t-101", "t-102"}) {
-    EXPECT_EQ(Read(cpu / t / "cpu.cfs_quota_us"), "3000") << t;
-    EXPECT_EQ(Read(cpu / t / "cpu.cfs_period_us"), "10000") << t;
+    EXPECT_EQ(Read(cpu / t / "cpu.cfs_quota_us"), "6000") << t;
+    EXPECT_EQ(Read(cpu / t / "cpu.cfs_period_us"), "20000") << t;
   }
 }
 
@@ -250,7 +256,7 @@ TEST_F(FakeCgroupTreeTest, V2EpisodeUsesCpuMaxAndThreadedChildren) {
   auto open = CgroupManager::Open(options_);
   ASSERT_TRUE(open.ok()) << open.error;
   EXPECT_EQ(Read(root_ / "worker/enavi/cgroup.subtree_control"), "+cpu +cpuset +memory");
-  EXPECT_EQ(Read(root_ / "worker/enavi/cpu.weight"), "1000");
+  EXPECT_EQ(Read(root_ / "worker/enavi/cpu.weight"), "10000");
   EpisodeLimits limits;
   limits.cpus = "1";
   limits.memory_bytes = 512LL << 20;
@@ -258,13 +264,13 @@ TEST_F(FakeCgroupTreeTest, V2EpisodeUsesCpuMaxAndThreadedChildren) {
   ASSERT_TRUE(created.ok()) << created.refusal;
   const fs::path ep = created.group->cpu_dir();
   EXPECT_EQ(ep.parent_path(), root_ / "worker/enavi");
-  EXPECT_EQ(Read(ep / "cpu.max"), "12000 10000");
+  EXPECT_EQ(Read(ep / "cpu.max"), "24000 20000");
   EXPECT_EQ(Read(ep / "cpuset.cpus"), "1");
   EXPECT_EQ(Read(ep / "memory.max"), "536870912");
   ASSERT_TRUE(created.group->AddThread(77).ok);
   EXPECT_EQ(Read(ep / "t-77/cgroup.type"), "threaded");
   EXPECT_EQ(Read(ep / "cgroup.subtree_control"), "+cpu");
-  EXPECT_EQ(Read(ep / "t-77/cpu.max"), "4000 10000");
+  EXPECT_EQ(Read(ep / "t-77/cpu.max"), "8000 20000");
   EXPECT_EQ(Read(ep / "t-77/cgroup.threads"), "77");
 }
 

@@ -133,13 +133,13 @@ TEST_F(KernelCgroupTest, EpisodeGroupIsCreatedWithItsQuotaAndRemoved) {
   const fs::path cpu = created.group->cpu_dir();
   ASSERT_TRUE(fs::is_directory(cpu));
   if (open.manager->layout().version == CgroupVersion::kV1) {
-    EXPECT_EQ(Read(cpu / "cpu.cfs_quota_us"), "12000");
-    EXPECT_EQ(Read(cpu / "cpu.cfs_period_us"), "10000");
+    EXPECT_EQ(Read(cpu / "cpu.cfs_quota_us"), "24000");
+    EXPECT_EQ(Read(cpu / "cpu.cfs_period_us"), "20000");
     EXPECT_EQ(Read(fs::path(open.manager->layout().memory_base) / "enavi" / created.group->name() /
                    "memory.limit_in_bytes"),
               "268435456");
   } else {
-    EXPECT_EQ(Read(cpu / "cpu.max"), "12000 10000");
+    EXPECT_EQ(Read(cpu / "cpu.max"), "24000 20000");
   }
   EXPECT_NEAR(open.manager->ReservedCpus(), 1.2, 1e-9);
   const CgroupStatus removed = created.group->Remove();

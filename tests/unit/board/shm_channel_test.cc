@@ -142,8 +142,12 @@ TEST(ShmChannelTest, ConcurrentReaderNeverSeesATornMessage) {
   double last = 0;
   bool backwards = false;
   auto* msg = new TrajectoryMsg();
-  while (!done || sim.ReadTrajectory(msg, &seq)) {
-    if (!sim.ReadTrajectory(msg, &seq)) continue;
+  while (true) {
+    const bool finished = done.load();  // read before the slot: nothing can follow it
+    if (!sim.ReadTrajectory(msg, &seq)) {
+      if (finished) break;
+      continue;
+    }
     ++reads;
     const double k = msg->t_issue;
     if (msg->count != static_cast<int>(k) || msg->samples[0].p[0] != k ||

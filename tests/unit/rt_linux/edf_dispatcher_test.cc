@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -142,6 +143,7 @@ TEST(EdfDispatcherTest, OverrunningTaskSkipsReleasesInsteadOfQueueing) {
   EXPECT_GE(s.skipped, 2) << "a 7 ms job with a 2 ms period covers >= 3 release instants";
   EXPECT_EQ(max_running.load(), 1) << "never two jobs of one task at once, even with 2 workers";
   EXPECT_GE(s.missed, 1) << "7 ms > 2 ms deadline";
+  EXPECT_LT(s.cpu_time, milliseconds(7) * s.completed) << "sleeping jobs use little CPU";
   EXPECT_LE(s.completed, s.released);
 }
 
@@ -166,6 +168,27 @@ TEST(EdfDispatcherTest, SetPeriodRespacesReleasesAfterTheNextOne) {
   const ReadyJob& before = seen[seen.size() - 2];
   EXPECT_EQ((last.release - before.release) / (last.index - before.index), milliseconds(3));
   EXPECT_EQ(last.deadline - last.release, milliseconds(3)) << "the implicit deadline follows";
+}
+
+TEST(EdfDispatcherTest, CpuTimeOfJobsIsChargedToTheirTask) {
+  EdfDispatcher d(Workers(1));
+  const int spin = d.AddTask(Task("spin", milliseconds(20), [](const ReadyJob&) {
+    timespec ts{};
+    auto cpu = [&ts] {
+      clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+      return ts.tv_sec * 1'000'000'000LL + ts.tv_nsec;
+    };
+    const long long start = cpu();
+    while (cpu() - start < 3'000'000) {
+    }
+  }));
+  const int idle = d.AddTask(Task("idle", milliseconds(20), [](const ReadyJob&) {}));
+  d.Start();
+  ASSERT_TRUE(WaitFor([&] { return d.Stats(spin).completed >= 3 && d.Stats(idle).completed >= 3; }));
+  d.Stop();
+  const PeriodicTaskStats s = d.Stats(spin);
+  EXPECT_GE(s.cpu_time, milliseconds(3) * s.completed) << "each job burns >= 3 ms of CPU";
+  EXPECT_LT(d.Stats(idle).cpu_time, milliseconds(1) * d.Stats(idle).completed);
 }
 
 TEST(EdfDispatcherTest, WorkerHookRunsOncePerWorkerThread) {
