@@ -575,7 +575,7 @@ CgroupManager::OpenResult CgroupManager::Open(const CgroupOptions& options) {
     }
   }
   result.manager.reset(new CgroupManager(std::move(ctx)));
-  result.manager->ReapStale();
+  result.reaped = result.manager->ReapStale(&result.reap_errors);
   return result;
 }
 

@@ -137,6 +137,8 @@ class CgroupManager {
   struct OpenResult {
     std::unique_ptr<CgroupManager> manager;
     std::string error;  ///< why the emulation is unavailable (the caller refuses --clock emulated)
+    std::vector<std::string> reaped;  ///< stale episode groups removed at start (to log)
+    std::string reap_errors;          ///< stale groups that could not be removed, and why
     bool ok() const { return manager != nullptr; }
   };
   static OpenResult Open(const CgroupOptions& options = {});

@@ -306,6 +306,8 @@ TEST_F(FakeCgroupTreeTest, ReaperRemovesOnlyGroupsOfWorkersThatAreGone) {
 
   auto open = CgroupManager::Open(options_);  // reaps
   ASSERT_TRUE(open.ok()) << open.error;
+  EXPECT_EQ(open.reaped.size(), 2u);
+  EXPECT_TRUE(open.reap_errors.empty()) << open.reap_errors;
   for (const char* h : {"cpu", "cpuset", "memory"}) {
     EXPECT_FALSE(fs::exists(root_ / h / "enavi" / dead)) << h;
     EXPECT_FALSE(fs::exists(root_ / h / "enavi" / reused)) << h << ": pid reused by another process";

@@ -256,6 +256,7 @@ TEST_F(KernelCgroupTest, ReaperRemovesGroupsOfAWorkerKilledBySigkill) {
 
   auto open = CgroupManager::Open();  // reaps at start
   ASSERT_TRUE(open.ok()) << open.error;
+  EXPECT_EQ(open.reaped.size(), 1u) << open.reap_errors;
   int status = 0;
   ASSERT_EQ(waitpid(navstack, &status, 0), navstack) << "the reaper killed the orphan";
   EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
