@@ -45,7 +45,7 @@ void BM_DistanceTransform(benchmark::State& state) {
   }
   SetWorkCounters(state, work);
   state.counters["cells_per_s"] = benchmark::Counter(
-      static_cast<double>(work.Get(WorkUnit::kGridCell)), benchmark::Counter::kIsIterationInvariantRate);
+      static_cast<double>(work.Get(WorkUnit::kDistanceCell)), benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_DistanceTransform)->Arg(100)->Arg(200)->Arg(500)->Unit(benchmark::kMillisecond);
 

@@ -15,7 +15,8 @@ enum class WorkUnit : int {
   kWarpPixel,          ///< depth pixel warped into another frame and compared (difference)
   kRayStep,            ///< one voxel traversed by a ray during map insertion
   kVoxelUpdate,        ///< one octree leaf updated (log-odds, with tree descent)
-  kGridCell,           ///< one cell of a dense grid extracted from the map or distance-transformed
+  kGridCell,           ///< one cell of a dense grid extracted from the map
+  kDistanceCell,       ///< one cell of the planner's Euclidean distance transform
   kStateCheck,         ///< one planner state validity / motion check
   kPlannerIteration,   ///< one iteration of the sampling-based search
   kOptimizerEval,      ///< one B-spline control point visited in one cost evaluation
@@ -26,7 +27,7 @@ enum class WorkUnit : int {
 };
 
 constexpr std::array<std::string_view, static_cast<int>(WorkUnit::kCount)> kWorkUnitNames = {
-    "pixel",          "back_projection", "warp_pixel", "ray_step",           "voxel_update", "grid_cell",  "state_check",
+    "pixel",          "back_projection", "warp_pixel", "ray_step",           "voxel_update", "grid_cell", "distance_cell", "state_check",
     "planner_iteration", "optimizer_eval", "trajectory_sample", "cell_probe", "policy_flop"};
 
 struct WorkCounts {

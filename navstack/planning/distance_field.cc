@@ -130,7 +130,7 @@ DistanceField::DistanceField(const VoxelGrid& grid, WorkCounts* work)
   for (double& d : dist_) {
     d = has_obstacles_ ? std::sqrt(d) * resolution_ - half : kNoObstacleDistance;
   }
-  if (work != nullptr) work->Add(WorkUnit::kGridCell, static_cast<std::int64_t>(dist_.size()));
+  if (work != nullptr) work->Add(WorkUnit::kDistanceCell, static_cast<std::int64_t>(dist_.size()));
 }
 
 double DistanceField::Distance(const Eigen::Vector3d& p_W) const { return Distance(p_W, nullptr); }

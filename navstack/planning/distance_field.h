@@ -25,7 +25,7 @@ class DistanceField {
   /// Value everywhere when the grid has no occupied cell [m].
   static constexpr double kNoObstacleDistance = 1e3;
 
-  /// Builds the field. Adds grid.dims.prod() WorkUnit::kGridCell to *work (may be null).
+  /// Builds the field. Adds grid.dims.prod() WorkUnit::kDistanceCell to *work (may be null).
   /// @throws std::invalid_argument if the grid is malformed (cells.size() != dims.prod(),
   ///         non-positive dims or resolution).
   explicit DistanceField(const VoxelGrid& grid, WorkCounts* work = nullptr);

@@ -106,8 +106,8 @@ TEST(DistanceFieldTest, CountsEveryCellAsWork) {
   WorkCounts small, large;
   DistanceField a(VoxelGrid(Eigen::Vector3d::Zero(), 0.1, {10, 10, 10}, CellState::kFree), &small);
   DistanceField b(VoxelGrid(Eigen::Vector3d::Zero(), 0.1, {20, 20, 10}, CellState::kFree), &large);
-  EXPECT_EQ(small.Get(WorkUnit::kGridCell), 1000);
-  EXPECT_EQ(large.Get(WorkUnit::kGridCell), 4000);
+  EXPECT_EQ(small.Get(WorkUnit::kDistanceCell), 1000);
+  EXPECT_EQ(large.Get(WorkUnit::kDistanceCell), 4000);
 }
 
 TEST(DistanceFieldTest, RejectsMalformedGrid) {

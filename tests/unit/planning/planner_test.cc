@@ -261,8 +261,8 @@ TEST_F(PlannerTest, WorkCountsGrowWithGridSize) {
   const PlanResult small = plan_in(4.0), large = plan_in(8.0);
   ASSERT_TRUE(small.ok()) << small.message;
   ASSERT_TRUE(large.ok()) << large.message;
-  EXPECT_EQ(small.work.Get(WorkUnit::kGridCell), 40 * 40 * 30);
-  EXPECT_EQ(large.work.Get(WorkUnit::kGridCell), 4 * 40 * 40 * 30);
+  EXPECT_EQ(small.work.Get(WorkUnit::kDistanceCell), 40 * 40 * 30);
+  EXPECT_EQ(large.work.Get(WorkUnit::kDistanceCell), 4 * 40 * 40 * 30);
   EXPECT_GT(small.work.Get(WorkUnit::kStateCheck), 0);
   EXPECT_GT(small.work.Get(WorkUnit::kOptimizerEval), 0);
   EXPECT_GT(small.work.Get(WorkUnit::kTrajectorySample), 0);
