@@ -1,7 +1,8 @@
-# enavi_add_test(<name> SOURCES a.cc [b.cc] LIBS enavi::x [...] [LABELS unit])
-# One line per test binary; every TEST in it is registered with CTest.
+# enavi_add_test(<name> SOURCES a.cc [b.cc] LIBS enavi::x [...] [LABELS unit] [LOCK name])
+# One line per test binary; every TEST in it is registered with CTest. LOCK serialises the tests
+# that share a host resource (cgroups, CPU-share measurements) under `ctest -j`.
 function(enavi_add_test name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "LOCK" "SOURCES;LIBS;LABELS" ${ARGN})
   if(NOT ARG_SOURCES)
     set(ARG_SOURCES ${name}.cc)
   endif()
@@ -13,5 +14,9 @@ function(enavi_add_test name)
   if(NOT ARG_LABELS)
     set(ARG_LABELS unit)
   endif()
-  gtest_discover_tests(${name} PROPERTIES LABELS "${ARG_LABELS}" DISCOVERY_TIMEOUT 60)
+  set(props LABELS "${ARG_LABELS}")
+  if(ARG_LOCK)
+    list(APPEND props RESOURCE_LOCK ${ARG_LOCK})
+  endif()
+  gtest_discover_tests(${name} PROPERTIES ${props} DISCOVERY_TIMEOUT 60)
 endfunction()
