@@ -4,7 +4,9 @@
 
 #include <cstdint>
 #include <map>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -14,6 +16,38 @@
 #include "worlds/mesh.h"
 
 namespace enavi::worlds {
+
+/// Bad world input (file, generator parameter, start/goal). The message is exactly
+/// `FILE:LINE: FIELD: REASON`; without a known line `FILE: FIELD: REASON`, without a file
+/// `FIELD: REASON`. FILE is the world/OBJ file as given, or the generator id.
+class WorldError : public std::invalid_argument {
+ public:
+  WorldError(std::string file, int line, std::string field, std::string reason)
+      : std::invalid_argument(Format(file, line, field, reason)),
+        file_(std::move(file)), line_(line), field_(std::move(field)), reason_(std::move(reason)) {}
+
+  const std::string& file() const { return file_; }
+  int line() const { return line_; }  ///< 1-based; 0 when unknown
+  const std::string& field() const { return field_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  static std::string Format(const std::string& file, int line, const std::string& field,
+                            const std::string& reason) {
+    std::string m;
+    if (!file.empty()) {
+      m.append(file);
+      if (line > 0) m.append(":").append(std::to_string(line));
+      m.append(": ");
+    }
+    m.append(field).append(": ").append(reason);
+    return m;
+  }
+  std::string file_;
+  int line_ = 0;
+  std::string field_;
+  std::string reason_;
+};
 
 /// Axis-aligned box rotated by `yaw` about its vertical centre axis.
 struct Box {

@@ -12,4 +12,7 @@ inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitBadInput = 2;
 
+/// `enavi world gen|check|show` (server/cli/world_cmd.cc).
+void RegisterWorldCommands(CLI::App& app);
+
 }  // namespace enavi::cli

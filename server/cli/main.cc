@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   using namespace enavi::cli;
   CLI::App app{"E-Navi Farm: a simulation farm for UAV navigation stacks on weak onboard computers"};
   app.require_subcommand(1);
+  RegisterWorldCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

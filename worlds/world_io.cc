@@ -1,0 +1,482 @@
+#include "worlds/world_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <initializer_list>
+#include <map>
+#include <set>
+#include <sstream>
+#include <system_error>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "worlds/detmath.h"
+#include "worlds/number_text.h"
+#include "worlds/obj_import.h"
+#include "worlds/primitives.h"
+
+namespace enavi::worlds {
+namespace {
+
+constexpr double kMaxYaw = 6.2832;     // 2 pi, rounded up to the file precision
+constexpr double kMaxRadius = 1000.0;  // m
+constexpr double kMaxScale = 1000.0;
+constexpr std::size_t kMaxStringLength = 256;
+
+// ---------------------------------------------------------------------------------------------
+// Reading
+
+struct ParseContext {
+  std::string file;
+  std::filesystem::path base_dir;
+  std::map<std::string, int> lines;  // field -> line, for errors found after parsing
+  std::map<std::string, TriangleMesh> meshes;  // OBJ files loaded so far, by relative path
+  std::size_t triangles = 0;
+  std::size_t max_objects = kMaxObjects;
+  std::size_t max_triangles = kMaxTriangles;
+};
+
+int LineOf(const YAML::Node& node) {
+  const YAML::Mark mark = node.Mark();
+  return mark.line >= 0 ? mark.line + 1 : 0;
+}
+
+[[noreturn]] void Fail(const ParseContext& ctx, const YAML::Node& at, const std::string& field,
+                       const std::string& reason) {
+  throw WorldError(ctx.file, LineOf(at), field, reason);
+}
+
+const char* Describe(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Map: return "a mapping";
+    case YAML::NodeType::Sequence: return "a sequence";
+    case YAML::NodeType::Scalar: return "a scalar";
+    case YAML::NodeType::Null: return "null";
+    default: return "nothing";
+  }
+}
+
+// Value text for "(got ...)", cut short so a hostile file cannot flood the message.
+std::string Shown(const std::string& text) {
+  constexpr std::size_t kMax = 40;
+  std::string out;
+  for (char ch : text.substr(0, kMax)) out += (ch >= 32 && ch < 127) ? ch : '?';
+  if (text.size() > kMax) out += "...";
+  return out;
+}
+
+std::string Join(std::initializer_list<const char*> items) {
+  std::string out;
+  for (const char* s : items) out += (out.empty() ? "" : ", ") + std::string(s);
+  return out;
+}
+
+std::string Child(const std::string& parent, const std::string& key) {
+  return parent.empty() ? key : parent + "." + key;
+}
+
+// A mapping's entries by key; unknown, duplicate and non-scalar keys are refused.
+class MapView {
+ public:
+  MapView(const ParseContext& ctx, const YAML::Node& node, std::string field,
+          std::initializer_list<const char*> allowed)
+      : ctx_(ctx), node_(node), field_(std::move(field)) {
+    if (!node.IsMap()) {
+      Fail(ctx, node, field_.empty() ? "document" : field_, std::string("expected a mapping (got ") + Describe(node) + ")");
+    }
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      const YAML::Node key = it->first;
+      if (!key.IsScalar()) Fail(ctx, key, field_.empty() ? "document" : field_, "keys must be plain names");
+      const std::string name = key.Scalar();
+      if (std::find_if(allowed.begin(), allowed.end(), [&](const char* a) { return name == a; }) == allowed.end()) {
+        Fail(ctx, key, Child(field_, Shown(name)), "unknown key (allowed: " + Join(allowed) + ")");
+      }
+      if (!entries_.emplace(name, std::make_pair(key, it->second)).second) {
+        Fail(ctx, key, Child(field_, name), "duplicate key");
+      }
+    }
+  }
+
+  bool Has(const std::string& key) const { return entries_.count(key) != 0; }
+  const YAML::Node& Get(const std::string& key) const {
+    const auto it = entries_.find(key);
+    if (it == entries_.end()) Fail(ctx_, node_, Child(field_, key), "missing (required)");
+    return it->second.second;
+  }
+  int KeyLine(const std::string& key) const { return LineOf(entries_.at(key).first); }
+  std::string Field(const std::string& key) const { return Child(field_, key); }
+  const YAML::Node& node() const { return node_; }
+
+ private:
+  const ParseContext& ctx_;
+  YAML::Node node_;
+  std::string field_;
+  std::map<std::string, std::pair<YAML::Node, YAML::Node>> entries_;
+};
+
+std::string ReadString(const ParseContext& ctx, const YAML::Node& node, const std::string& field) {
+  if (!node.IsScalar()) Fail(ctx, node, field, std::string("expected a string (got ") + Describe(node) + ")");
+  if (node.Scalar().size() > kMaxStringLength) Fail(ctx, node, field, "longer than 256 characters");
+  return node.Scalar();
+}
+
+double ReadNumber(const ParseContext& ctx, const YAML::Node& node, const std::string& field) {
+  if (!node.IsScalar()) Fail(ctx, node, field, std::string("expected a number (got ") + Describe(node) + ")");
+  double v = 0.0;
+  if (!ParseFiniteDouble(node.Scalar(), &v)) {
+    Fail(ctx, node, field, "expected a finite number (got " + Shown(node.Scalar()) + ")");
+  }
+  return v;
+}
+
+// A number in [lo, hi] (lo excluded when `lo_open`), with the allowed range in the message.
+double ReadRange(const ParseContext& ctx, const YAML::Node& node, const std::string& field, double lo, double hi,
+                 bool lo_open) {
+  const double v = ReadNumber(ctx, node, field);
+  if (lo_open ? !(v > lo) : !(v >= lo)) {
+    Fail(ctx, node, field, std::string("must be ") + (lo_open ? "> " : ">= ") + FormatFixed(lo) + " (got " +
+                               Shown(node.Scalar()) + ")");
+  }
+  if (!(v <= hi)) Fail(ctx, node, field, "must be <= " + FormatFixed(hi) + " (got " + Shown(node.Scalar()) + ")");
+  return v;
+}
+
+// [x, y, z], each component checked like ReadRange; errors name the vector field.
+Eigen::Vector3d ReadVec3(const ParseContext& ctx, const YAML::Node& node, const std::string& field, double lo,
+                         double hi, bool lo_open) {
+  if (!node.IsSequence() || node.size() != 3) {
+    Fail(ctx, node, field, std::string("expected [x, y, z] (got ") +
+                               (node.IsSequence() ? std::to_string(node.size()) + " values" : Describe(node)) + ")");
+  }
+  Eigen::Vector3d v;
+  for (std::size_t i = 0; i < 3; ++i) v[static_cast<int>(i)] = ReadRange(ctx, node[i], field, lo, hi, lo_open);
+  return v;
+}
+
+Eigen::Vector3d ReadPoint(const ParseContext& ctx, const YAML::Node& node, const std::string& field) {
+  return ReadVec3(ctx, node, field, -kMaxCoordinate, kMaxCoordinate, false);
+}
+
+// A mesh path: relative, no "..", inside the world file's directory even through symlinks.
+std::filesystem::path ResolveMeshPath(const ParseContext& ctx, const YAML::Node& node, const std::string& field) {
+  const std::string text = ReadString(ctx, node, field);
+  if (text.empty()) Fail(ctx, node, field, "empty path");
+  const std::filesystem::path rel(text);
+  if (rel.is_absolute() || rel.has_root_name() || rel.has_root_directory()) {
+    Fail(ctx, node, field, "absolute paths are not allowed (give a path relative to the world file)");
+  }
+  for (const auto& part : rel) {
+    if (part == "..") Fail(ctx, node, field, "'..' is not allowed (the mesh must be inside the world file's directory)");
+  }
+  const std::filesystem::path full = ctx.base_dir / rel;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(full, ec)) Fail(ctx, node, field, "file not found: " + full.string());
+  const auto root = std::filesystem::weakly_canonical(ctx.base_dir, ec);
+  const auto target = std::filesystem::weakly_canonical(full, ec);
+  if (ec) Fail(ctx, node, field, "cannot resolve " + full.string() + ": " + ec.message());
+  const auto [root_end, target_it] = std::mismatch(root.begin(), root.end(), target.begin(), target.end());
+  if (root_end != root.end()) Fail(ctx, node, field, "resolves outside the world file's directory: " + target.string());
+  return full;
+}
+
+void CountTriangles(ParseContext* ctx, const YAML::Node& at, const std::string& field, std::size_t n) {
+  ctx->triangles += n;
+  if (ctx->triangles > ctx->max_triangles) {
+    Fail(*ctx, at, field, "the world exceeds " + std::to_string(ctx->max_triangles) + " triangles");
+  }
+}
+
+Object ReadObject(ParseContext* ctx, const YAML::Node& node, const std::string& field) {
+  if (!node.IsMap() || node.size() != 1) {
+    Fail(*ctx, node, field, "expected one of {box: ...}, {cylinder: ...}, {ellipsoid: ...}, {mesh: ...}");
+  }
+  const MapView kind(*ctx, node, field, {"box", "cylinder", "ellipsoid", "mesh"});
+  if (kind.Has("box")) {
+    const MapView m(*ctx, kind.Get("box"), kind.Field("box"), {"center", "size", "yaw"});
+    Box b;
+    b.center = ReadPoint(*ctx, m.Get("center"), m.Field("center"));
+    b.size = ReadVec3(*ctx, m.Get("size"), m.Field("size"), 0.0, kMaxExtent, true);
+    if (m.Has("yaw")) b.yaw = ReadRange(*ctx, m.Get("yaw"), m.Field("yaw"), -kMaxYaw, kMaxYaw, false);
+    CountTriangles(ctx, node, field, TriangleCount(b));
+    return b;
+  }
+  if (kind.Has("cylinder")) {
+    const MapView m(*ctx, kind.Get("cylinder"), kind.Field("cylinder"), {"base", "radius", "height"});
+    Cylinder c;
+    c.base = ReadPoint(*ctx, m.Get("base"), m.Field("base"));
+    c.radius = ReadRange(*ctx, m.Get("radius"), m.Field("radius"), 0.0, kMaxRadius, true);
+    c.height = ReadRange(*ctx, m.Get("height"), m.Field("height"), 0.0, kMaxExtent, true);
+    CountTriangles(ctx, node, field, TriangleCount(c));
+    return c;
+  }
+  if (kind.Has("ellipsoid")) {
+    const MapView m(*ctx, kind.Get("ellipsoid"), kind.Field("ellipsoid"), {"center", "radii"});
+    Ellipsoid e;
+    e.center = ReadPoint(*ctx, m.Get("center"), m.Field("center"));
+    e.radii = ReadVec3(*ctx, m.Get("radii"), m.Field("radii"), 0.0, kMaxRadius, true);
+    CountTriangles(ctx, node, field, TriangleCount(e));
+    return e;
+  }
+  const MapView m(*ctx, kind.Get("mesh"), kind.Field("mesh"), {"file", "position", "yaw", "scale"});
+  MeshObject mesh;
+  mesh.path = ReadString(*ctx, m.Get("file"), m.Field("file"));
+  const std::filesystem::path full = ResolveMeshPath(*ctx, m.Get("file"), m.Field("file"));
+  mesh.position = ReadPoint(*ctx, m.Get("position"), m.Field("position"));
+  if (m.Has("yaw")) mesh.yaw = ReadRange(*ctx, m.Get("yaw"), m.Field("yaw"), -kMaxYaw, kMaxYaw, false);
+  if (m.Has("scale")) mesh.scale = ReadRange(*ctx, m.Get("scale"), m.Field("scale"), 0.0, kMaxScale, true);
+  auto cached = ctx->meshes.find(mesh.path);
+  if (cached == ctx->meshes.end()) cached = ctx->meshes.emplace(mesh.path, LoadObjFile(full)).first;
+  mesh.mesh = cached->second;
+  CountTriangles(ctx, node, field, mesh.mesh.triangle_count());
+  // The placed mesh must stay within the coordinate limits too.
+  const Eigen::AlignedBox3d placed = ObjectBounds(mesh);
+  if (placed.min().cwiseAbs().maxCoeff() > kMaxCoordinate || placed.max().cwiseAbs().maxCoeff() > kMaxCoordinate) {
+    Fail(*ctx, node, field, "the placed mesh reaches beyond +-100000 m");
+  }
+  return mesh;
+}
+
+World ParseDocument(ParseContext* ctx, const YAML::Node& root, const WorldFileOptions& options) {
+  World world;
+  const MapView top(*ctx, root, "", {"format", "name", "metadata", "bounds", "ground", "start", "goal", "objects"});
+
+  const std::string format = ReadString(*ctx, top.Get("format"), "format");
+  if (format != kWorldFormat) {
+    Fail(*ctx, top.Get("format"), "format", "unsupported format '" + Shown(format) + "' (expected " +
+                                                std::string(kWorldFormat) + ")");
+  }
+  world.metadata.name = top.Has("name") ? ReadString(*ctx, top.Get("name"), "name")
+                                        : std::filesystem::path(ctx->file).stem().string();
+  world.metadata.scenario = "custom";
+  if (top.Has("metadata")) {
+    const MapView meta(*ctx, top.Get("metadata"), "metadata", {"scenario", "seed", "generator_version", "params"});
+    if (meta.Has("scenario")) world.metadata.scenario = ReadString(*ctx, meta.Get("scenario"), meta.Field("scenario"));
+    if (meta.Has("seed")) {
+      const YAML::Node& n = meta.Get("seed");
+      if (!n.IsScalar() || !ParseUint64(n.Scalar(), &world.metadata.seed)) {
+        Fail(*ctx, n, meta.Field("seed"), "expected an unsigned integer");
+      }
+    }
+    if (meta.Has("generator_version")) {
+      const YAML::Node& n = meta.Get("generator_version");
+      std::int64_t v = 0;
+      if (!n.IsScalar() || !ParseInt64(n.Scalar(), &v) || v < 0 || v > 1'000'000) {
+        Fail(*ctx, n, meta.Field("generator_version"), "expected an integer in [0, 1000000]");
+      }
+      world.metadata.generator_version = static_cast<int>(v);
+    }
+    if (meta.Has("params")) {
+      const YAML::Node& params = meta.Get("params");
+      if (!params.IsMap()) Fail(*ctx, params, meta.Field("params"), "expected a mapping of name: value");
+      for (auto it = params.begin(); it != params.end(); ++it) {
+        const std::string key = ReadString(*ctx, it->first, meta.Field("params"));
+        const std::string value = ReadString(*ctx, it->second, meta.Field("params") + "." + Shown(key));
+        if (!world.metadata.params.emplace(key, value).second) {
+          Fail(*ctx, it->first, meta.Field("params") + "." + Shown(key), "duplicate key");
+        }
+      }
+    }
+  }
+
+  // Bounds: min < max per axis, at most kMaxExtent.
+  {
+    const MapView b(*ctx, top.Get("bounds"), "bounds", {"min", "max"});
+    const Eigen::Vector3d lo = ReadPoint(*ctx, b.Get("min"), "bounds.min");
+    const Eigen::Vector3d hi = ReadPoint(*ctx, b.Get("max"), "bounds.max");
+    for (int a = 0; a < 3; ++a) {
+      if (!(hi[a] > lo[a])) {
+        Fail(*ctx, b.Get("max"), "bounds.max", std::string("must exceed bounds.min along ") + "xyz"[a] + " (got " +
+                                                   FormatFixed(hi[a]) + " <= " + FormatFixed(lo[a]) + ")");
+      }
+      if (hi[a] - lo[a] > kMaxExtent) {
+        Fail(*ctx, top.Get("bounds"), "bounds", std::string("extent along ") + "xyz"[a] + " is " +
+                                                    FormatFixed(hi[a] - lo[a]) + " m (limit 2000 m)");
+      }
+    }
+    world.bounds = Eigen::AlignedBox3d(lo, hi);
+    ctx->lines["bounds"] = top.KeyLine("bounds");
+  }
+
+  if (top.Has("ground")) {
+    const YAML::Node& g = top.Get("ground");
+    if (g.IsScalar() && g.Scalar() == "none") {
+      world.ground.enabled = false;
+    } else if (g.IsMap()) {
+      const MapView gm(*ctx, g, "ground", {"z"});
+      world.ground.enabled = true;
+      world.ground.z = ReadRange(*ctx, gm.Get("z"), "ground.z", -kMaxCoordinate, kMaxCoordinate, false);
+    } else {
+      Fail(*ctx, g, "ground", "expected {z: number} or none");
+    }
+  }
+
+  // Start and goal; a command-line override makes the file's value optional.
+  const std::pair<const char*, const std::optional<Eigen::Vector3d>*> ends[2] = {{"start", &options.start},
+                                                                                 {"goal", &options.goal}};
+  for (const auto& [name, override_value] : ends) {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    if (top.Has(name) || !override_value->has_value()) {
+      p = ReadPoint(*ctx, top.Get(name), name);
+      ctx->lines[name] = top.KeyLine(name);
+    }
+    if (override_value->has_value()) {
+      p = **override_value;
+      ctx->lines[name] = 0;  // the error is about the command line, not the file
+    }
+    (std::string(name) == "start" ? world.start : world.goal) = p;
+  }
+
+  if (top.Has("objects")) {
+    const YAML::Node& objects = top.Get("objects");
+    if (!objects.IsSequence()) {
+      Fail(*ctx, objects, "objects", std::string("expected a sequence (got ") + Describe(objects) + ")");
+    }
+    if (objects.size() > ctx->max_objects) {
+      Fail(*ctx, objects, "objects", "more than " + std::to_string(ctx->max_objects) + " objects (" +
+                                         std::to_string(objects.size()) + ")");
+    }
+    world.objects.reserve(objects.size());
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+      const std::string field = "objects[" + std::to_string(i) + "]";
+      world.objects.push_back(ReadObject(ctx, objects[i], field));
+      ctx->lines[field] = LineOf(objects[i]);
+    }
+  }
+  return world;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing
+
+std::string Num(double v) { return FormatFixed(detmath::Quantize(v), kWorldFileDecimals); }
+
+std::string Vec(const Eigen::Vector3d& v) { return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]"; }
+
+std::string Quote(const std::string& s) {
+  static const char* kHex = "0123456789abcdef";
+  std::string out = "\"";
+  for (unsigned char ch : s) {
+    if (ch == '"' || ch == '\\') {
+      out += '\\';
+      out += static_cast<char>(ch);
+    } else if (ch < 0x20 || ch == 0x7f) {
+      out += "\\x";
+      out += kHex[ch >> 4];
+      out += kHex[ch & 15];
+    } else {
+      out += static_cast<char>(ch);
+    }
+  }
+  return out + "\"";
+}
+
+std::string Key(const std::string& s) {
+  const bool plain = !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+  });
+  return plain ? s : Quote(s);
+}
+
+}  // namespace
+
+World ParseWorld(std::string_view yaml, const std::string& file_name, const std::filesystem::path& base_dir,
+                 const WorldFileOptions& options) {
+  ParseContext ctx;
+  ctx.file = file_name;
+  ctx.base_dir = base_dir.empty() ? std::filesystem::path(".") : base_dir;
+  ctx.max_objects = options.max_objects;
+  ctx.max_triangles = options.max_triangles;
+  World world;
+  try {
+    std::vector<YAML::Node> docs = YAML::LoadAll(std::string(yaml));
+    if (docs.empty()) throw WorldError(file_name, 0, "document", "empty file (expected a world mapping)");
+    if (docs.size() > 1) throw WorldError(file_name, LineOf(docs[1]), "document", "more than one YAML document");
+    world = ParseDocument(&ctx, docs[0], options);
+  } catch (const YAML::Exception& e) {
+    throw WorldError(file_name, e.mark.line >= 0 ? e.mark.line + 1 : 0, "yaml", e.msg);
+  }
+  if (options.validate) {
+    const ValidationResult v = ValidateWorld(world, options.validation);
+    if (!v.ok) {
+      const auto it = ctx.lines.find(v.field);
+      throw WorldError(file_name, it == ctx.lines.end() ? 0 : it->second, v.field, v.reason);
+    }
+  }
+  return world;
+}
+
+World LoadWorldFile(const std::filesystem::path& path, const WorldFileOptions& options) {
+  const std::string name = path.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw WorldError(name, 0, "file", "not found or not a regular file");
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) throw WorldError(name, 0, "file", "cannot read: " + ec.message());
+  if (size > kMaxFileBytes) {
+    throw WorldError(name, 0, "file", "too large (" + std::to_string(size) + " bytes; limit 256 MiB)");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw WorldError(name, 0, "file", "cannot open for reading");
+  std::string text(size, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(size));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  return ParseWorld(text, name, path.parent_path(), options);
+}
+
+std::string WorldToYaml(const World& world) {
+  std::string out;
+  out += "format: " + std::string(kWorldFormat) + "\n";
+  out += "name: " + Quote(world.metadata.name) + "\n";
+  out += "metadata:\n";
+  out += "  scenario: " + Quote(world.metadata.scenario) + "\n";
+  out += "  seed: " + std::to_string(world.metadata.seed) + "\n";
+  out += "  generator_version: " + std::to_string(world.metadata.generator_version) + "\n";
+  out += "  params: {";
+  bool first = true;
+  for (const auto& [k, v] : world.metadata.params) {
+    out += (first ? "" : ", ") + Key(k) + ": " + Quote(v);
+    first = false;
+  }
+  out += "}\n";
+  out += "bounds: {min: " + Vec(world.bounds.min()) + ", max: " + Vec(world.bounds.max()) + "}\n";
+  out += world.ground.enabled ? "ground: {z: " + Num(world.ground.z) + "}\n" : "ground: none\n";
+  out += "start: " + Vec(world.start) + "\n";
+  out += "goal: " + Vec(world.goal) + "\n";
+  if (world.objects.empty()) {
+    out += "objects: []\n";
+    return out;
+  }
+  out += "objects:\n";
+  struct Writer {
+    std::string* out;
+    void operator()(const Box& b) const {
+      *out += "  - box: {center: " + Vec(b.center) + ", size: " + Vec(b.size) + ", yaw: " + Num(b.yaw) + "}\n";
+    }
+    void operator()(const Cylinder& c) const {
+      *out += "  - cylinder: {base: " + Vec(c.base) + ", radius: " + Num(c.radius) + ", height: " + Num(c.height) + "}\n";
+    }
+    void operator()(const Ellipsoid& e) const {
+      *out += "  - ellipsoid: {center: " + Vec(e.center) + ", radii: " + Vec(e.radii) + "}\n";
+    }
+    void operator()(const MeshObject& m) const {
+      *out += "  - mesh: {file: " + Quote(m.path) + ", position: " + Vec(m.position) + ", yaw: " + Num(m.yaw) +
+              ", scale: " + Num(m.scale) + "}\n";
+    }
+  };
+  for (const auto& o : world.objects) std::visit(Writer{&out}, o);
+  return out;
+}
+
+void SaveWorldFile(const World& world, const std::filesystem::path& path) {
+  const std::string text = WorldToYaml(world);
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  if (!f) throw std::runtime_error("cannot open world file for writing: " + path.string());
+  f.write(text.data(), static_cast<std::streamsize>(text.size()));
+  f.close();
+  if (!f) throw std::runtime_error("cannot write world file: " + path.string());
+}
+
+}  // namespace enavi::worlds
