@@ -14,5 +14,9 @@ inline constexpr int kExitBadInput = 2;
 
 /// `enavi world gen|check|show` (server/cli/world_cmd.cc).
 void RegisterWorldCommands(CLI::App& app);
+/// `enavi fly` (server/cli/fly_cmd.cc).
+void RegisterFlyCommand(CLI::App& app);
+/// `enavi bench raycast|...` (server/cli/bench_cmd.cc).
+void RegisterBenchCommands(CLI::App& app);
 
 }  // namespace enavi::cli

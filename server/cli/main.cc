@@ -12,6 +12,8 @@ int main(int argc, char** argv) {
   CLI::App app{"E-Navi Farm: a simulation farm for UAV navigation stacks on weak onboard computers"};
   app.require_subcommand(1);
   RegisterWorldCommands(app);
+  RegisterFlyCommand(app);
+  RegisterBenchCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
