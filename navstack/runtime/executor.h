@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 
 #include "navstack/runtime/task.h"
 
@@ -45,5 +46,9 @@ class TaskExecutor {
   /// True while a job of the task is released and not finished.
   virtual bool active(TaskId task) const = 0;
 };
+
+/// Sees every job as it starts: what it did and the host CPU time its code took. Used by
+/// `enavi calibrate` to fit the cost model.
+using JobObserver = std::function<void(TaskId task, const WorkCounts& work, double host_cpu_seconds)>;
 
 }  // namespace enavi::navstack

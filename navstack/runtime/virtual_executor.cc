@@ -1,22 +1,16 @@
 #include "navstack/runtime/virtual_executor.h"
 
-#include <time.h>
-
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
+#include "navstack/common/cpu_time.h"
+
 namespace enavi::navstack {
 namespace {
 
 constexpr double kEps = 1e-12;
-
-double ThreadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 }  // namespace
 
@@ -82,6 +76,7 @@ void VirtualExecutor::Start(TaskId task) {
   const double cpu0 = ThreadCpuSeconds();
   JobOutput out = s.fn();
   const double host_cpu = ThreadCpuSeconds() - cpu0;
+  if (observer_) observer_(task, out.work, host_cpu);
   const double cost = cost_.JobSeconds(task, out.work, host_cpu);
   job.started = true;
   job.remaining = cost;

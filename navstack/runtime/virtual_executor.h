@@ -27,6 +27,7 @@ class VirtualExecutor final : public TaskExecutor {
   int cores() const override { return cores_; }
   const TaskStats& stats(TaskId task) const override { return slot(task).stats; }
   bool active(TaskId task) const override { return slot(task).job.has_value(); }
+  void SetJobObserver(JobObserver observer) { observer_ = std::move(observer); }
 
  private:
   struct Job {
@@ -57,6 +58,7 @@ class VirtualExecutor final : public TaskExecutor {
   const CostModel& cost_;
   double now_;
   std::array<Slot, kTaskCount> slots_;
+  JobObserver observer_;
 };
 
 }  // namespace enavi::navstack

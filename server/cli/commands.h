@@ -18,5 +18,7 @@ void RegisterWorldCommands(CLI::App& app);
 void RegisterFlyCommand(CLI::App& app);
 /// `enavi bench raycast|...` (server/cli/bench_cmd.cc).
 void RegisterBenchCommands(CLI::App& app);
+/// `enavi calibrate` (server/cli/calibrate_cmd.cc).
+void RegisterCalibrateCommand(CLI::App& app);
 
 }  // namespace enavi::cli

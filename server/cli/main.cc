@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   RegisterWorldCommands(app);
   RegisterFlyCommand(app);
   RegisterBenchCommands(app);
+  RegisterCalibrateCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

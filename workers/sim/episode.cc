@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "navstack/common/cpu_time.h"
 #include "navstack/control/controller.h"
 #include "navstack/eci/eci.h"
 #include "navstack/runtime/virtual_executor.h"
@@ -94,6 +95,7 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
 
   // Navigation stack on the board's executor.
   navstack::VirtualExecutor executor(board.cores, *cost);
+  if (options.job_observer) executor.SetJobObserver(options.job_observer);
   config.nav.goal = world.goal;
   config.nav.flight_bounds = world.bounds;
   config.nav.planner.robot_radius = std::max(config.nav.planner.robot_radius, vehicle.collision_radius);
@@ -134,7 +136,9 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
       camera.Render(*prepared.scene, frame->X_WC, &frame->image, spec.seed * 1000003ULL + frame->index);
       navstack::WorkCounts eci_work;
       const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * state.v_WB;
+      const double eci_cpu0 = navstack::ThreadCpuSeconds();
       eci_latest = navstack::ComputeEci(frame->image, config.nav.camera, v_C, config.nav.eci, &eci_work).eci;
+      if (options.job_observer) options.job_observer(TaskId::kEci, eci_work, navstack::ThreadCpuSeconds() - eci_cpu0);
       eci_cost_sum += cost->JobSeconds(TaskId::kEci, eci_work, 0.0);
       eci_sum += eci_latest;
       eci_min = std::min(eci_min, eci_latest);

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "api/episode.h"
+#include "navstack/runtime/executor.h"
 #include "worlds/world.h"
 
 namespace enavi::sim {
@@ -30,6 +31,8 @@ struct EpisodeOptions {
   double goal_radius = 0.5;   ///< m
   /// Called about once per simulated second with the sim time and the distance to the goal.
   std::function<void(double t, double distance_to_goal)> progress;
+  /// Sees every navstack job (and every eci computation) with its host CPU time: calibration.
+  navstack::JobObserver job_observer;
 };
 
 /// Flies `spec` in `world`. Bad specs (unknown board/method, bad overrides) throw

@@ -1,14 +1,13 @@
 #include "workers/sim/raycast_bench.h"
 
-#include <time.h>
-
-#include <chrono>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <stdexcept>
 
+#include "navstack/common/cpu_time.h"
 #include "workers/sim/bullet_raycaster.h"
 #include "workers/sim/static_world.h"
 
@@ -100,12 +99,6 @@ DepthComparison CompareDepthImages(const navstack::DepthImage& a, const navstack
   return c;
 }
 
-double ThreadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
 RaycastBenchResult RunRaycastBench(const worlds::TriangleMesh& mesh, const Eigen::Vector3d& start,
                                    const Eigen::Vector3d& goal,
                                    const RaycastBenchOptions& options) {
@@ -164,9 +157,9 @@ RaycastBenchResult RunRaycastBench(const worlds::TriangleMesh& mesh, const Eigen
     double cpu = 0.0;
     std::size_t next_shared = 0;
     for (int i = 0; i < options.frames; ++i) {
-      const double c0 = ThreadCpuSeconds();
+      const double c0 = navstack::ThreadCpuSeconds();
       camera.Render(scene, poses[i], &image);
-      cpu += ThreadCpuSeconds() - c0;
+      cpu += navstack::ThreadCpuSeconds() - c0;
       if (m != 0) continue;
       for (float d : image.data) valid += navstack::DepthImage::Valid(d) ? 1 : 0;
       while (next_shared < shared.size() && shared[next_shared] == i) {
@@ -189,9 +182,9 @@ RaycastBenchResult RunRaycastBench(const worlds::TriangleMesh& mesh, const Eigen
     double cpu = 0.0;
     DepthComparison agreement;
     for (std::size_t j = 0; j < shared.size(); ++j) {
-      const double c0 = ThreadCpuSeconds();
+      const double c0 = navstack::ThreadCpuSeconds();
       bullet.Render(poses[shared[j]], &image);
-      cpu += ThreadCpuSeconds() - c0;
+      cpu += navstack::ThreadCpuSeconds() - c0;
       agreement += CompareDepthImages(embree_images[j], image);
     }
     r.both_hit_pixels = agreement.both_hit;

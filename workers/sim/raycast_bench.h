@@ -91,7 +91,5 @@ RaycastBenchResult RunRaycastBench(const worlds::TriangleMesh& mesh, const Eigen
 /// JSON object with every field of `result` (names as in the struct).
 nlohmann::json ToJson(const RaycastBenchResult& result);
 
-/// CPU time consumed by the calling thread, s (CLOCK_THREAD_CPUTIME_ID).
-double ThreadCpuSeconds();
 
 }  // namespace enavi::sim
