@@ -34,7 +34,7 @@ struct GeometricControllerOptions {
   double max_tilt_deg = 35.0;  ///< bound on the angle between desired body z and world z
   double min_thrust = 1.5;     ///< N, collective thrust floor (keeps rotors spinning)
   double max_thrust = 30.0;    ///< N, collective thrust ceiling (<= 4 x MaxThrustPerRotor)
-  bool drag_feedforward = true;  ///< add the rotor-frame linear drag at the reference velocity
+  bool drag_feedforward = true;  ///< compensate VehicleParams::linear_drag (body axes) at v_ref
   bool jerk_feedforward = true;  ///< desired angular velocity from the reference jerk / yaw rate
 };
 
