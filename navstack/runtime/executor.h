@@ -47,8 +47,8 @@ class TaskExecutor {
   virtual bool active(TaskId task) const = 0;
 };
 
-/// Sees every job as it starts: what it did and the host CPU time its code took. Used by
-/// `enavi calibrate` to fit the cost model.
+/// Sees every job as it finishes: what it did and the host CPU time its code and its commit
+/// took. Used by `enavi calibrate` to fit the cost model.
 using JobObserver = std::function<void(TaskId task, const WorkCounts& work, double host_cpu_seconds)>;
 
 }  // namespace enavi::navstack

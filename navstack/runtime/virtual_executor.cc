@@ -76,11 +76,12 @@ void VirtualExecutor::Start(TaskId task) {
   const double cpu0 = ThreadCpuSeconds();
   JobOutput out = s.fn();
   const double host_cpu = ThreadCpuSeconds() - cpu0;
-  if (observer_) observer_(task, out.work, host_cpu);
-  const double cost = cost_.JobSeconds(task, out.work, host_cpu);
+  const double cost = cost_.JobSeconds(task, out.work, host_cpu + s.commit_cpu_mean_s);
   job.started = true;
   job.remaining = cost;
   job.commit = std::move(out.commit);
+  job.work = out.work;
+  job.host_cpu_s = host_cpu;
   ++s.stats.started;
   s.stats.cost_sum_s += cost;
   s.stats.cost_max_s = std::max(s.stats.cost_max_s, cost);
@@ -93,7 +94,15 @@ void VirtualExecutor::Finish(TaskId task) {
   s.job.reset();
   ++s.stats.completed;
   if (now_ > job.deadline + kEps) ++s.stats.late;
-  if (job.commit) job.commit();
+  double commit_cpu = 0;
+  if (job.commit) {
+    const double cpu0 = ThreadCpuSeconds();
+    job.commit();
+    commit_cpu = ThreadCpuSeconds() - cpu0;
+  }
+  s.stats.host_cpu_s += commit_cpu;
+  s.commit_cpu_mean_s += (commit_cpu - s.commit_cpu_mean_s) / static_cast<double>(s.stats.completed);
+  if (observer_) observer_(task, job.work, job.host_cpu_s + commit_cpu);
   if (s.pending_trigger) {
     const double d = *s.pending_trigger;
     s.pending_trigger.reset();

@@ -1,7 +1,9 @@
 #pragma once
 // The virtual clock: a discrete-event, preemptive global-EDF schedule of the board's N cores in
 // sim time. A job's code runs on the host when the simulated scheduler first gives it a core; its
-// board time comes from the cost model; its commit is applied at its simulated finish.
+// board time comes from the cost model; its commit is applied at its simulated finish. In measured
+// mode a job's host CPU is its code's plus the task's mean commit CPU so far (the commit itself
+// runs only at the finish, after the job's board time had to be known).
 
 #include <array>
 #include <memory>
@@ -35,6 +37,8 @@ class VirtualExecutor final : public TaskExecutor {
     double remaining = 0;  ///< board seconds still to execute
     bool started = false;
     std::function<void()> commit;
+    WorkCounts work;
+    double host_cpu_s = 0;  ///< of the job's code at its start
   };
   struct Slot {
     JobFn fn;
@@ -43,6 +47,7 @@ class VirtualExecutor final : public TaskExecutor {
     double last_release = -1;
     std::optional<Job> job;
     std::optional<double> pending_trigger;  ///< relative deadline of a coalesced trigger
+    double commit_cpu_mean_s = 0;  ///< running mean host CPU of the task's commits
     TaskStats stats;
   };
 

@@ -72,7 +72,8 @@ BoardProfile ParseBoardProfile(const std::string& yaml_text, const std::string& 
   }
   if (root["clock_ghz"] && root["clock_ghz"].Scalar() != "auto")
     b.clock_ghz = GetPositive(root, "clock_ghz", source, 10);
-  if (root["paper_gflops"]) b.paper_gflops = GetPositive(root, "paper_gflops", source, 1e6);
+  if (root["paper_gflops"] && !root["paper_gflops"].IsNull())
+    b.paper_gflops = GetPositive(root, "paper_gflops", source, 1e6);
   const YAML::Node speed = root["per_core_speed"];
   if (!speed) Fail(source, root, "per_core_speed", "missing");
   b.per_core_speed = GetPositive(speed, "value", source, 100);

@@ -12,15 +12,16 @@ constexpr int kUnits = static_cast<int>(navstack::WorkUnit::kCount);
 }
 
 CostFit FitCosts(const std::vector<JobSample>& samples) {
-  const int n_coef = kUnits + 1;  // per-job overhead, then one per unit
+  // One coefficient per unit and no per-job intercept: the eci's pixel count never varies, so an
+  // intercept would absorb its whole cost and charge it to every other task's jobs.
+  const int n_coef = kUnits;
   if (static_cast<int>(samples.size()) < 2 * n_coef)
     throw std::invalid_argument("calibration: " + std::to_string(samples.size()) + " job samples, need at least " +
                                 std::to_string(2 * n_coef));
   Eigen::MatrixXd A(samples.size(), n_coef);
   Eigen::VectorXd b(samples.size());
   for (std::size_t i = 0; i < samples.size(); ++i) {
-    A(i, 0) = 1.0;
-    for (int u = 0; u < kUnits; ++u) A(i, u + 1) = static_cast<double>(samples[i].work.n[u]);
+    for (int u = 0; u < kUnits; ++u) A(i, u) = static_cast<double>(samples[i].work.n[u]);
     b[i] = samples[i].host_cpu_s * 1e9;
   }
   // Unit-norm columns: counts span 1 to 1e6, which would otherwise swamp the solver's tolerance.
@@ -36,10 +37,10 @@ CostFit FitCosts(const std::vector<JobSample>& samples) {
 
   CostFit fit;
   fit.samples = static_cast<int>(samples.size());
-  fit.costs.ns.ns_per_job = coef[0];
+  fit.costs.ns.ns_per_job = 0.0;
   for (int u = 0; u < kUnits; ++u) {
-    fit.costs.ns.ns_per_unit[u] = coef[u + 1];
-    if (scale[u + 1] == 1.0 && A.col(u + 1).isZero()) fit.unobserved_units.emplace_back(navstack::kWorkUnitNames[u]);
+    fit.costs.ns.ns_per_unit[u] = coef[u];
+    if (A.col(u).isZero()) fit.unobserved_units.emplace_back(navstack::kWorkUnitNames[u]);
   }
   const Eigen::VectorXd predicted = A * nnls.x;
   const double mean = b.mean();
