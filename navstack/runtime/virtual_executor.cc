@@ -14,8 +14,8 @@ constexpr double kEps = 1e-12;
 
 }  // namespace
 
-VirtualExecutor::VirtualExecutor(int cores, const CostModel& cost, double t0)
-    : cores_(cores), cost_(cost), now_(t0) {
+VirtualExecutor::VirtualExecutor(int cores, const CostModel& cost, SchedulingPolicy policy, double t0)
+    : cores_(cores), policy_(policy), cost_(cost), now_(t0) {
   if (cores < 1) throw std::logic_error("VirtualExecutor: cores must be >= 1");
 }
 
@@ -58,11 +58,14 @@ std::vector<TaskId> VirtualExecutor::Running() const {
   std::vector<TaskId> ready;
   for (int i = 0; i < kTaskCount; ++i)
     if (slots_[i].job) ready.push_back(static_cast<TaskId>(i));
-  // EDF; ties by release time, then by task id, so the schedule is deterministic.
+  const bool fifo = policy_ == SchedulingPolicy::kFifoNonPreemptive;
+  // EDF (or FIFO by release); ties by release time, then by task id, so the schedule is
+  // deterministic. Without preemption, started jobs keep their cores: they sort first.
   std::sort(ready.begin(), ready.end(), [&](TaskId a, TaskId b) {
     const Job& ja = *slot(a).job;
     const Job& jb = *slot(b).job;
-    if (ja.deadline != jb.deadline) return ja.deadline < jb.deadline;
+    if (fifo && ja.started != jb.started) return ja.started;
+    if (!fifo && ja.deadline != jb.deadline) return ja.deadline < jb.deadline;
     if (ja.release != jb.release) return ja.release < jb.release;
     return a < b;
   });

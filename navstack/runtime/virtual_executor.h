@@ -15,10 +15,20 @@
 
 namespace enavi::navstack {
 
+/// How jobs share the board's cores.
+enum class SchedulingPolicy {
+  /// Preemptive global EDF over all cores: E-Navi's tasks under SCHED_DEADLINE (paper Sec. III.A).
+  kGlobalEdf,
+  /// Non-preemptive, first released first served: the callbacks of a ROS node's single-threaded
+  /// spinner, as in the fixed-configuration baseline (Ego-Planner's node), on `cores` threads.
+  kFifoNonPreemptive,
+};
+
 class VirtualExecutor final : public TaskExecutor {
  public:
   /// @pre cores >= 1; `cost` outlives the executor.
-  VirtualExecutor(int cores, const CostModel& cost, double t0 = 0.0);
+  VirtualExecutor(int cores, const CostModel& cost, SchedulingPolicy policy = SchedulingPolicy::kGlobalEdf,
+                  double t0 = 0.0);
 
   void Register(TaskId task, JobFn fn) override;
   void SetRate(TaskId task, double hz) override;
@@ -60,6 +70,7 @@ class VirtualExecutor final : public TaskExecutor {
   void Finish(TaskId task);
 
   int cores_;
+  SchedulingPolicy policy_;
   const CostModel& cost_;
   double now_;
   std::array<Slot, kTaskCount> slots_;

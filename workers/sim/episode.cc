@@ -8,8 +8,6 @@
 #include "navstack/common/cpu_time.h"
 #include "navstack/control/controller.h"
 #include "navstack/eci/eci.h"
-#include "navstack/runtime/virtual_executor.h"
-#include "navstack/stack/nav_stack.h"
 #include "workers/board/board_profile.h"
 #include "workers/sim/depth_camera.h"
 #include "workers/sim/embree_scene.h"
@@ -17,6 +15,7 @@
 #include "workers/sim/flight_recorder.h"
 #include "workers/sim/quadrotor.h"
 #include "workers/sim/static_world.h"
+#include "workers/sim/virtual_nav_link.h"
 #include "worlds/mesh.h"
 #include "worlds/resolve.h"
 
@@ -35,10 +34,10 @@ std::unique_ptr<navstack::CostModel> MakeCostModel(const api::EpisodeSpec& spec,
 }
 
 // Navigation-task busy time: the four tasks the paper counts as navigation workload.
-double NavBusy(const navstack::TaskExecutor& ex) {
+double NavBusy(const NavAccounting& acc) {
   double busy = 0;
   for (int i = 0; i < navstack::kTaskCount; ++i)
-    if (navstack::IsNavigationTask(static_cast<TaskId>(i))) busy += ex.stats(static_cast<TaskId>(i)).busy_s;
+    if (navstack::IsNavigationTask(static_cast<TaskId>(i))) busy += acc.tasks[i].busy_s;
   return busy;
 }
 
@@ -65,13 +64,24 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const EpisodeOptions
   return RunEpisode(spec, *world, options);
 }
 
+namespace {
+
+std::unique_ptr<NavLink> MakeNavLink(const api::EpisodeSpec& spec, const EpisodeConfig& config,
+                                     const board::BoardProfile& board, const navstack::VehicleState& initial,
+                                     const EpisodeOptions& options) {
+  const int threads = config.scheduler.threads > 0 ? std::min(config.scheduler.threads, board.cores) : board.cores;
+  if (spec.clock == "virtual")
+    return std::make_unique<VirtualNavLink>(config.nav, threads, config.scheduler.policy, MakeCostModel(spec, board),
+                                            initial, options.job_observer);
+  throw std::invalid_argument("clock: '" + spec.clock + "' is not available in this build (known: virtual)");
+}
+
+}  // namespace
+
 api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld& prepared,
                               const EpisodeOptions& options) {
-  if (spec.clock != "virtual")
-    throw std::invalid_argument("clock: '" + spec.clock + "' is not available in this build (known: virtual)");
   const worlds::World& world = prepared.world;
   const board::BoardProfile board = board::LoadBoard(spec.board);
-  const auto cost = MakeCostModel(spec, board);
   EpisodeConfig config = MakeEpisodeConfig(spec);
 
   api::EpisodeResult result;
@@ -79,8 +89,11 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   result.scenario = world.metadata.scenario.empty() ? "custom" : world.metadata.scenario;
   result.straight_line_m = (world.goal - world.start).norm();
   result.notes["clock"] = spec.clock;
-  result.notes["cost"] = cost->mode();
   result.notes["board_cores"] = std::to_string(board.cores);
+  result.notes["scheduler"] =
+      std::string(config.scheduler.policy == navstack::SchedulingPolicy::kGlobalEdf ? "global EDF" : "FIFO, no preemption") +
+      " on " + std::to_string(config.scheduler.threads > 0 ? std::min(config.scheduler.threads, board.cores) : board.cores) +
+      " thread(s)";
   result.notes["triangles"] = std::to_string(prepared.triangles);
 
   // Vehicle: hovering at the start, facing the goal.
@@ -93,13 +106,11 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   navstack::Controller controller(vehicle);
   const DepthCamera camera(config.nav.camera, config.noise);
 
-  // Navigation stack on the board's executor.
-  navstack::VirtualExecutor executor(board.cores, *cost);
-  if (options.job_observer) executor.SetJobObserver(options.job_observer);
+  // The navigation stack under the board's emulation.
   config.nav.goal = world.goal;
   config.nav.flight_bounds = world.bounds;
   config.nav.planner.robot_radius = std::max(config.nav.planner.robot_radius, vehicle.collision_radius);
-  navstack::NavStack nav(config.nav, &executor, quad.State());
+  const std::unique_ptr<NavLink> nav = MakeNavLink(spec, config, board, quad.State(), options);
 
   const double timeout = spec.timeout_s > 0 ? spec.timeout_s
                                             : 20.0 + 6.0 * result.straight_line_m / config.nav.planner.v_max;
@@ -120,7 +131,7 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   for (long k = 0;; ++k) {
     const double t = k * options.physics_dt;
     const navstack::VehicleState state = quad.State();
-    nav.OnState(state);
+    nav->OnState(state);
 
     // Sensor: a depth frame at f_sen; eci of every frame for the metrics.
     if (t >= next_frame_t - 1e-9) {
@@ -138,35 +149,36 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
       const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * state.v_WB;
       const double eci_cpu0 = navstack::ThreadCpuSeconds();
       eci_latest = navstack::ComputeEci(frame->image, config.nav.camera, v_C, config.nav.eci, &eci_work).eci;
-      if (options.job_observer) options.job_observer(TaskId::kEci, eci_work, navstack::ThreadCpuSeconds() - eci_cpu0);
-      eci_cost_sum += cost->JobSeconds(TaskId::kEci, eci_work, 0.0);
+      const double eci_cpu = navstack::ThreadCpuSeconds() - eci_cpu0;
+      if (options.job_observer) options.job_observer(TaskId::kEci, eci_work, eci_cpu);
+      eci_cost_sum += nav->OffBoardSeconds(TaskId::kEci, eci_work, eci_cpu);
       eci_sum += eci_latest;
       eci_min = std::min(eci_min, eci_latest);
       eci_max = std::max(eci_max, eci_latest);
-      nav.OnFrame(std::move(frame));
+      nav->OnFrame(std::move(frame));
     }
 
-    executor.AdvanceTo(t);
-    for (const auto& e : nav.TakeEvents()) {
+    nav->AdvanceTo(t);
+    for (const auto& e : nav->TakeEvents()) {
       if (e.kind == "replan") ++result.replans;
       interval_events += (interval_events.empty() ? "" : ";") + e.kind;
       if (result.events.size() < 5000) result.events.push_back({e.t, e.kind, e.detail});
     }
 
-    if (k % control_every == 0) quad.SetCommand(controller.Update(state, nav.Reference(t)));
+    if (k % control_every == 0) quad.SetCommand(controller.Update(state, nav->Reference(t)));
     if (k % record_every == 0) recorder.Sample(state.p_WB, state.v_WB);
     if (k % series_every == 0) {
       api::TimeSeries& s = result.series;
-      const double busy = NavBusy(executor);
+      const double busy = NavBusy(nav->Accounting());
       s.t.push_back(t);
       s.position.push_back(ToVec3(state.p_WB));
       s.velocity.push_back(ToVec3(state.v_WB));
       s.eci.push_back(eci_latest);
-      const navstack::TaskRates& r = nav.rates();
+      const navstack::TaskRates r = nav->rates();
       s.f_per.push_back(r.f_per);
       s.f_col.push_back(r.collision_on_map_update ? r.f_per : r.f_col);
       s.f_dif.push_back(r.f_dif);
-      s.res.push_back(nav.map_resolution());
+      s.res.push_back(nav->map_resolution());
       s.utilisation.push_back(k == 0 ? 0.0 : 100.0 * (busy - last_busy) / options.series_dt);
       last_busy = busy;
       s.events.push_back(std::exchange(interval_events, {}));
@@ -198,6 +210,7 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   }
 
   // Results (DESIGN.md section 8).
+  const NavAccounting acc = nav->Accounting();
   const double T = quad.time();
   result.sim_time_s = T;
   result.flight_time_s = T;
@@ -205,16 +218,16 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   result.velocity_mean_mps = recorder.speed_mean();
   result.velocity_std_mps = recorder.speed_std();
   result.accel_peak_mps2 = recorder.accel_peak();
-  auto util = [&](TaskId id) { return T > 0 ? 100.0 * executor.stats(id).busy_s / T : 0.0; };
+  auto util = [&](TaskId id) { return T > 0 ? 100.0 * acc[id].busy_s / T : 0.0; };
   result.task_cpu_util_pct = {util(TaskId::kPerception), util(TaskId::kPlanning), util(TaskId::kCollision),
                               util(TaskId::kDifference)};
   result.nav_cpu_util_pct = result.task_cpu_util_pct.Sum();
   for (int i = 0; i < navstack::kTaskCount; ++i) {
     const auto id = static_cast<TaskId>(i);
     if (!navstack::IsNavigationTask(id)) continue;
-    result.jobs_released += executor.stats(id).released;
-    result.deadline_misses += executor.stats(id).misses();
-    const auto& st = executor.stats(id);
+    const navstack::TaskStats& st = acc[id];
+    result.jobs_released += st.released;
+    result.deadline_misses += st.misses();
     result.notes["task." + std::string(navstack::TaskName(id))] =
         "released " + std::to_string(st.released) + ", late " + std::to_string(st.late) + ", skipped " +
         std::to_string(st.skipped) + ", mean job " + std::to_string(1e3 * st.MeanCost()) + " ms, max " +
@@ -224,8 +237,9 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
       result.jobs_released > 0 ? static_cast<double>(result.deadline_misses) / result.jobs_released : 0.0;
   result.eci = {frame_index > 0 ? eci_min : 0.0, frame_index > 0 ? eci_sum / frame_index : 0.0, eci_max};
   result.eci_time_ms_mean = frame_index > 0 ? 1e3 * eci_cost_sum / frame_index : 0.0;
-  result.adapter_time_ms_mean = 0.0;
-  result.notes["plan_failures"] = std::to_string(nav.plan_failures());
+  result.adapter_time_ms_mean = 1e3 * acc[TaskId::kAdapter].MeanCost();
+  result.notes["plan_failures"] = std::to_string(acc.plan_failures);
+  for (const auto& [k, v] : acc.notes) result.notes[k] = v;
   return result;
 }
 

@@ -37,6 +37,13 @@ const std::vector<Setter>& Setters() {
        }},
       {{"camera.noise_k", 0.0, 0.05, false, "depth noise sigma = k d^2, 1/m"},
        [](EpisodeConfig& c, double v) { c.noise.k = v; }},
+      {{"sched.threads", 0, 64, true, "threads the jobs run on (0: all board cores)"},
+       [](EpisodeConfig& c, double v) { c.scheduler.threads = static_cast<int>(v); }},
+      {{"sched.global_edf", 0, 1, true, "1: preemptive global EDF, 0: FIFO without preemption"},
+       [](EpisodeConfig& c, double v) {
+         c.scheduler.policy = v > 0 ? navstack::SchedulingPolicy::kGlobalEdf
+                                    : navstack::SchedulingPolicy::kFifoNonPreemptive;
+       }},
   };
   return setters;
 }
@@ -68,6 +75,7 @@ EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
   if (spec.method == "baseline") {
     config.nav.rates = BaselineRates();
     config.nav.map.resolution = config.nav.rates.resolution;
+    config.scheduler = {navstack::SchedulingPolicy::kFifoNonPreemptive, 1};
   } else if (spec.method == "enavi") {
     throw std::invalid_argument(
         "method: 'enavi' is not available in this build yet: its strategy controller and trained "

@@ -7,13 +7,23 @@
 #include <vector>
 
 #include "api/episode.h"
+#include "navstack/runtime/virtual_executor.h"
 #include "navstack/stack/nav_stack.h"
 #include "workers/sim/depth_camera.h"
 
 namespace enavi::sim {
 
+/// How the stack's jobs are scheduled on the board.
+struct SchedulerConfig {
+  navstack::SchedulingPolicy policy = navstack::SchedulingPolicy::kGlobalEdf;
+  /// Threads the jobs may use: 0 = all board cores (E-Navi's global EDF); the baseline's ROS
+  /// node runs its callbacks on one spinner thread.
+  int threads = 0;
+};
+
 struct EpisodeConfig {
   navstack::NavStackOptions nav;
+  SchedulerConfig scheduler;
   DepthNoise noise;
 };
 
@@ -28,6 +38,9 @@ const std::vector<Tunable>& Tunables();
 
 /// The baseline's configuration (paper Sec. VI): perception 30 Hz, planning on a 20 Hz timer,
 /// collision check after every map update, no difference detection, 0.1 m map, no adaptation.
+/// Its jobs run as the callbacks of one single-threaded ROS node (Ego-Planner's), first come
+/// first served without preemption: the "partitioned scheme with static periods" the paper
+/// contrasts E-Navi with (Sec. I).
 navstack::TaskRates BaselineRates();
 
 /// Builds the configuration for `spec.method` and applies `spec.overrides`. Throws

@@ -104,6 +104,42 @@ TEST(VirtualExecutorTest, ShortDeadlineJobPreemptsLongJob) {
   EXPECT_NEAR(plan_commits[0], 0.035, 1e-9) << "planning resumes and loses 5 ms";
 }
 
+TEST(VirtualExecutorTest, FifoPolicyNeverPreempts) {
+  // The same arrivals as ShortDeadlineJobPreemptsLongJob, on a single-threaded spinner.
+  const auto cost = MillisecondPerPixel();
+  VirtualExecutor ex(1, cost, SchedulingPolicy::kFifoNonPreemptive);
+  std::vector<double> plan_commits, col_commits;
+  ex.Register(TaskId::kPlanning, FixedCost(30, nullptr, &plan_commits, &ex));
+  ex.Register(TaskId::kCollision, FixedCost(5, nullptr, &col_commits, &ex));
+  ex.Trigger(TaskId::kPlanning, 0.200);
+  ex.AdvanceTo(0.010);
+  ex.Trigger(TaskId::kCollision, 0.010);
+  AdvanceInSteps(ex, 0.1);
+  ASSERT_EQ(col_commits.size(), 1u);
+  ASSERT_EQ(plan_commits.size(), 1u);
+  EXPECT_NEAR(plan_commits[0], 0.030, 1e-9) << "planning keeps the core";
+  EXPECT_NEAR(col_commits[0], 0.035, 1e-9) << "the collision check waits and misses its deadline";
+  EXPECT_EQ(ex.stats(TaskId::kCollision).late, 1);
+}
+
+TEST(VirtualExecutorTest, FifoPolicyServesInReleaseOrder) {
+  const auto cost = MillisecondPerPixel();
+  VirtualExecutor ex(1, cost, SchedulingPolicy::kFifoNonPreemptive);
+  std::vector<double> a, b, c;
+  ex.Register(TaskId::kPlanning, FixedCost(10, nullptr, &a, &ex));
+  ex.Register(TaskId::kPerception, FixedCost(10, nullptr, &b, &ex));
+  ex.Register(TaskId::kCollision, FixedCost(10, nullptr, &c, &ex));
+  ex.Trigger(TaskId::kPlanning, 1.0);
+  ex.AdvanceTo(0.001);
+  ex.Trigger(TaskId::kPerception, 0.5);
+  ex.AdvanceTo(0.002);
+  ex.Trigger(TaskId::kCollision, 0.1);  // earliest deadline, but released last
+  AdvanceInSteps(ex, 0.1);
+  EXPECT_NEAR(a.at(0), 0.010, 1e-9);
+  EXPECT_NEAR(b.at(0), 0.020, 1e-9);
+  EXPECT_NEAR(c.at(0), 0.030, 1e-9);
+}
+
 TEST(VirtualExecutorTest, TwoCoresRunTwoJobsInParallel) {
   const auto cost = MillisecondPerPixel();
   VirtualExecutor ex(2, cost);

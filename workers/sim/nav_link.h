@@ -1,0 +1,49 @@
+#pragma once
+// How the episode loop reaches the navigation stack: in-process on the virtual clock, or in a
+// throttled child process on the emulated clock. The loop (sensor, controller, physics,
+// metrics) is the same for both; only this link differs.
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "navstack/common/camera.h"
+#include "navstack/common/state.h"
+#include "navstack/runtime/executor.h"
+#include "navstack/stack/nav_stack.h"
+
+namespace enavi::sim {
+
+/// What the stack spent and missed, per task, for the episode's results.
+struct NavAccounting {
+  std::array<navstack::TaskStats, navstack::kTaskCount> tasks{};
+  std::int64_t plan_failures = 0;
+  std::map<std::string, std::string> notes;  ///< how the numbers were produced (fallbacks, quotas)
+
+  const navstack::TaskStats& operator[](navstack::TaskId id) const { return tasks[static_cast<int>(id)]; }
+};
+
+class NavLink {
+ public:
+  virtual ~NavLink() = default;
+  /// Latest odometry and a new sensor frame (call before AdvanceTo for the same instant).
+  virtual void OnState(const navstack::VehicleState& state) = 0;
+  virtual void OnFrame(navstack::DepthFramePtr frame) = 0;
+  /// Lets the stack run up to sim time t (virtual: the EDF schedule; emulated: wall-clock pacing).
+  virtual void AdvanceTo(double t) = 0;
+  /// The reference the flight controller tracks at t.
+  virtual navstack::TrajectorySample Reference(double t) = 0;
+  virtual std::vector<navstack::NavEvent> TakeEvents() = 0;
+  /// Current configuration, for the time series.
+  virtual navstack::TaskRates rates() const = 0;
+  virtual double map_resolution() const = 0;
+  virtual NavAccounting Accounting() const = 0;
+  /// Board seconds of work done outside the stack's schedule (the metrics' eci of every frame).
+  virtual double OffBoardSeconds(navstack::TaskId task, const navstack::WorkCounts& work,
+                                 double host_cpu_s) const = 0;
+};
+
+}  // namespace enavi::sim

@@ -1,0 +1,37 @@
+#pragma once
+// The virtual clock's link: the stack in this process on a VirtualExecutor (sim-time global EDF
+// over the board's cores, cost model pricing every job).
+
+#include <memory>
+
+#include "navstack/runtime/cost_model.h"
+#include "navstack/runtime/virtual_executor.h"
+#include "workers/sim/nav_link.h"
+
+namespace enavi::sim {
+
+class VirtualNavLink final : public NavLink {
+ public:
+  VirtualNavLink(const navstack::NavStackOptions& options, int threads, navstack::SchedulingPolicy policy,
+                 std::unique_ptr<navstack::CostModel> cost, const navstack::VehicleState& initial,
+                 navstack::JobObserver observer = {});
+
+  void OnState(const navstack::VehicleState& state) override { nav_.OnState(state); }
+  void OnFrame(navstack::DepthFramePtr frame) override { nav_.OnFrame(std::move(frame)); }
+  void AdvanceTo(double t) override { executor_.AdvanceTo(t); }
+  navstack::TrajectorySample Reference(double t) override { return nav_.Reference(t); }
+  std::vector<navstack::NavEvent> TakeEvents() override { return nav_.TakeEvents(); }
+  navstack::TaskRates rates() const override { return nav_.rates(); }
+  double map_resolution() const override { return nav_.map_resolution(); }
+  NavAccounting Accounting() const override;
+  double OffBoardSeconds(navstack::TaskId task, const navstack::WorkCounts& work, double host_cpu_s) const override {
+    return cost_->JobSeconds(task, work, host_cpu_s);
+  }
+
+ private:
+  std::unique_ptr<navstack::CostModel> cost_;
+  navstack::VirtualExecutor executor_;
+  navstack::NavStack nav_;
+};
+
+}  // namespace enavi::sim
