@@ -12,4 +12,10 @@ inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitBadInput = 2;
 
+// The farm (server/cli/{serve,worker,client,eval}_cmd.cc).
+void RegisterServeCommand(CLI::App& app);
+void RegisterWorkerCommand(CLI::App& app);
+void RegisterClientCommands(CLI::App& app);  // submit, status, results, cancel
+void RegisterEvalCommand(CLI::App& app);
+
 }  // namespace enavi::cli

@@ -11,6 +11,10 @@ int main(int argc, char** argv) {
   using namespace enavi::cli;
   CLI::App app{"E-Navi Farm: a simulation farm for UAV navigation stacks on weak onboard computers"};
   app.require_subcommand(1);
+  RegisterServeCommand(app);
+  RegisterWorkerCommand(app);
+  RegisterClientCommands(app);
+  RegisterEvalCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
