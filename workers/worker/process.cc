@@ -137,6 +137,9 @@ ChildProcess ChildProcess::Spawn(const SpawnOptions& options) {
     execve(program.c_str(), argv.data(), envp.data());
     ChildFail("execve");
   }
+  // Both sides set the group (the classic race): a signal sent right after Spawn returns must
+  // already reach the child's group.
+  setpgid(pid, pid);
   for (int fd : {out_fd, err_fd, null_fd}) if (fd >= 0) close(fd);
   ChildProcess child;
   child.pid_ = pid;
@@ -203,7 +206,9 @@ std::optional<ExitStatus> ChildProcess::Wait(std::chrono::milliseconds timeout) 
 }
 
 void ChildProcess::Signal(int signal) {
-  if (running()) kill(-pid_, signal);
+  if (!running()) return;
+  // The group, or the child alone if it has already exec'd into something that left the group.
+  if (kill(-pid_, signal) != 0) kill(pid_, signal);
 }
 
 ExitStatus ChildProcess::Terminate(std::chrono::milliseconds grace) {
