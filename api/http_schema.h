@@ -11,7 +11,8 @@
 //   POST /api/jobs/{id}/cancel     -> JobProgress
 //   GET  /api/episodes/{id}/result -> full result JSON (time series and events included)
 //   GET  /api/workers              -> [{"worker_id", "host", "slots", "free_slots", ...}]
-//   GET  /api/health               -> {"ok": true, "protocol": 1}
+//   GET  /api/health               -> {"ok": true, "protocol": 1, "stats": {results_received,
+//                                      results_stored, duplicates, assignments, leases_lost}}
 // State-changing requests (POST) carry "Authorization: Bearer TOKEN" when the server has a token.
 
 #include <cstdint>

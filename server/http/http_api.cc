@@ -119,8 +119,15 @@ void HttpApi::Routes() {
     }
   });
 
-  s.Get("/api/health", [](const httplib::Request&, httplib::Response& res) {
-    Reply(res, 200, {{"ok", true}, {"protocol", api::kFarmProtocolVersion}});
+  s.Get("/api/health", [this](const httplib::Request&, httplib::Response& res) {
+    const FarmServerStats st = farm_->stats();
+    Reply(res, 200,
+          {{"ok", true},
+           {"protocol", api::kFarmProtocolVersion},
+           {"stats",
+            {{"results_received", st.results_received}, {"results_stored", st.results_stored},
+             {"duplicates", st.duplicates}, {"assignments", st.assignments},
+             {"leases_lost", st.leases_lost}}}});
   });
 
   s.Post("/api/jobs", [this](const httplib::Request& req, httplib::Response& res) {

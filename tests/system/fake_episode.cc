@@ -4,6 +4,7 @@
 //
 // Behaviour, from the spec's overrides (per episode) or the environment (every episode):
 //   fake.sleep_s        / FAKE_EPISODE_SLEEP_S         sleep before answering
+//   fake.busy_s         / FAKE_EPISODE_BUSY_S          spin one core this long (CPU-bound)
 //   fake.crash_attempts / FAKE_EPISODE_CRASH_ATTEMPTS  abort() while ENAVI_ATTEMPT <= N
 //   fake.exit_code      / FAKE_EPISODE_EXIT_CODE       exit with this code, no result
 //   fake.hang           / FAKE_EPISODE_HANG            never finish
@@ -74,6 +75,14 @@ int main(int argc, char** argv) {
     while (true) std::this_thread::sleep_for(std::chrono::hours(1));
   }
   if (sleep_s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(sleep_s));
+  const double busy_s = Setting(spec, "fake.busy_s", "FAKE_EPISODE_BUSY_S", 0.0);
+  if (busy_s > 0) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(busy_s);
+    volatile double sink = 0;
+    while (std::chrono::steady_clock::now() < until) {
+      for (int i = 0; i < 10000; ++i) sink = sink + std::sqrt(static_cast<double>(i));
+    }
+  }
   if (attempt <= Setting(spec, "fake.crash_attempts", "FAKE_EPISODE_CRASH_ATTEMPTS", 0.0)) {
     std::cerr << "fake_episode: crashing on attempt " << attempt << " as asked\n";
     std::abort();
