@@ -73,7 +73,12 @@ class FarmFixture : public ::testing::Test {
         }
       }
     }
-    fs::remove_all(dir_);
+    // ENAVI_KEEP_SYSTEM_LOGS=1 keeps the directory (logs, database) for a look afterwards.
+    if (const char* keep = std::getenv("ENAVI_KEEP_SYSTEM_LOGS"); keep && *keep == '1') {
+      std::cerr << "kept " << dir_ << "\n";
+    } else {
+      fs::remove_all(dir_);
+    }
   }
 
   // Prefix for commands run elsewhere (ip netns exec NS); empty: here.
@@ -82,12 +87,12 @@ class FarmFixture : public ::testing::Test {
   virtual std::vector<std::string> BusArgs(const std::string& /*node*/) const { return {"--loopback"}; }
 
   worker::ChildProcess& Start(const std::string& name, std::vector<std::string> argv,
-                              std::vector<std::string> env = {}) {
+                              std::vector<std::string> env = {}, std::string log = "") {
     worker::SpawnOptions o;
     o.argv = Prefix(name);
     o.argv.insert(o.argv.end(), argv.begin(), argv.end());
     o.env = std::move(env);
-    o.stdout_file = dir_ / (name + ".log");
+    o.stdout_file = dir_ / ((log.empty() ? name : log) + ".log");
     o.stderr_file = o.stdout_file;
     auto [it, inserted] = processes_.insert_or_assign(name, worker::ChildProcess::Spawn(o));
     return it->second;
@@ -95,13 +100,14 @@ class FarmFixture : public ::testing::Test {
 
   /// Starts `enavi serve` on the database in the test directory; returns its URL.
   std::string StartServer(const std::string& node = "server") {
-    const fs::path ready = dir_ / ("ready-" + std::to_string(server_starts_++));
+    const std::string run = std::to_string(server_starts_++);
+    const fs::path ready = dir_ / ("ready-" + run);
     std::vector<std::string> argv = {EnaviBinary().string(), "serve", "--db",
                                      (dir_ / "farm.db").string(), "--http", "127.0.0.1:0",
                                      "--ready-file", ready.string(), "--domain",
                                      std::to_string(domain_), "--partition", partition_};
     for (const auto& a : BusArgs(node)) argv.push_back(a);
-    Start(node, argv);
+    Start(node, argv, {}, node + "-" + run);  // one log per start
     EXPECT_TRUE(Eventually([&] { return fs::exists(ready); }, 30s)) << "server did not start";
     std::string url = ReadText(ready);
     while (!url.empty() && url.back() == '\n') url.pop_back();
