@@ -181,9 +181,42 @@ Store::Store(const std::filesystem::path& path, StoreOptions options)
   db_->Exec(kSchema);
   db_->Exec("PRAGMA user_version = " + std::to_string(kStoreSchemaVersion));
   tx.Commit();
+  db_->Exec("PRAGMA wal_autocheckpoint = 0");
+  checkpointer_ = std::thread([this, path] { CheckpointLoop(path); });
 }
 
-Store::~Store() = default;
+Store::~Store() {
+  {
+    std::lock_guard lock(checkpoint_mutex_);
+    stop_checkpoints_ = true;
+  }
+  checkpoint_cv_.notify_all();
+  if (checkpointer_.joinable()) checkpointer_.join();
+  // Fold the WAL into the database file, so the file alone is the whole store.
+  try {
+    db_->Exec("PRAGMA wal_checkpoint(TRUNCATE)");
+  } catch (const StoreError&) {
+    // Another connection is reading: the WAL stays and is replayed on the next open.
+  }
+}
+
+void Store::CheckpointLoop(std::filesystem::path path) {
+  // PASSIVE: copies what no reader still needs and never blocks the writer. Once everything is
+  // copied, the next commit starts the WAL from its beginning, so the WAL stays bounded.
+  Database db(path, options_.busy_timeout_ms);
+  std::unique_lock lock(checkpoint_mutex_);
+  while (!stop_checkpoints_) {
+    checkpoint_cv_.wait_for(lock, std::chrono::milliseconds(500));
+    if (stop_checkpoints_) break;
+    lock.unlock();
+    try {
+      db.Exec("PRAGMA wal_checkpoint(PASSIVE)");
+    } catch (const StoreError&) {
+      // Busy: the next round catches up.
+    }
+    lock.lock();
+  }
+}
 
 // ---------------------------------------------------------------- jobs
 

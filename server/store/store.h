@@ -17,9 +17,11 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <condition_variable>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -140,9 +142,17 @@ class Store {
   void FinishJobsIfComplete(const std::vector<std::string>& job_ids, std::int64_t now_ms);
   api::JobProgress ProgressLocked(const std::string& job_id, std::int64_t now_ms);
 
+  void CheckpointLoop(std::filesystem::path path);
+
   StoreOptions options_;
   std::mutex mutex_;  // one connection, used by the scheduler and the HTTP threads
   std::unique_ptr<Database> db_;
+  // WAL checkpoints run on their own connection and thread, off the ingestion path: copying
+  // pages into the database file inside a commit halved result ingestion with large series.
+  std::mutex checkpoint_mutex_;
+  std::condition_variable checkpoint_cv_;
+  bool stop_checkpoints_ = false;
+  std::thread checkpointer_;
 };
 
 /// Packs a time series into the compact binary form stored in the results table.
