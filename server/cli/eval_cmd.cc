@@ -24,7 +24,8 @@ struct EvalFlags {
   bool verbose = false;
 };
 
-void RunEvalCommand(EvalFlags f) {
+void RunEvalCommand(EvalFlags f, const CLI::App& root) {
+  RequireFlyUnlessEpisodeCmd(root, f.options.episode_command);
   StopSignals signals;
   SetupLogging(f.verbose);
   if (!f.verbose) spdlog::set_level(spdlog::level::warn);
@@ -84,7 +85,7 @@ void RegisterEvalCommand(CLI::App& app) {
       ->check(CLI::Range(0, 232));
   sub->add_flag("--json", f->json, "print the result objects as JSON instead of the table");
   sub->add_flag("-v,--verbose", f->verbose, "server log on stderr");
-  sub->callback([f] { RunEvalCommand(*f); });
+  sub->callback([f, &app] { RunEvalCommand(*f, app); });
 }
 
 }  // namespace enavi::cli

@@ -114,6 +114,16 @@ void StopSignals::Watch(std::function<void(int)> on_signal) {
   });
 }
 
+void RequireFlyUnlessEpisodeCmd(const CLI::App& root, const std::string& episode_cmd) {
+  if (!episode_cmd.empty()) return;
+  for (const CLI::App* sub : root.get_subcommands([](const CLI::App*) { return true; })) {
+    if (sub->get_name() == "fly") return;
+  }
+  throw std::runtime_error(
+      "this enavi build has no `fly` subcommand, the default episode command "
+      "(`enavi fly --spec-file S --result-file R`); pass --episode-cmd PROGRAM");
+}
+
 std::pair<std::string, int> ParseHostPort(const std::string& text, const std::string& flag) {
   const std::size_t colon = text.rfind(':');
   if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) {

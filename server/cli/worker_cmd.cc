@@ -29,7 +29,8 @@ struct WorkerFlags {
   BusFlags bus;
 };
 
-void RunWorker(const WorkerFlags& f) {
+void RunWorker(const WorkerFlags& f, const CLI::App& root) {
+  RequireFlyUnlessEpisodeCmd(root, f.episode_cmd);
   StopSignals signals;
   SetupLogging(f.verbose);
   BusFlags bus_flags = f.bus;
@@ -102,7 +103,7 @@ void RegisterWorkerCommand(CLI::App& app) {
       ->delimiter(',');
   sub->add_flag("-v,--verbose", f->verbose, "debug logging");
   AddBusFlags(sub, &f->bus);
-  sub->callback([f] { RunWorker(*f); });
+  sub->callback([f, &app] { RunWorker(*f, app); });
 }
 
 }  // namespace enavi::cli

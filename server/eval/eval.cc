@@ -83,6 +83,8 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   const api::JobSpec job = api::ParseJobSpec(yaml, "enavi eval flags", options.job_spec);
   const auto episodes = api::ExpandJob(job);
 
+  const fs::path enavi = options.enavi.empty() ? worker::SelfExecutable() : options.enavi;
+
   TempDir tmp;
   const fs::path db = options.db.empty() ? tmp.path() / "eval.db" : options.db;
 
@@ -106,7 +108,6 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   farm.Start();
 
   // Workers: separate processes running `enavi worker`, as on a cluster.
-  const fs::path enavi = options.enavi.empty() ? worker::SelfExecutable() : options.enavi;
   std::vector<worker::ChildProcess> workers;
   std::vector<fs::path> logs;
   for (int i = 0; i < options.workers; ++i) {

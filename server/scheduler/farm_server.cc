@@ -140,14 +140,20 @@ void FarmServer::HandleStatuses(const std::vector<api::WorkerStatus>& statuses,
 
 void FarmServer::HandleGone(const std::string& worker_id, const std::string& reason,
                             std::int64_t now_ms) {
+  bool draining = false;
   {
     std::lock_guard lock(mutex_);
     auto it = workers_.find(worker_id);
     if (it == workers_.end() || !it->second.alive) return;
     it->second.alive = false;
+    draining = it->second.status.draining;
   }
   const auto released = store_->ReleaseWorker(worker_id, reason, now_ms);
-  spdlog::warn("{}: {} ({} leases re-queued)", worker_id, reason, released.size());
+  if (draining && released.empty()) {
+    spdlog::info("worker {} left", worker_id);  // a graceful stop
+  } else {
+    spdlog::warn("{}: {} ({} leases re-queued)", worker_id, reason, released.size());
+  }
   HandleReleased(released, now_ms);
 }
 

@@ -38,6 +38,8 @@ EpisodeOutcome Error(std::string message, double wall_s) {
 
 }  // namespace
 
+std::vector<std::string> DefaultEpisodeCommand() { return {SelfExecutable().string(), "fly"}; }
+
 EpisodeOutcome RunEpisode(const api::EpisodeSpec& spec, const EpisodeRun& run,
                           const std::atomic<bool>& abort) {
   const auto start = std::chrono::steady_clock::now();

@@ -37,6 +37,9 @@ struct EpisodeOutcome {
   api::EpisodeResult result;  ///< kResult
 };
 
+/// The production episode command: this executable's `fly` subcommand.
+std::vector<std::string> DefaultEpisodeCommand();
+
 /// Runs the episode; returns early with kAborted (child killed) once `abort` becomes true.
 EpisodeOutcome RunEpisode(const api::EpisodeSpec& spec, const EpisodeRun& run,
                           const std::atomic<bool>& abort);

@@ -62,7 +62,7 @@ Worker::Worker(WorkerOptions options)
     if (!Has(api::kClocks, c)) throw std::invalid_argument("--clocks: unknown clock '" + c + "'");
   }
   if (options_.episode_command.empty()) {
-    options_.episode_command = {SelfExecutable().string(), "fly"};
+    options_.episode_command = DefaultEpisodeCommand();
   }
   fs::create_directories(options_.work_dir);
   bus_ = std::make_unique<api::WorkerBus>(options_.bus, options_.worker_id);
