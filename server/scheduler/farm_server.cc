@@ -175,14 +175,20 @@ void FarmServer::HandleResults(const std::vector<api::ResultMessage>& results,
   // One transaction for the whole batch, then the acks: a result is acknowledged only once it
   // is durable.
   const std::vector<IngestOutcome> outcomes = store_->Ingest(results, now_ms);
-  std::uint64_t stored = 0, duplicates = 0;
+  {
+    // Counted before the acks go out, so whoever sees an ack also sees it counted.
+    std::lock_guard lock(mutex_);
+    stats_.results_received += results.size();
+    for (const IngestOutcome& o : outcomes) {
+      if (o.ack == api::AckStatus::kStored) ++stats_.results_stored;
+      if (o.ack == api::AckStatus::kDuplicate) ++stats_.duplicates;
+    }
+  }
   std::vector<PendingEvent> events;
   for (std::size_t i = 0; i < results.size(); ++i) {
     const api::ResultMessage& m = results[i];
     const IngestOutcome& o = outcomes[i];
     bus_->Publish(api::ResultAck{m.worker_id, m.episode_id, m.attempt, o.ack, o.detail});
-    if (o.ack == api::AckStatus::kStored) ++stored;
-    if (o.ack == api::AckStatus::kDuplicate) ++duplicates;
     if (o.ack == api::AckStatus::kStored || o.ack == api::AckStatus::kRecorded) {
       RetireAssignment(m.worker_id, m.episode_id, m.attempt);
     }
@@ -195,10 +201,6 @@ void FarmServer::HandleResults(const std::vector<api::ResultMessage>& results,
     }
   }
   PublishEvents(events, now_ms);
-  std::lock_guard lock(mutex_);
-  stats_.results_received += results.size();
-  stats_.results_stored += stored;
-  stats_.duplicates += duplicates;
 }
 
 void FarmServer::Assign(std::int64_t now_ms) {
