@@ -162,7 +162,8 @@ class Writer {
 /// Sample metadata the farm uses.
 struct SampleInfo {
   bool valid_data = false;
-  bool alive = true;  ///< false: instance disposed or without writers (valid_data then false)
+  bool alive = true;      ///< false: instance disposed or without writers
+  bool disposed = false;  ///< the writer disposed the instance (a deliberate end)
   dds_instance_handle_t instance = 0;
 };
 
@@ -259,6 +260,7 @@ std::size_t Reader<T>::Take(std::size_t max, Visit&& visit) {
       SampleInfo info;
       info.valid_data = infos[i].valid_data;
       info.alive = infos[i].instance_state == DDS_IST_ALIVE;
+      info.disposed = infos[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED;
       info.instance = infos[i].instance_handle;
       visit(*static_cast<const T*>(samples[i]), info);
     }

@@ -398,7 +398,7 @@ ServerBus::Inbox ServerBus::Wait(std::chrono::milliseconds timeout, std::size_t 
     // A status that arrives together with its instance's end (dispose, no writers) is the
     // worker's last word: report it gone, not alive.
     if (!info.alive) {
-      inbox.workers_gone.push_back(Str(c.worker_id));
+      (info.disposed ? inbox.workers_left : inbox.workers_gone).push_back(Str(c.worker_id));
     } else if (info.valid_data) {
       Convert(&inbox.bad_samples, kStatusTopic,
               [&] { inbox.statuses.push_back(FromSample(c)); });
@@ -447,7 +447,10 @@ struct WorkerBus::Impl {
         assignment_reader(common.subscriber, common.assignment_topic, AssignmentQos()),
         ack_reader(common.subscriber, common.ack_topic, AckQos()),
         event_reader(common.subscriber, common.event_topic, EventQos()),
-        status_writer(common.publisher, common.status_topic, StatusQos(options.liveliness_lease)),
+        // No auto-dispose: only an explicit DisposeStatus() is a graceful leave; a writer that
+        // merely disappears is a worker gone.
+        status_writer(common.publisher, common.status_topic,
+                      StatusQos(options.liveliness_lease).NoAutoDispose()),
         result_writer(common.publisher, common.result_topic, dds::Qos(ResultQos()).NoAutoDispose()),
         assignment_cond(assignment_reader.get()),
         ack_cond(ack_reader.get()),

@@ -35,11 +35,13 @@ class ServerBus {
 
   struct Inbox {
     std::vector<WorkerStatus> statuses;
-    std::vector<std::string> workers_gone;  ///< liveliness lost or status disposed
+    std::vector<std::string> workers_gone;  ///< liveliness lost (crash, SIGKILL, network)
+    std::vector<std::string> workers_left;  ///< status disposed: a graceful stop
     std::vector<ResultMessage> results;
     std::vector<std::string> bad_samples;   ///< samples that did not convert (reason each)
     bool empty() const {
-      return statuses.empty() && workers_gone.empty() && results.empty() && bad_samples.empty();
+      return statuses.empty() && workers_gone.empty() && workers_left.empty() && results.empty() &&
+             bad_samples.empty();
     }
   };
   /// Blocks until data arrives, Wake() is called or `timeout` passes; then takes every status

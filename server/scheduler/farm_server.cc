@@ -94,6 +94,7 @@ void FarmServer::Step() {
   for (const auto& bad : inbox.bad_samples) spdlog::warn("dropped malformed sample: {}", bad);
   HandleStatuses(inbox.statuses, now);
   for (const auto& id : inbox.workers_gone) HandleGone(id, "worker gone (DDS liveliness lost)", now);
+  for (const auto& id : inbox.workers_left) HandleGone(id, "worker left", now);
   if (!inbox.results.empty()) HandleResults(inbox.results, now);
 
   // Silent workers and expired leases, at most once per tick however busy the inbox is.
@@ -115,6 +116,11 @@ void FarmServer::Step() {
 
 void FarmServer::HandleStatuses(const std::vector<api::WorkerStatus>& statuses,
                                 std::int64_t now_ms) {
+  // Heartbeats renew exactly the attempts a worker lists as running. Renewals are written at
+  // most every quarter lease per worker (or when the list changes), all in one transaction:
+  // a farm of many workers must not cost one fsync per heartbeat.
+  std::map<std::string, std::vector<api::EpisodeRef>> renew;
+  const auto now = std::chrono::steady_clock::now();
   for (const auto& s : statuses) {
     if (s.protocol != api::kFarmProtocolVersion) {
       spdlog::warn("worker {} speaks protocol {}, this server {}: ignored", s.worker_id,
@@ -125,32 +131,35 @@ void FarmServer::HandleStatuses(const std::vector<api::WorkerStatus>& statuses,
     {
       std::lock_guard lock(mutex_);
       auto [it, inserted] = workers_.try_emplace(s.worker_id);
-      is_new = inserted || !it->second.alive;
-      it->second.status = s;
-      it->second.last_seen = std::chrono::steady_clock::now();
-      it->second.alive = true;
+      Worker& w = it->second;
+      is_new = inserted || !w.alive;
+      w.status = s;
+      w.last_seen = now;
+      w.alive = true;
+      if (is_new || s.running != w.renewed || now - w.last_renewal >= options_.lease / 4) {
+        w.last_renewal = now;
+        w.renewed = s.running;
+        renew[s.worker_id] = s.running;
+      }
     }
     if (is_new) {
       spdlog::info("worker {} on {} (pid {}): {} slots", s.worker_id, s.host, s.pid, s.slots);
     }
-    // The heartbeat is the lease renewal for exactly the attempts the worker is running.
-    store_->RenewLeases(s.worker_id, s.running, now_ms + options_.lease.count());
   }
+  store_->RenewLeases(renew, now_ms + options_.lease.count());
 }
 
 void FarmServer::HandleGone(const std::string& worker_id, const std::string& reason,
                             std::int64_t now_ms) {
-  bool draining = false;
   {
     std::lock_guard lock(mutex_);
     auto it = workers_.find(worker_id);
     if (it == workers_.end() || !it->second.alive) return;
     it->second.alive = false;
-    draining = it->second.status.draining;
   }
   const auto released = store_->ReleaseWorker(worker_id, reason, now_ms);
-  if (draining && released.empty()) {
-    spdlog::info("worker {} left", worker_id);  // a graceful stop
+  if (released.empty()) {
+    spdlog::info("worker {}: {}", worker_id, reason);
   } else {
     spdlog::warn("{}: {} ({} leases re-queued)", worker_id, reason, released.size());
   }

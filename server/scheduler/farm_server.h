@@ -86,6 +86,8 @@ class FarmServer {
   struct Worker {
     api::WorkerStatus status;
     std::chrono::steady_clock::time_point last_seen;
+    std::chrono::steady_clock::time_point last_renewal;  // leases written to the store
+    std::vector<api::EpisodeRef> renewed;                // what that renewal listed
     bool alive = true;
   };
 

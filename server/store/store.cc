@@ -389,17 +389,27 @@ std::vector<Lease> Store::LeaseEpisodes(const std::string& worker_id, int count,
 
 int Store::RenewLeases(const std::string& worker_id, const std::vector<api::EpisodeRef>& running,
                        std::int64_t deadline_ms) {
-  if (running.empty()) return 0;
+  return RenewLeases(std::map<std::string, std::vector<api::EpisodeRef>>{{worker_id, running}},
+                     deadline_ms);
+}
+
+int Store::RenewLeases(const std::map<std::string, std::vector<api::EpisodeRef>>& running_by_worker,
+                       std::int64_t deadline_ms) {
+  const bool any = std::any_of(running_by_worker.begin(), running_by_worker.end(),
+                               [](const auto& kv) { return !kv.second.empty(); });
+  if (!any) return 0;
   std::lock_guard lock(mutex_);
   Transaction tx(*db_);
   Statement& renew = db_->Prepare(
       "UPDATE episodes SET lease_deadline_ms = ? WHERE id = ? AND state = 'leased' "
       "AND lease_owner = ? AND attempts = ?");
   int renewed = 0;
-  for (const auto& ref : running) {
-    renew.Reset().Bind(1, deadline_ms).Bind(2, ref.episode_id).Bind(3, worker_id)
-        .Bind(4, ref.attempt).Run();
-    renewed += static_cast<int>(db_->Changes());
+  for (const auto& [worker_id, running] : running_by_worker) {
+    for (const auto& ref : running) {
+      renew.Reset().Bind(1, deadline_ms).Bind(2, ref.episode_id).Bind(3, worker_id)
+          .Bind(4, ref.attempt).Run();
+      renewed += static_cast<int>(db_->Changes());
+    }
   }
   tx.Commit();
   return renewed;

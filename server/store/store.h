@@ -113,6 +113,9 @@ class Store {
   /// Extends the listed leases held by `worker_id`; returns how many were extended.
   int RenewLeases(const std::string& worker_id, const std::vector<api::EpisodeRef>& running,
                   std::int64_t deadline_ms);
+  /// The same for many workers in one transaction (worker id -> attempts it runs).
+  int RenewLeases(const std::map<std::string, std::vector<api::EpisodeRef>>& running_by_worker,
+                  std::int64_t deadline_ms);
   /// Ends every lease whose deadline passed: back to pending, or failed when out of attempts.
   std::vector<ReleasedLease> ExpireLeases(std::int64_t now_ms);
   /// Ends every lease held by a worker that is gone.

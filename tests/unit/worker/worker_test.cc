@@ -60,7 +60,7 @@ class WorkerTest : public ::testing::Test {
     auto in = server_->Wait(20ms);
     for (auto& s : in.statuses) statuses_.push_back(std::move(s));
     for (auto& r : in.results) results_.push_back(std::move(r));
-    for (auto& g : in.workers_gone) gone_.push_back(std::move(g));
+    for (auto& g : in.workers_left) left_.push_back(std::move(g));
   }
   bool WaitForResults(std::size_t n) {
     return WaitFor([&] {
@@ -89,7 +89,7 @@ class WorkerTest : public ::testing::Test {
   std::thread thread_;
   std::vector<api::WorkerStatus> statuses_;
   std::vector<api::ResultMessage> results_;
-  std::vector<std::string> gone_;
+  std::vector<std::string> left_;
 };
 
 TEST_F(WorkerTest, AnnouncesItselfWithItsCapabilities) {
@@ -189,7 +189,7 @@ TEST_F(WorkerTest, StoppingHandsBackAnAbandonedEpisodeAndLeaves) {
   worker_.reset();
   ASSERT_TRUE(WaitFor([&] {
     Pump();
-    return !gone_.empty();
+    return !left_.empty();
   })) << "the server must see the worker leave";
 }
 
