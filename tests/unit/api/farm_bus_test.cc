@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/dds_config.h"
+#include "tests/unit/api/cyclone_log_guard.h"
 #include "tests/unit/api/farm_test_util.h"
 
 namespace enavi::api {
@@ -70,7 +71,13 @@ struct WorkerInbox {
   }
 };
 
-TEST(FarmBusTest, WorkerStatusReachesTheServerWithEveryField) {
+// Every bus test fails on a Cyclone warning or error.
+class FarmBusTest : public ::testing::Test {
+ protected:
+  testing::CycloneLogGuard cyclone_log_;
+};
+
+TEST_F(FarmBusTest, WorkerStatusReachesTheServerWithEveryField) {
   const BusOptions bus = TestBus();
   ServerBus server(bus);
   WorkerBus worker(bus, "w1");
@@ -103,7 +110,7 @@ TEST(FarmBusTest, WorkerStatusReachesTheServerWithEveryField) {
   EXPECT_EQ(got.protocol, kFarmProtocolVersion);
 }
 
-TEST(FarmBusTest, AssignmentsReachOnlyTheirWorker) {
+TEST_F(FarmBusTest, AssignmentsReachOnlyTheirWorker) {
   const BusOptions bus = TestBus();
   ServerBus server(bus);
   WorkerBus a(bus, "a"), b(bus, "b");
@@ -128,7 +135,7 @@ TEST(FarmBusTest, AssignmentsReachOnlyTheirWorker) {
   EXPECT_EQ(got.spec.overrides.at("f_per_max"), 12.5);
 }
 
-TEST(FarmBusTest, ResultWithTimeSeriesRoundTripsAndAckComesBack) {
+TEST_F(FarmBusTest, ResultWithTimeSeriesRoundTripsAndAckComesBack) {
   const BusOptions bus = TestBus();
   ServerBus server(bus);
   WorkerBus worker(bus, "w1");
@@ -156,7 +163,7 @@ TEST(FarmBusTest, ResultWithTimeSeriesRoundTripsAndAckComesBack) {
   EXPECT_EQ(win.acks.front().episode_id, "j1-00000");
 }
 
-TEST(FarmBusTest, UnacknowledgedResultReachesAServerThatStartsLater) {
+TEST_F(FarmBusTest, UnacknowledgedResultReachesAServerThatStartsLater) {
   const BusOptions bus = TestBus();
   WorkerBus worker(bus, "w1");
   ResultMessage m;
@@ -183,7 +190,7 @@ TEST(FarmBusTest, UnacknowledgedResultReachesAServerThatStartsLater) {
   EXPECT_TRUE(in2.results.empty()) << "a retired result was replayed";
 }
 
-TEST(FarmBusTest, GracefulLeaveAndVanishedWorkerAreToldApart) {
+TEST_F(FarmBusTest, GracefulLeaveAndVanishedWorkerAreToldApart) {
   const BusOptions bus = TestBus();
   ServerBus server(bus);
   ServerInbox in;
@@ -217,7 +224,7 @@ TEST(FarmBusTest, GracefulLeaveAndVanishedWorkerAreToldApart) {
   }));
 }
 
-TEST(FarmBusTest, JobEventsAreBroadcast) {
+TEST_F(FarmBusTest, JobEventsAreBroadcast) {
   const BusOptions bus = TestBus();
   ServerBus server(bus);
   WorkerBus a(bus, "a"), b(bus, "b");
@@ -235,7 +242,7 @@ TEST(FarmBusTest, JobEventsAreBroadcast) {
   EXPECT_EQ(in_b.events.front().job_id, "j9");
 }
 
-TEST(FarmBusTest, WakeInterruptsAWait) {
+TEST_F(FarmBusTest, WakeInterruptsAWait) {
   const BusOptions bus = TestBus();
   ServerBus server(bus);
   std::thread waker([&] {
