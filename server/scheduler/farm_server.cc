@@ -232,8 +232,11 @@ void FarmServer::Assign(std::int64_t now_ms) {
   });
   const std::int64_t deadline = now_ms + options_.lease.count();
   for (const auto& [id, status] : candidates) {
+    // Free = slots minus our leases, but never more than the worker itself reports: after a
+    // server restart or a lost lease it may still run episodes this database no longer gives it.
     auto it = leased.find(id);
-    const int free = status.slots - (it == leased.end() ? 0 : it->second);
+    const int free =
+        std::min(status.slots - (it == leased.end() ? 0 : it->second), status.free_slots);
     if (free <= 0) continue;
     const auto leases =
         store_->LeaseEpisodes(id, free, {status.boards, status.clocks}, deadline, now_ms);
