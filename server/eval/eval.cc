@@ -135,7 +135,9 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   while (true) {
     report.progress = *store.Progress(report.job_id, NowMs());
     const auto now = std::chrono::steady_clock::now();
-    if (report.progress.terminal() || now - last_print >= options.progress_period) {
+    // A bar redrawn in place on a terminal; piped, only the final line (DESIGN.md section 10).
+    if (report.progress.terminal() ||
+        (options.progress_bar && now - last_print >= options.progress_period)) {
       const std::string line = ProgressLine(report.progress, options.progress_bar);
       if (options.progress_bar) {
         progress_out << "\r" << line << "\033[K" << std::flush;

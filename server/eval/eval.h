@@ -35,8 +35,8 @@ struct EvalOptions {
   std::filesystem::path enavi;
   std::optional<std::uint32_t> domain;  ///< empty: derived from the process id
   api::JobSpecOptions job_spec;
-  bool progress_bar = false;     ///< redraw a bar in place (terminal) instead of plain lines
-  std::chrono::milliseconds progress_period{1000};
+  bool progress_bar = false;     ///< redraw a bar in place (terminal); else only the last line
+  std::chrono::milliseconds progress_period{500};
 };
 
 struct EvalReport {
