@@ -31,6 +31,13 @@ using namespace std::chrono_literals;
 inline fs::path EnaviBinary() { return fs::path(ENAVI_BINARY_DIR) / "bin/enavi"; }
 inline fs::path FakeEpisode() { return fs::path(ENAVI_BINARY_DIR) / "tests/fake_episode"; }
 
+/// The episode command of the farm tests: tests/system/fake_episode, or the command in
+/// ENAVI_SYSTEM_EPISODE_CMD (e.g. "build/bin/enavi fly") to run them on real episodes.
+inline std::string EpisodeCommand() {
+  const char* cmd = std::getenv("ENAVI_SYSTEM_EPISODE_CMD");
+  return cmd != nullptr && *cmd != '\0' ? std::string(cmd) : FakeEpisode().string();
+}
+
 /// Polls until `condition` holds or `timeout` passes.
 template <typename F>
 bool Eventually(F&& condition, std::chrono::milliseconds timeout) {
@@ -115,26 +122,29 @@ class FarmFixture : public ::testing::Test {
     return url;
   }
 
+  /// Starts `enavi worker`; fake episodes take `episode_s` seconds each. `command`: the episode
+  /// command (default EpisodeCommand()).
   worker::ChildProcess& StartWorker(const std::string& name, int slots = 1,
-                                    std::vector<std::string> env = {}) {
+                                    double episode_s = 1.0, std::string command = "") {
     std::vector<std::string> argv = {EnaviBinary().string(), "worker", "--id", name, "--slots",
                                      std::to_string(slots), "--domain", std::to_string(domain_),
                                      "--partition", partition_, "--spool",
                                      (dir_ / name / "spool").string(), "--work-dir",
                                      (dir_ / name / "work").string(), "--episode-cmd",
-                                     FakeEpisode().string()};
+                                     command.empty() ? EpisodeCommand() : command};
     for (const auto& a : BusArgs(name)) argv.push_back(a);
-    env.push_back("FAKE_EPISODE_LOG=" + (dir_ / "episodes.txt").string());
+    // Through the environment, not the job spec: a real `enavi fly` ignores these.
+    std::vector<std::string> env = {"FAKE_EPISODE_LOG=" + (dir_ / "episodes.txt").string(),
+                                    "FAKE_EPISODE_SLEEP_S=" + std::to_string(episode_s)};
     return Start(name, argv, env);
   }
 
   worker::ChildProcess& Process(const std::string& name) { return processes_.at(name); }
 
-  /// A job of boards x 1 scenario x methods x seeds with fake episodes taking `sleep_s`.
-  static std::string Job(int seeds, double sleep_s) {
+  /// A job of 2 boards x 1 scenario x 2 methods x `seeds` seeds.
+  static std::string Job(int seeds) {
     return "name: system\nboards: [tx2, pi4b]\nscenarios: [s1]\nmethods: [baseline, enavi]\n"
-           "seeds: " + std::to_string(seeds) + "\noverrides: {fake.sleep_s: " +
-           std::to_string(sleep_s) + "}\n";
+           "seeds: " + std::to_string(seeds) + "\n";
   }
 
   /// Checks a finished job: exactly `n` results, one per episode, matching the matrix.

@@ -109,13 +109,13 @@ class NetnsFarm : public FarmFixture {
 
 TEST_F(NetnsFarm, ServerAndWorkersOnSeparateHostsRunAJobToCompletion) {
   StartServer("server");
-  StartWorker("w1");
-  StartWorker("w2");
+  StartWorker("w1", 1, /*episode_s=*/0.5);
+  StartWorker("w2", 1, /*episode_s=*/0.5);
   InNamespace("server", [&] {
     api::FarmClient client(url_);
     ASSERT_TRUE(Eventually([&] { return client.Workers().size() == 2; }, 60s))
         << "workers in other namespaces were not discovered";
-    const std::string job = client.Submit(Job(/*seeds=*/2, /*sleep_s=*/0.5), "netns.yaml").job_id;
+    const std::string job = client.Submit(Job(/*seeds=*/2), "netns.yaml").job_id;
     ASSERT_TRUE(Eventually([&] { return client.Status(job).terminal(); }, 120s));
     ExpectExactlyOneResultPerEpisode(client, job, 8);
     std::set<std::string> workers;

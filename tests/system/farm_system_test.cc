@@ -21,7 +21,7 @@ TEST_F(FarmFixture, SigkilledWorkerLosesNothingAndDuplicatesNothing) {
   StartWorker("w1");
   StartWorker("w2");
   ASSERT_TRUE(Eventually([&] { return client.Workers().size() == 2; }, 30s)) << "workers not seen";
-  const std::string job = client.Submit(Job(/*seeds=*/2, /*sleep_s=*/1.0), "system.yaml").job_id;
+  const std::string job = client.Submit(Job(/*seeds=*/2), "system.yaml").job_id;
 
   // After the first result, kill a worker in the middle of an episode.
   ASSERT_TRUE(Eventually([&] { return client.Status(job).done >= 1 && BusyWorkers(client).count("w1"); },
@@ -42,7 +42,7 @@ TEST_F(FarmFixture, SigkilledAndRestartedServerLosesNothingAndDuplicatesNothing)
   StartWorker("w1");
   StartWorker("w2");
   ASSERT_TRUE(Eventually([&] { return before.Workers().size() == 2; }, 30s)) << "workers not seen";
-  const std::string job = before.Submit(Job(/*seeds=*/2, /*sleep_s=*/1.0), "system.yaml").job_id;
+  const std::string job = before.Submit(Job(/*seeds=*/2), "system.yaml").job_id;
   ASSERT_TRUE(Eventually([&] { return before.Status(job).done >= 2; }, 60s));
 
   // Kill the server mid-job; the workers finish what they run and keep those results.
@@ -62,7 +62,8 @@ TEST_F(FarmFixture, SigkilledAndRestartedServerLosesNothingAndDuplicatesNothing)
 
 TEST_F(FarmFixture, CrashingEpisodesAreRetriedThenFailWithTheReason) {
   api::FarmClient client(StartServer());
-  StartWorker("w1", /*slots=*/2);
+  // Always the fake: the crashes are asked for through its tunables.
+  StartWorker("w1", /*slots=*/2, /*episode_s=*/0, FakeEpisode().string());
   ASSERT_TRUE(Eventually([&] { return client.Workers().size() == 1; }, 30s));
   // Seed 1 crashes on attempts 1 and 2 (then succeeds); seed 2 always crashes.
   const std::string spec = R"(name: crashy
@@ -92,7 +93,7 @@ TEST_F(FarmFixture, EvalStoresEveryResultAndPrintsThePaperTable) {
   worker::SpawnOptions o;
   o.argv = {EnaviBinary().string(), "eval", "--boards", "tx2", "--scenarios", "s1", "--methods",
             "enavi,baseline", "--seeds", "2", "--db", db.string(), "--workers", "2",
-            "--episode-cmd", FakeEpisode().string(), "--domain", std::to_string(domain_)};
+            "--episode-cmd", EpisodeCommand(), "--domain", std::to_string(domain_)};
   o.stdout_file = dir_ / "eval.out";
   o.stderr_file = dir_ / "eval.log";
   worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
