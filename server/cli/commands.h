@@ -20,5 +20,10 @@ void RegisterFlyCommand(CLI::App& app);
 void RegisterBenchCommands(CLI::App& app);
 /// `enavi calibrate` (server/cli/calibrate_cmd.cc).
 void RegisterCalibrateCommand(CLI::App& app);
+// The farm (server/cli/{serve,worker,client,eval}_cmd.cc).
+void RegisterServeCommand(CLI::App& app);
+void RegisterWorkerCommand(CLI::App& app);
+void RegisterClientCommands(CLI::App& app);  // submit, status, results, cancel
+void RegisterEvalCommand(CLI::App& app);
 
 }  // namespace enavi::cli

@@ -15,6 +15,10 @@ int main(int argc, char** argv) {
   RegisterFlyCommand(app);
   RegisterBenchCommands(app);
   RegisterCalibrateCommand(app);
+  RegisterServeCommand(app);
+  RegisterWorkerCommand(app);
+  RegisterClientCommands(app);
+  RegisterEvalCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,54 @@
+#pragma once
+// The farm's HTTP API: routes and the JSON of its replies, shared by the server (server/http)
+// and the client library (api/client.h).
+//
+//   POST /api/jobs                 body: job spec YAML; header X-Enavi-File: name for errors
+//                                  -> 201 {"job_id", "name", "episodes"}; 400 {"error"}
+//   GET  /api/jobs                 -> [JobProgress]
+//   GET  /api/jobs/{id}            -> JobProgress                    404 {"error"}
+//   GET  /api/jobs/{id}/results    -> [result object]  (board, scenario, method, seed, metrics)
+//   GET  /api/jobs/{id}/episodes   -> [{"id", "state", "attempts", "last_error", ...}]
+//   POST /api/jobs/{id}/cancel     -> JobProgress
+//   GET  /api/episodes/{id}/result -> full result JSON (time series and events included)
+//   GET  /api/workers              -> [{"worker_id", "host", "slots", "free_slots", ...}]
+//   GET  /api/health               -> {"ok": true, "protocol": 1, "stats": {results_received,
+//                                      results_stored, duplicates, assignments, leases_lost}}
+// State-changing requests (POST) carry "Authorization: Bearer TOKEN" when the server has a token.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+namespace enavi::api {
+
+inline constexpr int kDefaultHttpPort = 8717;
+
+/// http://127.0.0.1:<kDefaultHttpPort>
+std::string DefaultServerUrl();
+
+/// Progress of one job.
+struct JobProgress {
+  std::string id;
+  std::string name;
+  std::string state;  ///< running, done, cancelled
+  int total = 0, pending = 0, leased = 0, done = 0, failed = 0, cancelled = 0;
+  std::int64_t created_ms = 0;   ///< server wall clock, Unix ms
+  std::int64_t started_ms = 0;   ///< first lease; 0: not started
+  std::int64_t finished_ms = 0;  ///< 0 while running
+  std::int64_t now_ms = 0;       ///< when this was produced
+  std::vector<std::string> errors;  ///< recent reasons episodes failed ("EPISODE: reason")
+
+  int finished() const { return done + failed + cancelled; }
+  bool terminal() const { return state != "running"; }
+  /// Finished episodes per second since the first lease (0 before any finished).
+  double rate_per_s() const;
+  /// Seconds until all episodes finish at the current rate; < 0 when unknown.
+  double eta_s() const;
+};
+
+void to_json(nlohmann::json& j, const JobProgress& p);
+void from_json(const nlohmann::json& j, JobProgress& p);
+
+}  // namespace enavi::api

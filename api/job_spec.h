@@ -1,0 +1,115 @@
+#pragma once
+// Job specs: a matrix of boards x scenarios x methods x seeds in YAML, validated and expanded
+// deterministically into EpisodeSpecs (DESIGN.md sections 3 and 9).
+//
+//   name: tx2-city                # optional; default: the file's stem
+//   boards: [tx2, pi4b]           # pi4b tx2 nx opi5 x86 host
+//   scenarios:                    # s1..s5 forest empty, or a world file under an allowed root
+//     - s1
+//     - worlds/hall.yaml
+//     - {world: meshes/yard.obj, start: [0, 0, 1], goal: [30, 0, 1], params: {k: v}}
+//   methods: [baseline, enavi]
+//   seeds: 3                      # a count (1..N) or a list [1, 7, 9]
+//   clock: virtual                # virtual | emulated
+//   cost: model                   # model | measured
+//   dilation: 1.0                 # emulated clock only: 1 sim s = dilation wall s
+//   timeout_s: 0                  # 0: derived from the start-goal distance
+//   policy: policies/enavi.json   # E-Navi policy file under an allowed root; default: shipped
+//   world_params: {density: "0.3"}
+//   overrides: {f_per_max: 20}    # named tunables, validated by the episode runner
+//   episode_overrides:            # later entries win
+//     - match: {board: tx2, method: [enavi], scenario: s1, seed: 2}
+//       timeout_s: 120
+//       overrides: {f_per_max: 15}
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "api/episode.h"
+
+namespace enavi::api {
+
+inline constexpr std::array<const char*, 6> kBoards = {"pi4b", "tx2", "nx", "opi5", "x86", "host"};
+inline constexpr std::array<const char*, 7> kScenarios = {"s1", "s2", "s3", "s4",
+                                                          "s5", "forest", "empty"};
+/// A job expands to at most this many episodes.
+inline constexpr std::size_t kMaxJobEpisodes = 10000;
+/// `seeds: N` accepts 1..kMaxSeedCount; a seed list holds at most that many entries.
+inline constexpr std::int64_t kMaxSeedCount = 1000;
+/// Largest episode timeout a job may ask for (seconds of simulated time).
+inline constexpr double kMaxTimeoutS = 3600.0;
+/// Largest emulated-clock dilation (1 sim second = dilation wall seconds).
+inline constexpr double kMaxDilation = 100.0;
+
+/// Bad job spec: the message reads "FILE:LINE: field: reason".
+class JobSpecError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+struct JobSpecOptions {
+  /// World and policy files must resolve inside one of these; relative paths in the spec are
+  /// taken relative to the first. Empty: the current directory.
+  std::vector<std::filesystem::path> allowed_roots;
+  std::size_t max_episodes = kMaxJobEpisodes;
+};
+
+struct ScenarioEntry {
+  std::string world;  ///< scenario id, or the canonical path of a world file
+  std::optional<Vec3> start, goal;
+  std::map<std::string, std::string> params;
+};
+
+/// Settings applied to the episodes a `match` selects (empty match lists: any).
+struct EpisodeOverride {
+  std::vector<std::string> boards, scenarios, methods;
+  std::vector<std::uint64_t> seeds;
+  std::optional<double> timeout_s, dilation;
+  std::optional<std::string> policy;
+  std::map<std::string, double> overrides;
+  std::map<std::string, std::string> world_params;
+};
+
+struct JobSpec {
+  std::string name;
+  std::vector<std::string> boards;
+  std::vector<ScenarioEntry> scenarios;
+  std::vector<std::string> methods;
+  std::vector<std::uint64_t> seeds;
+  std::string clock = "virtual";
+  std::string cost = "model";
+  double dilation = 1.0;
+  double timeout_s = 0.0;
+  std::string policy;
+  std::map<std::string, std::string> world_params;
+  std::map<std::string, double> overrides;
+  std::vector<EpisodeOverride> episode_overrides;
+
+  std::size_t MatrixSize() const {
+    return boards.size() * scenarios.size() * methods.size() * seeds.size();
+  }
+};
+
+/// Parses and validates a job spec; `file_name` is used in error messages.
+/// @throws JobSpecError "FILE:LINE: field: reason" on any bad input.
+JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
+                     const JobSpecOptions& options = {});
+
+/// Reads `path` and parses it (relative world paths still resolve against the allowed roots).
+JobSpec LoadJobSpec(const std::filesystem::path& path, const JobSpecOptions& options = {});
+
+/// The episodes of a job, in a fixed order: boards, then scenarios, then methods, then seeds,
+/// each in the order the spec lists them. Same spec -> same list.
+std::vector<EpisodeSpec> ExpandJob(const JobSpec& job);
+
+/// Scenario id of a world string as it appears in EpisodeSpec::world ("custom" for files).
+std::string ScenarioOf(const std::string& world);
+
+}  // namespace enavi::api

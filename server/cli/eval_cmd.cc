@@ -1,0 +1,91 @@
+// enavi eval: the embedded farm (server + local workers + SQLite), table at the end.
+#include <unistd.h>
+
+#include <iostream>
+#include <memory>
+
+#include <spdlog/spdlog.h>
+
+#include "server/cli/commands.h"
+#include "server/cli/farm_flags.h"
+#include "server/eval/eval.h"
+#include "server/eval/tables.h"
+
+namespace enavi::cli {
+namespace {
+
+struct EvalFlags {
+  server::EvalOptions options;
+  std::string db;
+  std::vector<std::string> world_roots;
+  int domain = -1;
+  double episode_timeout_s = 3600;
+  bool json = false;
+  bool verbose = false;
+};
+
+void RunEvalCommand(EvalFlags f, const CLI::App& root) {
+  RequireFlyUnlessEpisodeCmd(root, f.options.episode_command);
+  StopSignals signals;
+  SetupLogging(f.verbose);
+  if (!f.verbose) spdlog::set_level(spdlog::level::warn);
+  server::EvalOptions& o = f.options;
+  o.db = f.db;
+  for (const auto& r : f.world_roots) o.job_spec.allowed_roots.emplace_back(r);
+  if (f.domain >= 0) o.domain = static_cast<std::uint32_t>(f.domain);
+  o.episode_timeout = std::chrono::seconds(static_cast<std::int64_t>(f.episode_timeout_s));
+  o.progress_bar = isatty(STDERR_FILENO) == 1;
+
+  // Ctrl-C: leave at once. The workers die with this process (PR_SET_PDEATHSIG) and their
+  // episodes with them; a --db keeps whatever was stored.
+  signals.Watch([](int) { std::_Exit(130); });
+  const server::EvalReport report = server::RunEval(o, std::cerr);
+  if (f.json) {
+    std::cout << report.results.dump(2) << "\n";
+  } else {
+    std::cout << server::PaperTable(report.results);
+  }
+  if (!f.db.empty()) {
+    std::cerr << report.results.size() << " results stored in " << f.db << " (job "
+              << report.job_id << ")\n";
+  }
+  if (report.progress.failed > 0) {
+    for (const auto& e : report.progress.errors) std::cerr << "failed: " << e << "\n";
+    throw std::runtime_error(std::to_string(report.progress.failed) + " of " +
+                             std::to_string(report.progress.total) + " episodes failed");
+  }
+}
+
+}  // namespace
+
+void RegisterEvalCommand(CLI::App& app) {
+  auto f = std::make_shared<EvalFlags>();
+  server::EvalOptions& o = f->options;
+  CLI::App* sub = app.add_subcommand(
+      "eval", "Evaluate a matrix on an embedded farm (local server + workers) and print the table");
+  sub->add_option("--boards", o.boards, "boards (comma-separated)")->delimiter(',')->capture_default_str();
+  sub->add_option("--scenarios", o.scenarios, "scenarios or world files (comma-separated)")
+      ->delimiter(',')
+      ->capture_default_str();
+  sub->add_option("--methods", o.methods, "methods (comma-separated)")->delimiter(',')->capture_default_str();
+  sub->add_option("--seeds", o.seeds, "seeds 1..N per cell")->capture_default_str();
+  sub->add_option("--clock", o.clock, "virtual or emulated")->capture_default_str();
+  sub->add_option("--cost", o.cost, "cost model: model or measured")->capture_default_str();
+  sub->add_option("--db", f->db, "keep the results in this SQLite database (default: temporary)");
+  sub->add_option("--workers", o.workers, "local worker processes")->capture_default_str();
+  sub->add_option("--slots", o.slots, "episodes per worker at once")->capture_default_str();
+  sub->add_option("--episode-cmd", o.episode_command,
+                  "episode command for the workers (default: enavi fly)")
+      ->envname("ENAVI_EPISODE_CMD");
+  sub->add_option("--episode-timeout", f->episode_timeout_s, "wall-clock limit per episode, s")
+      ->check(CLI::Range(1.0, 7 * 24 * 3600.0))
+      ->capture_default_str();
+  sub->add_option("--world-root", f->world_roots, "allowed root for world files (default: cwd)");
+  sub->add_option("--domain", f->domain, "DDS domain (default: derived from the pid)")
+      ->check(CLI::Range(0, 232));
+  sub->add_flag("--json", f->json, "print the result objects as JSON instead of the table");
+  sub->add_flag("-v,--verbose", f->verbose, "server log on stderr");
+  sub->callback([f, &app] { RunEvalCommand(*f, app); });
+}
+
+}  // namespace enavi::cli

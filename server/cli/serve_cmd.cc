@@ -1,0 +1,100 @@
+// enavi serve: the farm server daemon (scheduler + SQLite store + HTTP API).
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include <spdlog/spdlog.h>
+
+#include "server/cli/commands.h"
+#include "server/cli/farm_flags.h"
+#include "server/http/http_api.h"
+#include "server/scheduler/farm_server.h"
+#include "server/store/store.h"
+
+namespace enavi::cli {
+namespace {
+
+struct ServeFlags {
+  std::string db = "enavi-farm.db";
+  std::string http = "127.0.0.1:" + std::to_string(api::kDefaultHttpPort);
+  std::string token;
+  std::vector<std::string> world_roots;
+  int max_attempts = 3;
+  double lease_s = 15;
+  std::string ready_file;
+  bool verbose = false;
+  BusFlags bus;
+};
+
+// Written once serving, atomically, so a script or test can wait for it and read the URL.
+void WriteReadyFile(const std::string& path, const std::string& url) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << url << "\n";
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+void RunServe(const ServeFlags& f) {
+  StopSignals signals;
+  SetupLogging(f.verbose);
+  const auto [host, port] = ParseHostPort(f.http, "--http");
+
+  server::StoreOptions store_options;
+  store_options.max_attempts = f.max_attempts;
+  server::Store store(f.db, store_options);
+
+  server::FarmServerOptions options;
+  options.bus = ResolveBus(f.bus);
+  options.lease = std::chrono::milliseconds(static_cast<std::int64_t>(f.lease_s * 1000));
+  server::FarmServer farm(&store, options);
+
+  server::HttpOptions http;
+  http.host = host;
+  http.port = port;
+  http.token = f.token;
+  for (const auto& r : f.world_roots) http.job_spec.allowed_roots.emplace_back(r);
+  server::HttpApi api(&farm, http);
+
+  farm.Start();
+  api.Start();
+  spdlog::info("enavi serve: {} (db {}, DDS domain {}, partition {}, pid {})", api.url(), f.db,
+               options.bus.domain_id, options.bus.partition, getpid());
+  if (!f.ready_file.empty()) WriteReadyFile(f.ready_file, api.url());
+
+  const int sig = signals.Wait();
+  spdlog::info("enavi serve: signal {}, stopping", sig);
+  api.Stop();
+  farm.Stop();
+}
+
+}  // namespace
+
+void RegisterServeCommand(CLI::App& app) {
+  auto f = std::make_shared<ServeFlags>();
+  CLI::App* sub = app.add_subcommand("serve", "Run the farm server: scheduler, SQLite store, HTTP API");
+  sub->add_option("--db", f->db, "SQLite database; created if missing, resumed if not")
+      ->capture_default_str();
+  sub->add_option("--http", f->http, "HTTP API address HOST:PORT (port 0: any free port)")
+      ->capture_default_str();
+  sub->add_option("--token", f->token,
+                  "token required on state-changing requests; needed when --http is not loopback")
+      ->envname("ENAVI_TOKEN");
+  sub->add_option("--world-root", f->world_roots,
+                  "allowed root for world and policy files in job specs (repeatable; default: cwd)");
+  sub->add_option("--max-attempts", f->max_attempts, "attempts per episode before it fails")
+      ->check(CLI::Range(1, 10))
+      ->capture_default_str();
+  sub->add_option("--lease", f->lease_s, "lease length in seconds (renewed by worker heartbeats)")
+      ->check(CLI::Range(2.0, 3600.0))
+      ->capture_default_str();
+  sub->add_option("--ready-file", f->ready_file, "write the HTTP URL here once serving");
+  sub->add_flag("-v,--verbose", f->verbose, "debug logging");
+  AddBusFlags(sub, &f->bus);
+  sub->callback([f] { RunServe(*f); });
+}
+
+}  // namespace enavi::cli

@@ -1,0 +1,56 @@
+#pragma once
+// `enavi eval`: the farm in one command. An in-process server (SQLite store + scheduler) and N
+// local worker processes (`enavi worker`, the same code as on a cluster) talk over DDS on a
+// private loopback domain and partition, so concurrent evals and tests never cross-talk.
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "api/http_schema.h"
+#include "api/job_spec.h"
+
+namespace enavi::server {
+
+struct EvalOptions {
+  std::vector<std::string> boards = {"tx2"};
+  std::vector<std::string> scenarios = {"s1"};
+  std::vector<std::string> methods = {"baseline", "enavi"};
+  int seeds = 1;
+  std::string clock = "virtual";
+  std::string cost = "model";
+  std::filesystem::path db;      ///< empty: a temporary database, removed afterwards
+  int workers = 2;
+  int slots = 1;                 ///< per worker
+  /// Episode command for the workers; empty: `<enavi> fly`.
+  std::string episode_command;
+  std::chrono::seconds episode_timeout{3600};
+  /// The enavi executable the workers run; empty: this process's executable.
+  std::filesystem::path enavi;
+  std::optional<std::uint32_t> domain;  ///< empty: derived from the process id
+  api::JobSpecOptions job_spec;
+  bool progress_bar = false;     ///< redraw a bar in place (terminal); else only the last line
+  std::chrono::milliseconds progress_period{500};
+};
+
+struct EvalReport {
+  std::string job_id;
+  api::JobProgress progress;
+  nlohmann::json results;  ///< result objects, episode order
+};
+
+/// Runs the matrix to completion; progress goes to `progress_out`.
+/// @throws std::invalid_argument for a bad matrix (message names the flag), std::runtime_error
+/// when the farm cannot run (e.g. every worker exited).
+EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out);
+
+/// The job spec YAML `enavi eval` submits for `options` (one flag per line).
+std::string EvalJobYaml(const EvalOptions& options);
+
+}  // namespace enavi::server

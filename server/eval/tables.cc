@@ -1,0 +1,240 @@
+#include "server/eval/tables.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <sstream>
+#include <vector>
+
+namespace enavi::server {
+namespace {
+
+std::string Fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
+  return buf;
+}
+
+// Left-aligned first `left` columns, the rest right-aligned.
+std::string Render(const std::vector<std::vector<std::string>>& rows, std::size_t left) {
+  std::vector<std::size_t> width;
+  for (const auto& r : rows) {
+    if (width.size() < r.size()) width.resize(r.size(), 0);
+    for (std::size_t i = 0; i < r.size(); ++i) width[i] = std::max(width[i], r[i].size());
+  }
+  std::ostringstream os;
+  for (const auto& r : rows) {
+    std::string line;
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const std::string pad(width[i] - r[i].size(), ' ');
+      if (i > 0) line += "  ";
+      line += i < left ? r[i] + pad : pad + r[i];
+    }
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    os << line << "\n";
+  }
+  return os.str();
+}
+
+std::string Str(const nlohmann::json& j) {
+  if (j.is_string()) return j.get<std::string>();
+  if (j.is_boolean()) return j.get<bool>() ? "true" : "false";
+  if (j.is_number_integer()) return std::to_string(j.get<std::int64_t>());
+  if (j.is_number_unsigned()) return std::to_string(j.get<std::uint64_t>());
+  if (j.is_number_float()) {
+    std::ostringstream os;
+    os.precision(10);
+    os << j.get<double>();
+    return os.str();
+  }
+  if (j.is_null()) return "";
+  return j.dump();
+}
+
+void Flatten(const nlohmann::json& j, const std::string& prefix,
+             std::vector<std::pair<std::string, std::string>>* out) {
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string key = prefix.empty() ? it.key() : prefix + "." + it.key();
+    if (it->is_object() && !it->empty()) {
+      Flatten(*it, key, out);
+    } else {
+      out->emplace_back(key, Str(*it));
+    }
+  }
+}
+
+std::string CsvField(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+struct Mean {
+  double sum = 0;
+  int n = 0;
+  void Add(double v) {
+    sum += v;
+    ++n;
+  }
+  double value() const { return n > 0 ? sum / n : std::nan(""); }
+  std::string Text(int digits) const { return n > 0 ? Fixed(value(), digits) : "-"; }
+};
+
+}  // namespace
+
+std::string ResultsTable(const nlohmann::json& results) {
+  std::vector<std::vector<std::string>> rows = {
+      {"episode", "board", "scenario", "method", "seed", "success", "end", "flight s", "path m",
+       "nav cpu %", "vel std", "miss %"}};
+  for (const auto& r : results) {
+    rows.push_back({r.value("episode_id", ""), r.value("board", ""), r.value("scenario", ""),
+                    r.value("method", ""), Str(r.value("seed", nlohmann::json())),
+                    r.value("success", false) ? "yes" : "no", r.value("end_reason", ""),
+                    Fixed(r.value("flight_time_s", 0.0), 2), Fixed(r.value("path_length_m", 0.0), 2),
+                    Fixed(r.value("nav_cpu_util_pct", 0.0), 1),
+                    Fixed(r.value("velocity_std_mps", 0.0), 3),
+                    Fixed(100.0 * r.value("deadline_miss_ratio", 0.0), 1)});
+  }
+  return Render(rows, 7);
+}
+
+std::string ResultsCsv(const nlohmann::json& results) {
+  // Columns: the union of every flattened key, in first-seen order.
+  std::vector<std::string> columns;
+  std::set<std::string> known;
+  std::vector<std::map<std::string, std::string>> rows;
+  for (const auto& r : results) {
+    std::vector<std::pair<std::string, std::string>> flat;
+    Flatten(r, "", &flat);
+    std::map<std::string, std::string> row;
+    for (auto& [k, v] : flat) {
+      if (known.insert(k).second) columns.push_back(k);
+      row[k] = v;
+    }
+    rows.push_back(std::move(row));
+  }
+  std::ostringstream os;
+  for (std::size_t i = 0; i < columns.size(); ++i) os << (i ? "," : "") << CsvField(columns[i]);
+  os << "\n";
+  for (const auto& row : rows) {
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      auto it = row.find(columns[i]);
+      os << (i ? "," : "") << (it == row.end() ? "" : CsvField(it->second));
+    }
+    os << "\n";
+  }
+  return os.str();
+}
+
+std::string PaperTable(const nlohmann::json& results) {
+  struct Cell {
+    Mean cpu, flight, path;
+  };
+  struct Row {
+    std::map<std::string, Cell> by_scenario;
+    Mean success, vel_std, cpu_all, flight_all;
+  };
+  std::vector<std::string> boards, methods, scenarios;
+  auto note = [](std::vector<std::string>* list, const std::string& v) {
+    if (std::find(list->begin(), list->end(), v) == list->end()) list->push_back(v);
+  };
+  std::map<std::pair<std::string, std::string>, Row> table;
+  for (const auto& r : results) {
+    const std::string board = r.value("board", ""), method = r.value("method", "");
+    const std::string scenario =
+        r.value("scenario", "") == "custom" ? r.value("world", "") : r.value("scenario", "");
+    note(&boards, board);
+    note(&methods, method);
+    note(&scenarios, scenario);
+    Row& row = table[{board, method}];
+    Cell& cell = row.by_scenario[scenario];
+    const bool ok = r.value("success", false);
+    cell.cpu.Add(r.value("nav_cpu_util_pct", 0.0));
+    row.cpu_all.Add(r.value("nav_cpu_util_pct", 0.0));
+    if (ok) {
+      cell.flight.Add(r.value("flight_time_s", 0.0));
+      cell.path.Add(r.value("path_length_m", 0.0));
+      row.flight_all.Add(r.value("flight_time_s", 0.0));
+    }
+    row.success.Add(ok ? 1.0 : 0.0);
+    row.vel_std.Add(r.value("velocity_std_mps", 0.0));
+  }
+  if (table.empty()) return "no results\n";
+
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> head1 = {"", ""}, head2 = {"board", "method"};
+  for (const auto& s : scenarios) {
+    head1.insert(head1.end(), {s, "", ""});
+    head2.insert(head2.end(), {"cpu %", "time s", "path m"});
+  }
+  head1.insert(head1.end(), {"all", ""});
+  head2.insert(head2.end(), {"success", "vel std"});
+  rows.push_back(head1);
+  rows.push_back(head2);
+  for (const auto& b : boards) {
+    for (const auto& m : methods) {
+      auto it = table.find({b, m});
+      if (it == table.end()) continue;
+      const Row& row = it->second;
+      std::vector<std::string> line = {b, m};
+      for (const auto& s : scenarios) {
+        auto c = row.by_scenario.find(s);
+        if (c == row.by_scenario.end()) {
+          line.insert(line.end(), {"-", "-", "-"});
+        } else {
+          line.insert(line.end(), {c->second.cpu.Text(1), c->second.flight.Text(1),
+                                   c->second.path.Text(1)});
+        }
+      }
+      line.push_back(Fixed(100.0 * row.success.value(), 0) + "%");
+      line.push_back(row.vel_std.Text(3));
+      rows.push_back(line);
+    }
+  }
+  std::string out = Render(rows, 2);
+
+  // E-Navi vs baseline: relative reduction of the scenario-averaged means.
+  std::vector<std::vector<std::string>> red = {{"board", "cpu % reduction", "flight time reduction"}};
+  for (const auto& b : boards) {
+    auto base = table.find({b, "baseline"});
+    auto enavi = table.find({b, "enavi"});
+    if (base == table.end() || enavi == table.end()) continue;
+    auto reduction = [](const Mean& before, const Mean& after) -> std::string {
+      if (before.n == 0 || after.n == 0 || before.value() == 0) return "-";
+      return Fixed(100.0 * (before.value() - after.value()) / before.value(), 1) + "%";
+    };
+    red.push_back({b, reduction(base->second.cpu_all, enavi->second.cpu_all),
+                   reduction(base->second.flight_all, enavi->second.flight_all)});
+  }
+  if (red.size() > 1) out += "\nE-Navi vs baseline\n" + Render(red, 1);
+  out += "\n(flight time and path length: mean over successful episodes; cpu %: navigation "
+         "tasks, % of one board core, mean over all episodes)\n";
+  return out;
+}
+
+std::string ProgressLine(const api::JobProgress& p, bool bar) {
+  std::ostringstream os;
+  if (bar) {
+    constexpr int kWidth = 30;
+    const int filled = p.total > 0 ? kWidth * p.finished() / p.total : 0;
+    os << "[" << std::string(filled, '#') << std::string(kWidth - filled, '-') << "] ";
+  }
+  os << p.id << " " << p.done << "/" << p.total << " done";
+  if (p.failed) os << "  " << p.failed << " failed";
+  if (p.cancelled) os << "  " << p.cancelled << " cancelled";
+  if (p.leased) os << "  " << p.leased << " running";
+  const double rate = p.rate_per_s();
+  if (rate > 0) os << "  " << Fixed(rate, rate < 1 ? 3 : 1) << " ep/s";
+  if (p.terminal()) {
+    os << "  " << p.state;
+  } else {
+    const double eta = p.eta_s();
+    os << "  ETA " << (eta < 0 ? std::string("?") : Fixed(eta, 0) + "s");
+  }
+  return os.str();
+}
+
+}  // namespace enavi::server

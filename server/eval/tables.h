@@ -1,0 +1,27 @@
+#pragma once
+// Text renderings of farm results: the per-episode table and CSV of `enavi results`, the
+// paper-style summary of `enavi eval`, and progress lines.
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "api/http_schema.h"
+
+namespace enavi::server {
+
+/// One row per result object (as returned by Store::Results / GET .../results).
+std::string ResultsTable(const nlohmann::json& results);
+/// Every scalar field, nested objects flattened with dots (task_cpu_util_pct.perception).
+std::string ResultsCsv(const nlohmann::json& results);
+
+/// Paper-style summary: rows board x method; per scenario nav CPU %, flight time and path
+/// length; success rate and velocity std; then the E-Navi vs baseline reduction per board.
+/// Flight time and path length average successful episodes (a crash's flight time is not a
+/// flight time); CPU % and velocity std average all episodes.
+std::string PaperTable(const nlohmann::json& results);
+
+/// "[########------] 12/40 done  1 failed  3.2 ep/s  ETA 9s" (bar when `bar`, else plain).
+std::string ProgressLine(const api::JobProgress& p, bool bar);
+
+}  // namespace enavi::server

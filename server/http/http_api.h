@@ -1,0 +1,55 @@
+#pragma once
+// The farm's HTTP API (routes in api/http_schema.h), served with cpp-httplib. Binds loopback by
+// default; bound anywhere else it refuses to start without a token, and every state-changing
+// request must carry it.
+
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "api/job_spec.h"
+#include "server/scheduler/farm_server.h"
+
+namespace httplib {
+class Server;
+}
+
+namespace enavi::server {
+
+struct HttpOptions {
+  std::string host = "127.0.0.1";
+  int port = 0;  ///< 0: any free port (see HttpApi::port())
+  /// Required on state-changing requests when non-empty ("Authorization: Bearer TOKEN").
+  std::string token;
+  api::JobSpecOptions job_spec;  ///< allowed roots and limits for submitted jobs
+  std::size_t max_body_bytes = 1 << 20;
+};
+
+/// True for 127.0.0.0/8, ::1 and "localhost".
+bool IsLoopbackHost(const std::string& host);
+
+class HttpApi {
+ public:
+  /// @throws std::invalid_argument when `options.host` is not loopback and there is no token.
+  HttpApi(FarmServer* farm, HttpOptions options);
+  ~HttpApi();
+  HttpApi(const HttpApi&) = delete;
+  HttpApi& operator=(const HttpApi&) = delete;
+
+  /// Binds and starts serving in a thread; returns the bound port.
+  /// @throws std::runtime_error when the address cannot be bound.
+  int Start();
+  void Stop();
+  int port() const { return port_; }
+  std::string url() const;
+
+ private:
+  void Routes();
+  FarmServer* farm_;
+  HttpOptions options_;
+  std::unique_ptr<httplib::Server> server_;
+  std::thread thread_;
+  int port_ = 0;
+};
+
+}  // namespace enavi::server

@@ -1,0 +1,644 @@
+#include "server/store/store.h"
+
+#include <cstring>
+#include <iomanip>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "api/job_spec.h"
+#include "server/store/sqlite.h"
+
+namespace enavi::server {
+namespace {
+
+// Schema version 1. Episode state is a small text enum; the result row keeps the flat result
+// JSON plus the columns tables filter and group by.
+constexpr const char* kSchema = R"sql(
+CREATE TABLE IF NOT EXISTS jobs (
+  id          TEXT PRIMARY KEY,
+  name        TEXT NOT NULL,
+  spec_yaml   TEXT NOT NULL,
+  state       TEXT NOT NULL CHECK (state IN ('running', 'done', 'cancelled')),
+  total       INTEGER NOT NULL,
+  created_ms  INTEGER NOT NULL,
+  started_ms  INTEGER,
+  finished_ms INTEGER
+);
+CREATE TABLE IF NOT EXISTS episodes (
+  id                TEXT PRIMARY KEY,
+  job_id            TEXT NOT NULL REFERENCES jobs(id),
+  idx               INTEGER NOT NULL,
+  spec_json         TEXT NOT NULL,
+  board             TEXT NOT NULL,
+  world             TEXT NOT NULL,
+  method            TEXT NOT NULL,
+  seed              INTEGER NOT NULL,
+  clock             TEXT NOT NULL,
+  state             TEXT NOT NULL
+                    CHECK (state IN ('pending', 'leased', 'done', 'failed', 'cancelled')),
+  attempts          INTEGER NOT NULL DEFAULT 0,
+  lease_owner       TEXT,
+  lease_deadline_ms INTEGER,
+  last_error        TEXT,
+  updated_ms        INTEGER NOT NULL,
+  UNIQUE (job_id, idx)
+);
+CREATE INDEX IF NOT EXISTS episodes_by_state ON episodes(state, job_id);
+CREATE INDEX IF NOT EXISTS episodes_by_owner ON episodes(lease_owner) WHERE state = 'leased';
+CREATE TABLE IF NOT EXISTS results (
+  episode_id          TEXT PRIMARY KEY REFERENCES episodes(id),
+  job_id              TEXT NOT NULL,
+  worker              TEXT NOT NULL,
+  attempt             INTEGER NOT NULL,
+  board               TEXT NOT NULL,
+  scenario            TEXT NOT NULL,
+  world               TEXT NOT NULL,
+  method              TEXT NOT NULL,
+  seed                INTEGER NOT NULL,
+  clock               TEXT NOT NULL,
+  success             INTEGER NOT NULL,
+  collided            INTEGER NOT NULL,
+  timed_out           INTEGER NOT NULL,
+  end_reason          TEXT NOT NULL,
+  flight_time_s       REAL NOT NULL,
+  path_length_m       REAL NOT NULL,
+  velocity_mean_mps   REAL NOT NULL,
+  velocity_std_mps    REAL NOT NULL,
+  nav_cpu_util_pct    REAL NOT NULL,
+  deadline_miss_ratio REAL NOT NULL,
+  replans             INTEGER NOT NULL,
+  wall_time_s         REAL NOT NULL,
+  received_ms         INTEGER NOT NULL,
+  result_json         TEXT NOT NULL,
+  series              BLOB NOT NULL
+);
+CREATE INDEX IF NOT EXISTS results_by_job ON results(job_id, board, scenario, method, seed);
+)sql";
+
+std::string NewJobId() {
+  std::random_device rd;  // ids only: never affects a result
+  std::ostringstream os;
+  os << "j" << std::hex << std::setfill('0') << std::setw(8) << rd() << std::setw(4)
+     << (rd() & 0xffff);
+  return os.str();
+}
+
+std::string EpisodeId(const std::string& job_id, std::size_t index) {
+  std::ostringstream os;
+  os << job_id << "-" << std::setfill('0') << std::setw(5) << index;
+  return os.str();
+}
+
+bool Accepts(const std::vector<std::string>& list, const std::string& value) {
+  return list.empty() || std::find(list.begin(), list.end(), value) != list.end();
+}
+
+// Series blob: "ENS1", then per column (t, position, velocity, eci, f_per, f_col, f_dif, res,
+// utilisation) a u32 element count and the doubles (vectors flattened xyz). Host byte order:
+// every platform the farm runs on (x86-64, aarch64) is little-endian.
+constexpr char kSeriesMagic[4] = {'E', 'N', 'S', '1'};
+
+void PutColumn(std::vector<std::uint8_t>* out, const double* data, std::uint32_t count) {
+  const std::size_t at = out->size();
+  out->resize(at + sizeof(count) + count * sizeof(double));
+  std::memcpy(out->data() + at, &count, sizeof(count));
+  if (count > 0) std::memcpy(out->data() + at + sizeof(count), data, count * sizeof(double));
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> PackSeries(const api::TimeSeries& s) {
+  std::vector<std::uint8_t> out(kSeriesMagic, kSeriesMagic + 4);
+  auto put = [&](const std::vector<double>& v) {
+    PutColumn(&out, v.data(), static_cast<std::uint32_t>(v.size()));
+  };
+  auto put3 = [&](const std::vector<api::Vec3>& v) {
+    PutColumn(&out, v.empty() ? nullptr : v.front().data(), static_cast<std::uint32_t>(3 * v.size()));
+  };
+  put(s.t);
+  put3(s.position);
+  put3(s.velocity);
+  put(s.eci);
+  put(s.f_per);
+  put(s.f_col);
+  put(s.f_dif);
+  put(s.res);
+  put(s.utilisation);
+  return out;
+}
+
+api::TimeSeries UnpackSeries(const std::vector<std::uint8_t>& blob) {
+  if (blob.size() < 4 || std::memcmp(blob.data(), kSeriesMagic, 4) != 0) {
+    throw std::invalid_argument("series blob: bad magic");
+  }
+  std::size_t at = 4;
+  auto get = [&](std::vector<double>* v) {
+    std::uint32_t count = 0;
+    if (at + sizeof(count) > blob.size()) throw std::invalid_argument("series blob: truncated");
+    std::memcpy(&count, blob.data() + at, sizeof(count));
+    at += sizeof(count);
+    if (at + std::size_t{count} * sizeof(double) > blob.size()) {
+      throw std::invalid_argument("series blob: truncated");
+    }
+    v->resize(count);
+    if (count > 0) std::memcpy(v->data(), blob.data() + at, count * sizeof(double));
+    at += count * sizeof(double);
+  };
+  auto get3 = [&](std::vector<api::Vec3>* v) {
+    std::vector<double> flat;
+    get(&flat);
+    if (flat.size() % 3 != 0) throw std::invalid_argument("series blob: vector column length");
+    v->resize(flat.size() / 3);
+    for (std::size_t i = 0; i < v->size(); ++i) (*v)[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
+  };
+  api::TimeSeries s;
+  get(&s.t);
+  get3(&s.position);
+  get3(&s.velocity);
+  get(&s.eci);
+  get(&s.f_per);
+  get(&s.f_col);
+  get(&s.f_dif);
+  get(&s.res);
+  get(&s.utilisation);
+  return s;
+}
+
+Store::Store(const std::filesystem::path& path, StoreOptions options)
+    : options_(options), db_(std::make_unique<Database>(path, options.busy_timeout_ms)) {
+  if (options_.max_attempts < 1) throw std::invalid_argument("max_attempts: must be >= 1");
+  Statement& version = db_->Prepare("PRAGMA user_version");
+  version.Step();
+  const std::int64_t found = version.Int(0);
+  version.Reset();
+  if (found > kStoreSchemaVersion) {
+    throw StoreError("database '" + path.string() + "' has schema version " +
+                     std::to_string(found) + ", newer than this build's " +
+                     std::to_string(kStoreSchemaVersion));
+  }
+  Transaction tx(*db_);
+  db_->Exec(kSchema);
+  db_->Exec("PRAGMA user_version = " + std::to_string(kStoreSchemaVersion));
+  tx.Commit();
+  db_->Exec("PRAGMA wal_autocheckpoint = 0");
+  checkpointer_ = std::thread([this, path] { CheckpointLoop(path); });
+}
+
+Store::~Store() {
+  {
+    std::lock_guard lock(checkpoint_mutex_);
+    stop_checkpoints_ = true;
+  }
+  checkpoint_cv_.notify_all();
+  if (checkpointer_.joinable()) checkpointer_.join();
+  // Fold the WAL into the database file, so the file alone is the whole store.
+  try {
+    db_->Exec("PRAGMA wal_checkpoint(TRUNCATE)");
+  } catch (const StoreError&) {
+    // Another connection is reading: the WAL stays and is replayed on the next open.
+  }
+}
+
+void Store::CheckpointLoop(std::filesystem::path path) {
+  // PASSIVE: copies what no reader still needs and never blocks the writer. Once everything is
+  // copied, the next commit starts the WAL from its beginning, so the WAL stays bounded.
+  Database db(path, options_.busy_timeout_ms);
+  std::unique_lock lock(checkpoint_mutex_);
+  while (!stop_checkpoints_) {
+    checkpoint_cv_.wait_for(lock, std::chrono::milliseconds(500));
+    if (stop_checkpoints_) break;
+    lock.unlock();
+    try {
+      db.Exec("PRAGMA wal_checkpoint(PASSIVE)");
+    } catch (const StoreError&) {
+      // Busy: the next round catches up.
+    }
+    lock.lock();
+  }
+}
+
+// ---------------------------------------------------------------- jobs
+
+std::string Store::CreateJob(const std::string& name, const std::string& spec_yaml,
+                             const std::vector<api::EpisodeSpec>& episodes, std::int64_t now_ms) {
+  if (episodes.empty()) throw std::invalid_argument("job '" + name + "': no episodes");
+  std::lock_guard lock(mutex_);
+  Transaction tx(*db_);
+  std::string job_id = NewJobId();
+  db_->Prepare("INSERT INTO jobs (id, name, spec_yaml, state, total, created_ms) "
+               "VALUES (?, ?, ?, 'running', ?, ?)")
+      .Bind(1, job_id).Bind(2, name).Bind(3, spec_yaml)
+      .Bind(4, static_cast<std::int64_t>(episodes.size())).Bind(5, now_ms).Run();
+  Statement& insert = db_->Prepare(
+      "INSERT INTO episodes (id, job_id, idx, spec_json, board, world, method, seed, clock, "
+      "state, updated_ms) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, 'pending', ?)");
+  for (std::size_t i = 0; i < episodes.size(); ++i) {
+    const api::EpisodeSpec& e = episodes[i];
+    insert.Reset()
+        .Bind(1, EpisodeId(job_id, i)).Bind(2, job_id).Bind(3, static_cast<std::int64_t>(i))
+        .Bind(4, nlohmann::json(e).dump()).Bind(5, e.board).Bind(6, e.world).Bind(7, e.method)
+        .Bind(8, static_cast<std::int64_t>(e.seed)).Bind(9, e.clock).Bind(10, now_ms).Run();
+  }
+  tx.Commit();
+  return job_id;
+}
+
+api::JobProgress Store::ProgressLocked(const std::string& job_id, std::int64_t now_ms) {
+  api::JobProgress p;
+  Statement& job = db_->Prepare(
+      "SELECT id, name, state, total, created_ms, started_ms, finished_ms FROM jobs WHERE id = ?");
+  job.Bind(1, job_id);
+  if (!job.Step()) return p;
+  p.id = job.Text(0);
+  p.name = job.Text(1);
+  p.state = job.Text(2);
+  p.total = static_cast<int>(job.Int(3));
+  p.created_ms = job.Int(4);
+  p.started_ms = job.IsNull(5) ? 0 : job.Int(5);
+  p.finished_ms = job.IsNull(6) ? 0 : job.Int(6);
+  p.now_ms = now_ms;
+  job.Reset();
+  Statement& counts =
+      db_->Prepare("SELECT state, COUNT(*) FROM episodes WHERE job_id = ? GROUP BY state");
+  counts.Bind(1, job_id);
+  while (counts.Step()) {
+    const std::string state = counts.Text(0);
+    const int n = static_cast<int>(counts.Int(1));
+    if (state == "pending") p.pending = n;
+    if (state == "leased") p.leased = n;
+    if (state == "done") p.done = n;
+    if (state == "failed") p.failed = n;
+    if (state == "cancelled") p.cancelled = n;
+  }
+  Statement& errors = db_->Prepare(
+      "SELECT id, last_error FROM episodes WHERE job_id = ? AND state = 'failed' "
+      "ORDER BY updated_ms DESC LIMIT 5");
+  errors.Bind(1, job_id);
+  while (errors.Step()) p.errors.push_back(errors.Text(0) + ": " + errors.Text(1));
+  return p;
+}
+
+std::optional<api::JobProgress> Store::Progress(const std::string& job_id, std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  api::JobProgress p = ProgressLocked(job_id, now_ms);
+  if (p.id.empty()) return std::nullopt;
+  return p;
+}
+
+std::vector<api::JobProgress> Store::ListJobs(std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  std::vector<std::string> ids;
+  Statement& list = db_->Prepare("SELECT id FROM jobs ORDER BY created_ms, rowid");
+  while (list.Step()) ids.push_back(list.Text(0));
+  std::vector<api::JobProgress> out;
+  for (const auto& id : ids) out.push_back(ProgressLocked(id, now_ms));
+  return out;
+}
+
+std::optional<std::vector<ReleasedLease>> Store::CancelJob(const std::string& job_id,
+                                                           std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  Transaction tx(*db_);
+  Statement& job = db_->Prepare("SELECT state FROM jobs WHERE id = ?");
+  job.Bind(1, job_id);
+  if (!job.Step()) return std::nullopt;
+  const std::string state = job.Text(0);
+  job.Reset();
+  std::vector<ReleasedLease> revoked;
+  if (state != "running") return revoked;  // done or already cancelled: nothing to do
+  Statement& leased = db_->Prepare(
+      "SELECT id, lease_owner, attempts FROM episodes WHERE job_id = ? AND state = 'leased'");
+  leased.Bind(1, job_id);
+  while (leased.Step()) {
+    revoked.push_back({leased.Text(0), job_id, leased.Text(1), static_cast<int>(leased.Int(2)),
+                       false, "job cancelled"});
+  }
+  db_->Prepare("UPDATE episodes SET state = 'cancelled', lease_owner = NULL, "
+               "lease_deadline_ms = NULL, last_error = 'job cancelled', updated_ms = ? "
+               "WHERE job_id = ? AND state IN ('pending', 'leased')")
+      .Bind(1, now_ms).Bind(2, job_id).Run();
+  db_->Prepare("UPDATE jobs SET state = 'cancelled', finished_ms = ? WHERE id = ?")
+      .Bind(1, now_ms).Bind(2, job_id).Run();
+  tx.Commit();
+  return revoked;
+}
+
+std::vector<EpisodeInfo> Store::Episodes(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  std::vector<EpisodeInfo> out;
+  Statement& q = db_->Prepare(
+      "SELECT id, idx, state, attempts, lease_owner, lease_deadline_ms, last_error, spec_json "
+      "FROM episodes WHERE job_id = ? ORDER BY idx");
+  q.Bind(1, job_id);
+  while (q.Step()) {
+    EpisodeInfo e;
+    e.id = q.Text(0);
+    e.index = static_cast<int>(q.Int(1));
+    e.state = q.Text(2);
+    e.attempts = static_cast<int>(q.Int(3));
+    e.lease_owner = q.Text(4);
+    e.lease_deadline_ms = q.IsNull(5) ? 0 : q.Int(5);
+    e.last_error = q.Text(6);
+    e.spec = nlohmann::json::parse(q.Text(7)).get<api::EpisodeSpec>();
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- scheduling
+
+std::vector<Lease> Store::LeaseEpisodes(const std::string& worker_id, int count,
+                                        const WorkerCapabilities& caps, std::int64_t deadline_ms,
+                                        std::int64_t now_ms) {
+  std::vector<Lease> leases;
+  if (count <= 0) return leases;
+  std::lock_guard lock(mutex_);
+  Transaction tx(*db_);
+  // Oldest job first, then episode order. Capability filters are applied here rather than in
+  // SQL so the statement stays cacheable; scanning stops once `count` are found.
+  Statement& pending = db_->Prepare(
+      "SELECT e.id, e.job_id, e.attempts, e.spec_json, e.board, e.clock FROM episodes e "
+      "JOIN jobs j ON j.id = e.job_id WHERE e.state = 'pending' AND j.state = 'running' "
+      "ORDER BY j.created_ms, j.rowid, e.idx");
+  std::vector<std::string> jobs;
+  while (static_cast<int>(leases.size()) < count && pending.Step()) {
+    if (!Accepts(caps.boards, pending.Text(4)) || !Accepts(caps.clocks, pending.Text(5))) continue;
+    Lease l;
+    l.episode_id = pending.Text(0);
+    l.job_id = pending.Text(1);
+    l.attempt = static_cast<int>(pending.Int(2)) + 1;
+    l.deadline_ms = deadline_ms;
+    l.spec = nlohmann::json::parse(pending.Text(3)).get<api::EpisodeSpec>();
+    leases.push_back(std::move(l));
+  }
+  pending.Reset();
+  Statement& update = db_->Prepare(
+      "UPDATE episodes SET state = 'leased', attempts = ?, lease_owner = ?, "
+      "lease_deadline_ms = ?, updated_ms = ? WHERE id = ? AND state = 'pending'");
+  Statement& started = db_->Prepare(
+      "UPDATE jobs SET started_ms = ? WHERE id = ? AND started_ms IS NULL");
+  for (const Lease& l : leases) {
+    update.Reset().Bind(1, l.attempt).Bind(2, worker_id).Bind(3, deadline_ms).Bind(4, now_ms)
+        .Bind(5, l.episode_id).Run();
+    started.Reset().Bind(1, now_ms).Bind(2, l.job_id).Run();
+  }
+  tx.Commit();
+  return leases;
+}
+
+int Store::RenewLeases(const std::string& worker_id, const std::vector<api::EpisodeRef>& running,
+                       std::int64_t deadline_ms) {
+  return RenewLeases(std::map<std::string, std::vector<api::EpisodeRef>>{{worker_id, running}},
+                     deadline_ms);
+}
+
+int Store::RenewLeases(const std::map<std::string, std::vector<api::EpisodeRef>>& running_by_worker,
+                       std::int64_t deadline_ms) {
+  const bool any = std::any_of(running_by_worker.begin(), running_by_worker.end(),
+                               [](const auto& kv) { return !kv.second.empty(); });
+  if (!any) return 0;
+  std::lock_guard lock(mutex_);
+  Transaction tx(*db_);
+  Statement& renew = db_->Prepare(
+      "UPDATE episodes SET lease_deadline_ms = ? WHERE id = ? AND state = 'leased' "
+      "AND lease_owner = ? AND attempts = ?");
+  int renewed = 0;
+  for (const auto& [worker_id, running] : running_by_worker) {
+    for (const auto& ref : running) {
+      renew.Reset().Bind(1, deadline_ms).Bind(2, ref.episode_id).Bind(3, worker_id)
+          .Bind(4, ref.attempt).Run();
+      renewed += static_cast<int>(db_->Changes());
+    }
+  }
+  tx.Commit();
+  return renewed;
+}
+
+std::vector<ReleasedLease> Store::ReleaseWhere(const std::string& where, const std::string& arg,
+                                               std::int64_t value, const std::string& reason,
+                                               std::int64_t now_ms) {
+  Transaction tx(*db_);
+  std::vector<ReleasedLease> released;
+  Statement& select = db_->Prepare(
+      "SELECT id, job_id, lease_owner, attempts FROM episodes WHERE state = 'leased' AND " + where);
+  if (arg.empty()) {
+    select.Bind(1, value);
+  } else {
+    select.Bind(1, arg);
+  }
+  while (select.Step()) {
+    ReleasedLease r;
+    r.episode_id = select.Text(0);
+    r.job_id = select.Text(1);
+    r.worker = select.Text(2);
+    r.attempt = static_cast<int>(select.Int(3));
+    r.failed = r.attempt >= options_.max_attempts;
+    r.reason = reason + " (worker " + r.worker + ", attempt " + std::to_string(r.attempt) + ")";
+    if (r.failed) {
+      r.reason += "; gave up after " + std::to_string(r.attempt) + " attempts";
+    }
+    released.push_back(std::move(r));
+  }
+  select.Reset();
+  Statement& update = db_->Prepare(
+      "UPDATE episodes SET state = ?, lease_owner = NULL, lease_deadline_ms = NULL, "
+      "last_error = ?, updated_ms = ? WHERE id = ? AND state = 'leased'");
+  std::vector<std::string> jobs;
+  for (const auto& r : released) {
+    update.Reset().Bind(1, r.failed ? "failed" : "pending").Bind(2, r.reason).Bind(3, now_ms)
+        .Bind(4, r.episode_id).Run();
+    if (r.failed) jobs.push_back(r.job_id);
+  }
+  FinishJobsIfComplete(jobs, now_ms);
+  tx.Commit();
+  return released;
+}
+
+std::vector<ReleasedLease> Store::ExpireLeases(std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  return ReleaseWhere("lease_deadline_ms < ?", "", now_ms, "lease expired", now_ms);
+}
+
+std::vector<ReleasedLease> Store::ReleaseWorker(const std::string& worker_id,
+                                                const std::string& reason, std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  return ReleaseWhere("lease_owner = ?", worker_id, 0, reason, now_ms);
+}
+
+std::map<std::string, int> Store::LeasedCounts() {
+  std::lock_guard lock(mutex_);
+  std::map<std::string, int> counts;
+  Statement& q = db_->Prepare(
+      "SELECT lease_owner, COUNT(*) FROM episodes WHERE state = 'leased' GROUP BY lease_owner");
+  while (q.Step()) counts[q.Text(0)] = static_cast<int>(q.Int(1));
+  return counts;
+}
+
+bool Store::HoldsLease(const std::string& episode_id, int attempt, const std::string& worker_id) {
+  std::lock_guard lock(mutex_);
+  Statement& q = db_->Prepare(
+      "SELECT 1 FROM episodes WHERE id = ? AND state = 'leased' AND attempts = ? "
+      "AND lease_owner = ?");
+  q.Bind(1, episode_id).Bind(2, attempt).Bind(3, worker_id);
+  const bool held = q.Step();
+  q.Reset();
+  return held;
+}
+
+void Store::FinishJobsIfComplete(const std::vector<std::string>& job_ids, std::int64_t now_ms) {
+  const std::set<std::string> unique(job_ids.begin(), job_ids.end());
+  Statement& open = db_->Prepare(
+      "SELECT COUNT(*) FROM episodes WHERE job_id = ? AND state IN ('pending', 'leased')");
+  Statement& finish = db_->Prepare(
+      "UPDATE jobs SET state = 'done', finished_ms = ? WHERE id = ? AND state = 'running'");
+  for (const auto& id : unique) {
+    open.Reset().Bind(1, id);
+    open.Step();
+    const std::int64_t remaining = open.Int(0);
+    open.Reset();
+    if (remaining == 0) finish.Reset().Bind(1, now_ms).Bind(2, id).Run();
+  }
+}
+
+// ---------------------------------------------------------------- results
+
+std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& results,
+                                         std::int64_t now_ms) {
+  std::vector<IngestOutcome> outcomes;
+  outcomes.reserve(results.size());
+  std::lock_guard lock(mutex_);
+  Transaction tx(*db_);
+  Statement& lookup = db_->Prepare(
+      "SELECT e.state, e.attempts, e.lease_owner, e.job_id, j.state FROM episodes e "
+      "JOIN jobs j ON j.id = e.job_id WHERE e.id = ?");
+  Statement& insert = db_->Prepare(
+      "INSERT OR IGNORE INTO results (episode_id, job_id, worker, attempt, board, scenario, world, "
+      "method, seed, clock, success, collided, timed_out, end_reason, flight_time_s, "
+      "path_length_m, velocity_mean_mps, velocity_std_mps, nav_cpu_util_pct, "
+      "deadline_miss_ratio, replans, wall_time_s, received_ms, result_json, series) "
+      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  Statement& set_state = db_->Prepare(
+      "UPDATE episodes SET state = ?, attempts = ?, lease_owner = NULL, lease_deadline_ms = NULL, "
+      "last_error = ?, updated_ms = ? WHERE id = ?");
+  std::vector<std::string> touched_jobs;
+
+  for (const api::ResultMessage& m : results) {
+    IngestOutcome out;
+    lookup.Reset().Bind(1, m.episode_id);
+    if (!lookup.Step()) {
+      out.ack = api::AckStatus::kUnknown;
+      out.detail = "no episode " + m.episode_id + " in this farm's database";
+      outcomes.push_back(out);
+      continue;
+    }
+    const std::string state = lookup.Text(0);
+    const int attempts = static_cast<int>(lookup.Int(1));
+    const std::string owner = lookup.Text(2);
+    out.job_id = lookup.Text(3);
+    const std::string job_state = lookup.Text(4);
+    lookup.Reset();
+    const bool current_lease = state == "leased" && attempts == m.attempt && owner == m.worker_id;
+
+    if (m.status == api::ResultStatus::kOk) {
+      if (state == "done") {
+        out.ack = api::AckStatus::kDuplicate;
+        out.detail = "episode already has a result";
+      } else if (state == "cancelled" || job_state == "cancelled") {
+        out.ack = api::AckStatus::kDiscarded;
+        out.detail = "job cancelled";
+      } else {
+        // pending/leased (any attempt: episodes are deterministic) or failed (a late success).
+        const api::EpisodeResult& r = m.result;
+        const std::string summary = [&] {
+          nlohmann::json j = api::ResultSummaryJson(r);
+          j["spec"] = r.spec;
+          nlohmann::json events = nlohmann::json::array();
+          for (const auto& e : r.events) events.push_back({{"t", e.t}, {"kind", e.kind}, {"detail", e.detail}});
+          j["events"] = std::move(events);
+          return j.dump();
+        }();
+        insert.Reset()
+            .Bind(1, m.episode_id).Bind(2, out.job_id).Bind(3, m.worker_id).Bind(4, m.attempt)
+            .Bind(5, r.spec.board).Bind(6, r.scenario.empty() ? api::ScenarioOf(r.spec.world) : r.scenario)
+            .Bind(7, r.spec.world).Bind(8, r.spec.method)
+            .Bind(9, static_cast<std::int64_t>(r.spec.seed)).Bind(10, r.spec.clock)
+            .Bind(11, r.success ? 1 : 0).Bind(12, r.collided ? 1 : 0).Bind(13, r.timed_out ? 1 : 0)
+            .Bind(14, r.end_reason).Bind(15, r.flight_time_s).Bind(16, r.path_length_m)
+            .Bind(17, r.velocity_mean_mps).Bind(18, r.velocity_std_mps)
+            .Bind(19, r.nav_cpu_util_pct).Bind(20, r.deadline_miss_ratio)
+            .Bind(21, r.replans).Bind(22, m.wall_time_s).Bind(23, now_ms).Bind(24, summary)
+            .BindBlob(25, PackSeries(r.series)).Run();
+        set_state.Reset().Bind(1, "done").Bind(2, std::max(attempts, m.attempt)).BindNull(3)
+            .Bind(4, now_ms).Bind(5, m.episode_id).Run();
+        out.ack = api::AckStatus::kStored;
+        out.event = "episode_done";
+        touched_jobs.push_back(out.job_id);
+      }
+    } else if (m.status == api::ResultStatus::kError) {
+      if (!current_lease) {
+        out.ack = state == "done" ? api::AckStatus::kDuplicate : api::AckStatus::kDiscarded;
+        out.detail = "not the current lease of this episode (" + state + ")";
+      } else {
+        const bool failed = attempts >= options_.max_attempts;
+        std::string reason = m.error;
+        if (failed) reason += " (gave up after " + std::to_string(attempts) + " attempts)";
+        set_state.Reset().Bind(1, failed ? "failed" : "pending").Bind(2, attempts)
+            .Bind(3, reason).Bind(4, now_ms).Bind(5, m.episode_id).Run();
+        out.ack = api::AckStatus::kRecorded;
+        out.detail = failed ? "episode failed" : "episode re-queued";
+        out.event = failed ? "episode_failed" : "requeued";
+        touched_jobs.push_back(out.job_id);
+      }
+    } else {  // rejected: the attempt did not run, so it does not count
+      if (!current_lease) {
+        out.ack = api::AckStatus::kDiscarded;
+        out.detail = "not the current lease of this episode (" + state + ")";
+      } else {
+        set_state.Reset().Bind(1, "pending").Bind(2, attempts - 1)
+            .Bind(3, "rejected by " + m.worker_id + ": " + m.error).Bind(4, now_ms)
+            .Bind(5, m.episode_id).Run();
+        out.ack = api::AckStatus::kRecorded;
+        out.detail = "episode re-queued";
+        out.event = "requeued";
+      }
+    }
+    outcomes.push_back(std::move(out));
+  }
+  FinishJobsIfComplete(touched_jobs, now_ms);
+  tx.Commit();
+  return outcomes;
+}
+
+nlohmann::json Store::Results(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  nlohmann::json list = nlohmann::json::array();
+  Statement& q = db_->Prepare(
+      "SELECT r.episode_id, r.worker, r.attempt, r.wall_time_s, r.result_json FROM results r "
+      "JOIN episodes e ON e.id = r.episode_id WHERE r.job_id = ? ORDER BY e.idx");
+  q.Bind(1, job_id);
+  while (q.Step()) {
+    nlohmann::json j = nlohmann::json::parse(q.Text(4));
+    j.erase("spec");
+    j.erase("events");
+    j["episode_id"] = q.Text(0);
+    j["worker"] = q.Text(1);
+    j["attempt"] = q.Int(2);
+    j["wall_time_s"] = q.Double(3);
+    list.push_back(std::move(j));
+  }
+  return list;
+}
+
+std::optional<api::EpisodeResult> Store::FullResult(const std::string& episode_id) {
+  std::lock_guard lock(mutex_);
+  Statement& q = db_->Prepare("SELECT result_json, series FROM results WHERE episode_id = ?");
+  q.Bind(1, episode_id);
+  if (!q.Step()) return std::nullopt;
+  api::EpisodeResult r = nlohmann::json::parse(q.Text(0)).get<api::EpisodeResult>();
+  r.series = UnpackSeries(q.Blob(1));
+  q.Reset();
+  return r;
+}
+
+}  // namespace enavi::server

@@ -1,0 +1,131 @@
+// The farm end to end: real `enavi serve` / `enavi worker` processes over DDS, fake episodes.
+#include <signal.h>
+
+#include "server/store/store.h"
+#include "tests/system/farm_harness.h"
+
+namespace enavi::testing {
+namespace {
+
+// Names of the workers running an episode right now.
+std::set<std::string> BusyWorkers(api::FarmClient& client) {
+  std::set<std::string> busy;
+  for (const auto& w : client.Workers()) {
+    if (w["alive"].get<bool>() && !w["running"].empty()) busy.insert(w["worker_id"].get<std::string>());
+  }
+  return busy;
+}
+
+TEST_F(FarmFixture, SigkilledWorkerLosesNothingAndDuplicatesNothing) {
+  api::FarmClient client(StartServer());
+  StartWorker("w1");
+  StartWorker("w2");
+  ASSERT_TRUE(Eventually([&] { return client.Workers().size() == 2; }, 30s)) << "workers not seen";
+  const std::string job = client.Submit(Job(/*seeds=*/2), "system.yaml").job_id;
+
+  // After the first result, kill a worker in the middle of an episode.
+  ASSERT_TRUE(Eventually([&] { return client.Status(job).done >= 1 && BusyWorkers(client).count("w1"); },
+                         60s));
+  Process("w1").Signal(SIGKILL);
+
+  ASSERT_TRUE(Eventually([&] { return client.Status(job).terminal(); }, 120s)) << "job did not finish";
+  ExpectExactlyOneResultPerEpisode(client, job, 8);
+  // The episode w1 was running when it died was run again (attempt 2) by w2.
+  int rerun = 0;
+  for (const auto& e : client.Episodes(job)) rerun += e["attempts"].get<int>() > 1 ? 1 : 0;
+  EXPECT_GE(rerun, 1) << "the killed worker's episode was not re-run";
+}
+
+TEST_F(FarmFixture, SigkilledAndRestartedServerLosesNothingAndDuplicatesNothing) {
+  StartServer();
+  api::FarmClient before(url_);
+  StartWorker("w1");
+  StartWorker("w2");
+  ASSERT_TRUE(Eventually([&] { return before.Workers().size() == 2; }, 30s)) << "workers not seen";
+  const std::string job = before.Submit(Job(/*seeds=*/2), "system.yaml").job_id;
+  ASSERT_TRUE(Eventually([&] { return before.Status(job).done >= 2; }, 60s));
+
+  // Kill the server mid-job; the workers finish what they run and keep those results.
+  Process("server").Signal(SIGKILL);
+  Process("server").Wait(std::chrono::milliseconds::max());
+  std::this_thread::sleep_for(2500ms);
+
+  api::FarmClient after(StartServer());  // same database, new port
+  ASSERT_TRUE(Eventually([&] { return after.Status(job).terminal(); }, 120s)) << "job did not finish";
+  ExpectExactlyOneResultPerEpisode(after, job, 8);
+  // Results finished while the server was down arrived after the restart: nothing had to run
+  // twice, and the running leases survived the restart.
+  for (const auto& e : after.Episodes(job)) {
+    EXPECT_EQ(e["attempts"].get<int>(), 1) << e.dump();
+  }
+}
+
+TEST_F(FarmFixture, CrashingEpisodesAreRetriedThenFailWithTheReason) {
+  api::FarmClient client(StartServer());
+  // Always the fake: the crashes are asked for through its tunables.
+  StartWorker("w1", /*slots=*/2, /*episode_s=*/0, FakeEpisode().string());
+  ASSERT_TRUE(Eventually([&] { return client.Workers().size() == 1; }, 30s));
+  // Seed 1 crashes on attempts 1 and 2 (then succeeds); seed 2 always crashes.
+  const std::string spec = R"(name: crashy
+boards: [tx2]
+scenarios: [s1]
+methods: [enavi]
+seeds: [1, 2]
+episode_overrides:
+  - match: {seed: 1}
+    overrides: {fake.crash_attempts: 2}
+  - match: {seed: 2}
+    overrides: {fake.crash_attempts: 99}
+)";
+  const std::string job = client.Submit(spec, "crashy.yaml").job_id;
+  ASSERT_TRUE(Eventually([&] { return client.Status(job).terminal(); }, 60s));
+  const api::JobProgress p = client.Status(job);
+  EXPECT_EQ(p.done, 1);
+  EXPECT_EQ(p.failed, 1);
+  ASSERT_EQ(p.errors.size(), 1u);
+  EXPECT_NE(p.errors[0].find("killed by signal 6"), std::string::npos) << p.errors[0];
+  EXPECT_NE(p.errors[0].find("gave up after 3 attempts"), std::string::npos) << p.errors[0];
+  EXPECT_TRUE(Process("w1").running()) << "crashing episodes must not take the worker down";
+}
+
+TEST_F(FarmFixture, EvalStoresEveryResultAndPrintsThePaperTable) {
+  const fs::path db = dir_ / "eval.db";
+  worker::SpawnOptions o;
+  o.argv = {EnaviBinary().string(), "eval", "--boards", "tx2", "--scenarios", "s1", "--methods",
+            "enavi,baseline", "--seeds", "2", "--db", db.string(), "--workers", "2",
+            "--episode-cmd", EpisodeCommand(), "--domain", std::to_string(domain_)};
+  o.stdout_file = dir_ / "eval.out";
+  o.stderr_file = dir_ / "eval.log";
+  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
+  const auto status = eval.Wait(std::chrono::seconds(180));
+  ASSERT_TRUE(status.has_value()) << "enavi eval did not finish";
+  EXPECT_TRUE(status->ok()) << status->Describe() << "\n" << ReadText(dir_ / "eval.log");
+  const std::string table = ReadText(dir_ / "eval.out");
+  EXPECT_NE(table.find("tx2    baseline"), std::string::npos) << table;
+  EXPECT_NE(table.find("tx2    enavi"), std::string::npos) << table;
+  EXPECT_NE(table.find("E-Navi vs baseline"), std::string::npos) << table;
+
+  server::Store store(db);
+  const auto jobs = store.ListJobs(0);
+  ASSERT_EQ(jobs.size(), 1u);
+  EXPECT_EQ(jobs[0].done, 4);
+  EXPECT_EQ(store.Results(jobs[0].id).size(), 4u);
+}
+
+TEST_F(FarmFixture, BadJobSpecIsRejectedByTheCliWithExitCodeTwo) {
+  StartServer();
+  std::ofstream(dir_ / "bad.yaml") << "boards: [tx2]\nscenarios: [s1]\nmethods: [enavi]\nseeds: -1\n";
+  worker::SpawnOptions o;
+  o.argv = {EnaviBinary().string(), "submit", (dir_ / "bad.yaml").string(), "--server", url_};
+  o.stderr_file = dir_ / "submit.err";
+  worker::ChildProcess submit = worker::ChildProcess::Spawn(o);
+  const auto status = submit.Wait(std::chrono::seconds(60));
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(status->code, 2) << status->Describe();
+  EXPECT_NE(ReadText(dir_ / "submit.err").find("bad.yaml:4: seeds: count -1 outside [1, 1000]"),
+            std::string::npos)
+      << ReadText(dir_ / "submit.err");
+}
+
+}  // namespace
+}  // namespace enavi::testing

@@ -1,0 +1,252 @@
+#include "api/job_spec.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace enavi::api {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A scratch allowed root with a couple of world files in it.
+class JobSpecTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() /
+            ("job_spec_test-" + std::to_string(getpid()) + "-" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(root_ / "worlds");
+    std::ofstream(root_ / "worlds/hall.yaml") << "name: hall\n";
+    std::ofstream(root_ / "worlds/yard.obj") << "v 0 0 0\n";
+    options_.allowed_roots = {root_};
+  }
+  void TearDown() override { fs::remove_all(root_); }
+
+  JobSpec Parse(const std::string& yaml) { return ParseJobSpec(yaml, "job.yaml", options_); }
+
+  // The error message of a spec that must be rejected.
+  std::string Error(const std::string& yaml) {
+    try {
+      Parse(yaml);
+    } catch (const JobSpecError& e) {
+      return e.what();
+    }
+    ADD_FAILURE() << "spec was accepted:\n" << yaml;
+    return "";
+  }
+
+  fs::path root_;
+  JobSpecOptions options_;
+};
+
+constexpr const char* kMinimal = R"(name: small
+boards: [tx2]
+scenarios: [s1]
+methods: [baseline, enavi]
+seeds: 2
+)";
+
+TEST_F(JobSpecTest, MinimalSpecParsesWithDefaults) {
+  const JobSpec job = Parse(kMinimal);
+  EXPECT_EQ(job.name, "small");
+  EXPECT_EQ(job.boards, std::vector<std::string>{"tx2"});
+  ASSERT_EQ(job.scenarios.size(), 1u);
+  EXPECT_EQ(job.scenarios[0].world, "s1");
+  EXPECT_EQ(job.seeds, (std::vector<std::uint64_t>{1, 2}));
+  EXPECT_EQ(job.clock, "virtual");
+  EXPECT_EQ(job.cost, "model");
+  EXPECT_EQ(job.MatrixSize(), 4u);
+}
+
+TEST_F(JobSpecTest, NameDefaultsToFileStem) {
+  const JobSpec job = ParseJobSpec("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\n",
+                                   "/x/nightly-tx2.yaml", options_);
+  EXPECT_EQ(job.name, "nightly-tx2");
+}
+
+TEST_F(JobSpecTest, ExpansionOrderIsBoardsScenariosMethodsSeeds) {
+  const JobSpec job = Parse(R"(boards: [tx2, pi4b]
+scenarios: [s1, s2]
+methods: [baseline, enavi]
+seeds: [3, 9]
+)");
+  const auto episodes = ExpandJob(job);
+  ASSERT_EQ(episodes.size(), 16u);
+  EXPECT_EQ(episodes[0].board, "tx2");
+  EXPECT_EQ(episodes[0].world, "s1");
+  EXPECT_EQ(episodes[0].method, "baseline");
+  EXPECT_EQ(episodes[0].seed, 3u);
+  EXPECT_EQ(episodes[1].seed, 9u) << "seeds vary fastest";
+  EXPECT_EQ(episodes[2].method, "enavi") << "then methods";
+  EXPECT_EQ(episodes[4].world, "s2") << "then scenarios";
+  EXPECT_EQ(episodes[8].board, "pi4b") << "boards vary slowest";
+  EXPECT_EQ(episodes[15].board, "pi4b");
+  EXPECT_EQ(episodes[15].world, "s2");
+  EXPECT_EQ(episodes[15].method, "enavi");
+  EXPECT_EQ(episodes[15].seed, 9u);
+}
+
+TEST_F(JobSpecTest, ExpansionIsDeterministic) {
+  const std::string yaml = std::string(kMinimal) + "overrides: {f_per_max: 20}\n";
+  const auto a = ExpandJob(Parse(yaml));
+  const auto b = ExpandJob(Parse(yaml));
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(nlohmann::json(a[i]).dump(), nlohmann::json(b[i]).dump()) << "episode " << i;
+  }
+}
+
+TEST_F(JobSpecTest, EpisodeOverridesApplyToMatchingEpisodesOnlyLaterWins) {
+  const JobSpec job = Parse(R"(boards: [tx2, pi4b]
+scenarios: [s1]
+methods: [baseline, enavi]
+seeds: 2
+timeout_s: 60
+overrides: {f_per_max: 30}
+episode_overrides:
+  - match: {board: tx2, method: enavi}
+    timeout_s: 120
+    overrides: {f_per_max: 20}
+  - match: {seed: 2, board: tx2, method: [enavi]}
+    overrides: {f_per_max: 10}
+)");
+  for (const EpisodeSpec& e : ExpandJob(job)) {
+    const bool tx2_enavi = e.board == "tx2" && e.method == "enavi";
+    EXPECT_EQ(e.timeout_s, tx2_enavi ? 120.0 : 60.0) << e.board << " " << e.method;
+    const double expected = !tx2_enavi ? 30.0 : (e.seed == 2 ? 10.0 : 20.0);
+    EXPECT_EQ(e.overrides.at("f_per_max"), expected) << e.board << " " << e.method << " " << e.seed;
+  }
+}
+
+TEST_F(JobSpecTest, WorldFilesResolveUnderTheAllowedRoot) {
+  const JobSpec job = Parse(R"(boards: tx2
+methods: enavi
+seeds: 1
+scenarios:
+  - worlds/hall.yaml
+  - {world: worlds/yard.obj, start: [0, 0, 1], goal: [30, 0, 1], params: {k: v}}
+)");
+  ASSERT_EQ(job.scenarios.size(), 2u);
+  EXPECT_EQ(job.scenarios[0].world, fs::weakly_canonical(root_ / "worlds/hall.yaml").string());
+  const auto episodes = ExpandJob(job);
+  ASSERT_TRUE(episodes[1].start.has_value());
+  EXPECT_EQ((*episodes[1].goal)[0], 30.0);
+  EXPECT_EQ(episodes[1].world_params.at("k"), "v");
+  EXPECT_EQ(ScenarioOf(episodes[1].world), "custom");
+  EXPECT_EQ(ScenarioOf("s3"), "s3");
+}
+
+// ---- every bad input names file, line and field ----
+
+TEST_F(JobSpecTest, UnknownBoardNamesLineAndField) {
+  EXPECT_EQ(Error("boards: [tx2, rpi9]\nscenarios: [s1]\nmethods: [enavi]\nseeds: 1\n"),
+            "job.yaml:1: boards: unknown board 'rpi9' (known: pi4b, tx2, nx, opi5, x86, host)");
+}
+
+TEST_F(JobSpecTest, UnknownMethodScenarioClockAreRejected) {
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: [fast]\nseeds: 1\n")
+                .rfind("job.yaml:3: methods: unknown method 'fast'", 0),
+            0u);
+  EXPECT_EQ(Error("boards: tx2\nscenarios: [s1, moon]\nmethods: enavi\nseeds: 1\n")
+                .rfind("job.yaml:2: scenarios: unknown scenario 'moon'", 0),
+            0u);
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\nclock: wall\n")
+                .rfind("job.yaml:5: clock: unknown clock 'wall'", 0),
+            0u);
+}
+
+TEST_F(JobSpecTest, NegativeAndAbsurdSeedCountsAreRejected) {
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: -3\n"),
+            "job.yaml:4: seeds: count -3 outside [1, 1000]");
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 50000\n"),
+            "job.yaml:4: seeds: count 50000 outside [1, 1000]");
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 2.5\n"),
+            "job.yaml:4: seeds: expected an integer, got '2.5'");
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: [1, 1]\n"),
+            "job.yaml:4: seeds: seed 1 listed twice");
+}
+
+TEST_F(JobSpecTest, MatrixAboveTheLimitIsRejected) {
+  // 6 boards x 7 scenarios x 2 methods x 200 seeds = 16800 > 10000.
+  const std::string e = Error(R"(boards: [pi4b, tx2, nx, opi5, x86, host]
+scenarios: [s1, s2, s3, s4, s5, forest, empty]
+methods: [baseline, enavi]
+seeds: 200
+)");
+  EXPECT_EQ(e, "job.yaml:4: matrix: 6 boards x 7 scenarios x 2 methods x 200 seeds = 16800 "
+               "episodes, above the limit 10000");
+}
+
+TEST_F(JobSpecTest, PathsOutsideTheAllowedRootsAreRejected) {
+  const std::string e = Error("boards: tx2\nmethods: enavi\nseeds: 1\nscenarios: [../../etc/x.yaml]\n");
+  EXPECT_EQ(e.rfind("job.yaml:4: scenarios: '../../etc/x.yaml' is outside the allowed roots", 0), 0u)
+      << e;
+  const std::string abs = Error("boards: tx2\nmethods: enavi\nseeds: 1\nscenarios: [/etc/hosts.yaml]\n");
+  EXPECT_NE(abs.find("outside the allowed roots"), std::string::npos) << abs;
+  const std::string missing =
+      Error("boards: tx2\nmethods: enavi\nseeds: 1\nscenarios: [worlds/none.yaml]\n");
+  EXPECT_EQ(missing, "job.yaml:4: scenarios: 'worlds/none.yaml': no such file");
+}
+
+TEST_F(JobSpecTest, ObjWorldWithoutStartAndGoalIsRejected) {
+  EXPECT_EQ(Error("boards: tx2\nmethods: enavi\nseeds: 1\nscenarios: [worlds/yard.obj]\n"),
+            "job.yaml:4: scenarios: 'worlds/yard.obj' is an OBJ mesh: give start and goal");
+}
+
+TEST_F(JobSpecTest, UnknownKeysAreRejectedWithTheirLine) {
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\nseed: 4\n")
+                .rfind("job.yaml:5: seed: unknown key (allowed: name, boards,", 0),
+            0u);
+  EXPECT_EQ(Error(R"(boards: tx2
+scenarios: s1
+methods: enavi
+seeds: 1
+episode_overrides:
+  - match: {boards: tx2}
+)")
+                .rfind("job.yaml:6: episode_overrides.match.boards: unknown key", 0),
+            0u);
+}
+
+TEST_F(JobSpecTest, MissingRequiredFieldAndMalformedYamlAreRejected) {
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\n"),
+            "job.yaml:1: seeds: missing (required)");
+  EXPECT_EQ(Error("boards: [tx2\nscenarios: s1\n").rfind("job.yaml:", 0), 0u);
+  EXPECT_NE(Error("boards: [tx2\nscenarios: s1\n").find(": yaml: "), std::string::npos);
+  EXPECT_EQ(Error("- just\n- a list\n"), "job.yaml:1: job: expected a YAML map of name, boards, scenarios, ...");
+}
+
+TEST_F(JobSpecTest, OutOfRangeNumbersNameTheRange) {
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\ntimeout_s: -5\n"),
+            "job.yaml:5: timeout_s: -5 outside [0, 3600]");
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\ndilation: .inf\n"),
+            "job.yaml:5: dilation: .inf outside [0.01, 100]");
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\noverrides: {F_PER: 2}\n"),
+            "job.yaml:5: overrides.F_PER: tunable names are lower_case identifiers");
+}
+
+TEST_F(JobSpecTest, DuplicatesInListsAreRejected) {
+  EXPECT_EQ(Error("boards: [tx2, tx2]\nscenarios: s1\nmethods: enavi\nseeds: 1\n"),
+            "job.yaml:1: boards: 'tx2' listed twice");
+}
+
+TEST_F(JobSpecTest, LoadJobSpecNamesTheFile) {
+  const fs::path file = root_ / "bad.yaml";
+  std::ofstream(file) << "boards: [tx2]\nscenarios: [s9]\nmethods: [enavi]\nseeds: 1\n";
+  try {
+    LoadJobSpec(file, options_);
+    FAIL() << "accepted";
+  } catch (const JobSpecError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(file.string() + ":2: scenarios: unknown scenario 's9'", 0), 0u)
+        << e.what();
+  }
+  EXPECT_THROW(LoadJobSpec(root_ / "absent.yaml", options_), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace enavi::api

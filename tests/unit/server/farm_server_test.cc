@@ -1,0 +1,210 @@
+#include "server/scheduler/farm_server.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "tests/unit/api/farm_test_util.h"
+
+namespace enavi::server {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using testing::WaitFor;
+
+// A scripted worker: the test decides what it announces and answers.
+struct FakeWorker {
+  FakeWorker(const api::BusOptions& bus, std::string id, int slots)
+      : bus(bus, id), slots(slots) {
+    status.worker_id = std::move(id);
+    status.slots = slots;
+    status.free_slots = slots;
+  }
+  void Heartbeat() {
+    status.running.clear();
+    for (const auto& a : running) status.running.push_back({a.episode_id, a.attempt});
+    ++status.seq;
+    bus.Publish(status);
+  }
+  void Pump() {
+    auto in = bus.Wait(20ms);
+    for (auto& a : in.assignments) {
+      running.push_back(a);
+      assignments.push_back(std::move(a));
+    }
+    for (auto& a : in.acks) acks.push_back(std::move(a));
+    for (auto& e : in.events) events.push_back(std::move(e));
+  }
+  api::ResultMessage Finish(const api::Assignment& a) {
+    api::ResultMessage m;
+    m.episode_id = a.episode_id;
+    m.attempt = a.attempt;
+    m.worker_id = status.worker_id;
+    m.job_id = a.job_id;
+    m.result.spec = a.spec;
+    m.result.success = true;
+    m.result.flight_time_s = 10;
+    running.erase(std::remove_if(running.begin(), running.end(),
+                                 [&](const api::Assignment& r) { return r.episode_id == a.episode_id; }),
+                  running.end());
+    bus.Publish(m);
+    return m;
+  }
+  api::WorkerBus bus;
+  int slots;
+  api::WorkerStatus status;
+  std::vector<api::Assignment> assignments, running;
+  std::vector<api::ResultAck> acks;
+  std::vector<api::JobEvent> events;
+};
+
+class FarmServerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("farm_server_test-" + std::to_string(getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    store_ = std::make_unique<Store>(dir_ / "farm.db");
+    options_.bus = testing::TestBus();
+    options_.lease = 1500ms;
+    options_.worker_timeout = 1500ms;
+    options_.tick = 50ms;
+  }
+  void TearDown() override {
+    server_.reset();
+    store_.reset();
+    fs::remove_all(dir_);
+  }
+  void StartServer() {
+    server_ = std::make_unique<FarmServer>(store_.get(), options_);
+    server_->Start();
+  }
+  std::string SubmitEpisodes(int n) {
+    std::vector<api::EpisodeSpec> episodes(n);
+    for (int i = 0; i < n; ++i) episodes[i].seed = static_cast<std::uint64_t>(i + 1);
+    return server_->Submit("test", "yaml", episodes);
+  }
+  // Heartbeats and pumps the worker until `done` holds.
+  bool Drive(FakeWorker& w, const std::function<bool()>& done,
+             std::chrono::milliseconds timeout = 20s) {
+    return WaitFor([&] {
+      w.Heartbeat();
+      w.Pump();
+      return done();
+    }, timeout);
+  }
+
+  fs::path dir_;
+  std::unique_ptr<Store> store_;
+  FarmServerOptions options_;
+  std::unique_ptr<FarmServer> server_;
+};
+
+TEST_F(FarmServerTest, AssignsPendingEpisodesUpToTheWorkersSlots) {
+  StartServer();
+  FakeWorker w(options_.bus, "w1", 2);
+  const std::string job = SubmitEpisodes(5);
+  ASSERT_TRUE(Drive(w, [&] { return w.assignments.size() >= 2; }));
+  // Keep heartbeating a while: no third assignment while both slots are leased.
+  Drive(w, [] { return false; }, 500ms);
+  EXPECT_EQ(w.assignments.size(), 2u);
+  EXPECT_EQ(store_->Progress(job, NowMs())->leased, 2);
+  EXPECT_EQ(w.assignments[0].attempt, 1);
+  EXPECT_EQ(w.assignments[0].job_id, job);
+}
+
+TEST_F(FarmServerTest, ResultIsStoredBeforeItIsAcknowledgedAndDuplicatesAreAckedToo) {
+  StartServer();
+  FakeWorker w(options_.bus, "w1", 1);
+  const std::string job = SubmitEpisodes(1);
+  ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }));
+  const api::ResultMessage m = w.Finish(w.assignments[0]);
+  ASSERT_TRUE(Drive(w, [&] { return !w.acks.empty(); }));
+  EXPECT_EQ(w.acks[0].status, api::AckStatus::kStored);
+  EXPECT_EQ(store_->Results(job).size(), 1u) << "acknowledged means stored";
+  EXPECT_EQ(store_->Progress(job, NowMs())->state, "done");
+  w.bus.Publish(m);  // re-sent, e.g. after a lost ack
+  ASSERT_TRUE(Drive(w, [&] { return w.acks.size() >= 2; }));
+  EXPECT_EQ(w.acks[1].status, api::AckStatus::kDuplicate);
+  EXPECT_EQ(store_->Results(job).size(), 1u);
+  EXPECT_EQ(server_->stats().duplicates, 1u);
+}
+
+TEST_F(FarmServerTest, VanishedWorkersEpisodeIsRunAgainElsewhere) {
+  StartServer();
+  auto w1 = std::make_unique<FakeWorker>(options_.bus, "w1", 1);
+  const std::string job = SubmitEpisodes(1);
+  ASSERT_TRUE(Drive(*w1, [&] { return !w1->assignments.empty(); }));
+  const std::string episode = w1->assignments[0].episode_id;
+  w1.reset();  // the worker process is gone
+  FakeWorker w2(options_.bus, "w2", 1);
+  ASSERT_TRUE(Drive(w2, [&] { return !w2.assignments.empty(); }));
+  EXPECT_EQ(w2.assignments[0].episode_id, episode);
+  EXPECT_EQ(w2.assignments[0].attempt, 2) << "the lost lease counted as an attempt";
+  w2.Finish(w2.assignments[0]);
+  ASSERT_TRUE(Drive(w2, [&] { return !w2.acks.empty(); }));
+  EXPECT_EQ(store_->Progress(job, NowMs())->done, 1);
+}
+
+TEST_F(FarmServerTest, HeartbeatsKeepALeaseAliveAndSilenceAboutItLosesIt) {
+  StartServer();
+  FakeWorker w(options_.bus, "w1", 1);
+  const std::string job = SubmitEpisodes(1);
+  ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }));
+  // Three lease lengths of heartbeats that list the episode: still leased to w1.
+  Drive(w, [] { return false; }, 3 * options_.lease);
+  EXPECT_TRUE(store_->HoldsLease(w.assignments[0].episode_id, 1, "w1"));
+  // The worker keeps heartbeating but no longer lists it (it lost the episode): the lease
+  // expires and the episode is assigned again.
+  w.running.clear();
+  ASSERT_TRUE(WaitFor([&] {
+    w.status.running.clear();
+    w.bus.Publish(w.status);
+    w.Pump();
+    return w.assignments.size() >= 2;
+  }));
+  EXPECT_EQ(w.assignments[1].attempt, 2);
+  EXPECT_EQ(store_->Progress(job, NowMs())->leased, 1);
+}
+
+TEST_F(FarmServerTest, CancelTellsWorkersToStop) {
+  StartServer();
+  FakeWorker w(options_.bus, "w1", 1);
+  const std::string job = SubmitEpisodes(3);
+  ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }));
+  EXPECT_TRUE(server_->Cancel(job));
+  ASSERT_TRUE(Drive(w, [&] {
+    return std::any_of(w.events.begin(), w.events.end(), [&](const api::JobEvent& e) {
+      return e.kind == "cancelled" && e.job_id == job;
+    });
+  }));
+  EXPECT_EQ(store_->Progress(job, NowMs())->state, "cancelled");
+  EXPECT_FALSE(server_->Cancel("jnothing"));
+}
+
+TEST_F(FarmServerTest, ARestartedServerKeepsLeasesItsWorkersStillRun) {
+  StartServer();
+  FakeWorker w(options_.bus, "w1", 1);
+  const std::string job = SubmitEpisodes(2);
+  ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }));
+  server_.reset();  // server gone; the worker keeps running its episode
+  StartServer();    // same database
+  // The heartbeat renews the lease under the new server; the result is accepted.
+  Drive(w, [] { return false; }, 2 * options_.lease);
+  EXPECT_TRUE(store_->HoldsLease(w.assignments[0].episode_id, 1, "w1"));
+  w.Finish(w.assignments[0]);
+  ASSERT_TRUE(Drive(w, [&] { return w.assignments.size() == 2; })) << "the second episode";
+  w.Finish(w.assignments[1]);
+  ASSERT_TRUE(Drive(w, [&] { return store_->Progress(job, NowMs())->state == "done"; }));
+  EXPECT_EQ(store_->Results(job).size(), 2u);
+  EXPECT_EQ(store_->Progress(job, NowMs())->failed, 0);
+}
+
+}  // namespace
+}  // namespace enavi::server

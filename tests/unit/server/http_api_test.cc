@@ -1,0 +1,155 @@
+#include "server/http/http_api.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "api/client.h"
+#include "tests/unit/api/farm_test_util.h"
+
+namespace enavi::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kJob = R"(name: http-test
+boards: [tx2]
+scenarios: [s1]
+methods: [baseline, enavi]
+seeds: 2
+)";
+
+// A farm server (no workers) behind its HTTP API on an ephemeral loopback port.
+class HttpApiTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("http_api_test-" + std::to_string(getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    store_ = std::make_unique<Store>(dir_ / "farm.db");
+    FarmServerOptions options;
+    options.bus = testing::TestBus();
+    farm_ = std::make_unique<FarmServer>(store_.get(), options);
+    farm_->Start();
+  }
+  void TearDown() override {
+    api_.reset();
+    farm_.reset();
+    store_.reset();
+    fs::remove_all(dir_);
+  }
+  std::string Serve(const std::string& token = "") {
+    HttpOptions http;
+    http.token = token;
+    http.job_spec.allowed_roots = {dir_};
+    api_ = std::make_unique<HttpApi>(farm_.get(), http);
+    api_->Start();
+    return api_->url();
+  }
+
+  fs::path dir_;
+  std::unique_ptr<Store> store_;
+  std::unique_ptr<FarmServer> farm_;
+  std::unique_ptr<HttpApi> api_;
+};
+
+TEST_F(HttpApiTest, SubmitStatusEpisodesAndCancelRoundTrip) {
+  api::FarmClient client(Serve());
+  EXPECT_EQ(client.Health()["ok"], true);
+  const auto submitted = client.Submit(kJob, "my-job.yaml");
+  EXPECT_EQ(submitted.name, "http-test");
+  EXPECT_EQ(submitted.episodes, 4);
+  const api::JobProgress p = client.Status(submitted.job_id);
+  EXPECT_EQ(p.total, 4);
+  EXPECT_EQ(p.state, "running");
+  const auto jobs = client.Jobs();
+  ASSERT_EQ(jobs.size(), 1u);
+  EXPECT_EQ(jobs[0].id, submitted.job_id);
+  const auto episodes = client.Episodes(submitted.job_id);
+  ASSERT_EQ(episodes.size(), 4u);
+  EXPECT_EQ(episodes[1]["seed"], 2);
+  EXPECT_TRUE(client.Results(submitted.job_id).empty());
+  const api::JobProgress cancelled = client.Cancel(submitted.job_id);
+  EXPECT_EQ(cancelled.state, "cancelled");
+  EXPECT_EQ(cancelled.cancelled, 4);
+}
+
+TEST_F(HttpApiTest, BadSpecIsRejectedWithFileLineFieldAndNothingIsStored) {
+  api::FarmClient client(Serve());
+  try {
+    client.Submit("boards: [tx2]\nscenarios: [s1]\nmethods: [warp]\nseeds: 1\n", "bad.yaml");
+    FAIL() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("bad.yaml:3: methods: unknown method 'warp'", 0), 0u)
+        << e.what();
+  }
+  EXPECT_TRUE(client.Jobs().empty()) << "a rejected job must change nothing";
+}
+
+TEST_F(HttpApiTest, UnknownJobIsBadInput) {
+  api::FarmClient client(Serve());
+  try {
+    client.Status("jdoesnotexist");
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "no job 'jdoesnotexist'");
+  }
+}
+
+TEST_F(HttpApiTest, TokenIsRequiredForStateChangesOnly) {
+  const std::string url = Serve("s3cret");
+  api::FarmClient anonymous(url);
+  EXPECT_NO_THROW(anonymous.Jobs()) << "reading needs no token";
+  try {
+    anonymous.Submit(kJob, "job.yaml");
+    FAIL() << "submitted without the token";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("token"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(api::FarmClient(url, "wrong").Submit(kJob, "job.yaml"), std::invalid_argument);
+  EXPECT_NO_THROW(api::FarmClient(url, "s3cret").Submit(kJob, "job.yaml"));
+  EXPECT_EQ(anonymous.Jobs().size(), 1u);
+}
+
+TEST_F(HttpApiTest, NonLoopbackBindWithoutTokenIsRefused) {
+  HttpOptions http;
+  http.host = "0.0.0.0";
+  try {
+    HttpApi api(farm_.get(), http);
+    FAIL() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--token: required", 0), 0u) << e.what();
+  }
+  EXPECT_TRUE(IsLoopbackHost("127.0.0.1"));
+  EXPECT_TRUE(IsLoopbackHost("127.8.0.1"));
+  EXPECT_TRUE(IsLoopbackHost("localhost"));
+  EXPECT_FALSE(IsLoopbackHost("10.0.0.1"));
+  EXPECT_FALSE(IsLoopbackHost("0.0.0.0"));
+}
+
+TEST(FarmClientTest, UnreachableServerIsAFailureNotBadInput) {
+  // Port 1 on loopback: nothing listens there.
+  api::FarmClient client("http://127.0.0.1:1");
+  try {
+    client.Jobs();
+    FAIL() << "no error";
+  } catch (const std::invalid_argument&) {
+    FAIL() << "an unreachable server is not the user's bad input";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("cannot reach the farm server at http://127.0.0.1:1", 0), 0u)
+        << e.what();
+  }
+}
+
+TEST(FarmClientTest, MalformedUrlIsBadInput) {
+  EXPECT_THROW(api::FarmClient("localhost:8717"), std::invalid_argument);
+  EXPECT_THROW(api::FarmClient("http://exa mple"), std::invalid_argument);
+  EXPECT_NO_THROW(api::FarmClient("http://farm-server:8717/"));
+}
+
+}  // namespace
+}  // namespace enavi::server
