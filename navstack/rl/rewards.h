@@ -25,8 +25,8 @@
 //   on how many decisions were taken or how long the flight lasted.
 //
 // Default weights: a goal (+10) and a collision (-20) dominate; a full flight's progress is worth
-// +10; CPU costs 0.5 per second at a fully loaded board (e.g. -7.5 for a 30 s flight at 50 %),
-// overload 5 per second per unit over capacity; time 0.2 per second.
+// +10; CPU costs 2 per second at a fully loaded board (e.g. -7.5 for a 30 s flight using one of
+// four cores at 50 %), overload 20 per second per unit over capacity; time 0.2 per second.
 
 #include <nlohmann/json.hpp>
 
@@ -34,8 +34,8 @@ namespace enavi::navstack::rl {
 
 /// Reward weights (all >= 0; the signs are fixed by the formulas above). Range [0, 1000] each.
 struct RewardWeights {
-  double w_util = 0.5;
-  double w_over = 5.0;
+  double w_util = 2.0;
+  double w_over = 20.0;
   double w_progress = 10.0;
   double w_path = 2.0;
   double w_collision = 20.0;

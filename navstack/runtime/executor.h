@@ -19,6 +19,7 @@ struct TaskStats {
   double busy_s = 0.0;         ///< board time spent executing this task
   double cost_sum_s = 0.0;     ///< board time of started jobs
   double cost_max_s = 0.0;
+  double cost_recent_s = 0.0;  ///< exponential average (weight 0.25) of recent jobs' board time
   double host_cpu_s = 0.0;     ///< host CPU time spent in the task's code
 
   /// Deadline misses: late finishes plus skipped releases (an overrun job takes its successors' slots).

@@ -88,6 +88,7 @@ void VirtualExecutor::Start(TaskId task) {
   ++s.stats.started;
   s.stats.cost_sum_s += cost;
   s.stats.cost_max_s = std::max(s.stats.cost_max_s, cost);
+  s.stats.cost_recent_s = s.stats.started == 1 ? cost : 0.75 * s.stats.cost_recent_s + 0.25 * cost;
   s.stats.host_cpu_s += host_cpu;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include "navstack/planning/collision_check.h"
@@ -44,8 +45,33 @@ NavStack::NavStack(const NavStackOptions& options, TaskExecutor* executor, const
   executor_->Register(TaskId::kPlanning, [this] { return PlanningJob(); });
   executor_->Register(TaskId::kCollision, [this] { return CollisionJob(); });
   executor_->Register(TaskId::kDifference, [this] { return DifferenceJob(); });
+  straight_length_ = to_goal.norm();
+  last_p_ = initial.p_WB;
+  if (options_.strategy) {
+    strategy_ = std::make_unique<StrategyController>(*options_.strategy);
+    options_.rates.resolution = strategy_->resolution();
+    options_.map.resolution = strategy_->resolution();
+    map_ = std::make_unique<OccupancyMap>(options_.map);
+    pending_resolution_ = options_.map.resolution;
+    executor_->Register(TaskId::kEci, [this] { return EciJob(); });
+    executor_->Register(TaskId::kAdapter, [this] { return AdapterJob(); });
+    executor_->SetRate(TaskId::kEci, options_.f_sen);
+    executor_->SetRate(TaskId::kAdapter, options_.strategy->f_adapt);
+  }
   SetRates(options_.rates);
   if (rates_.f_plan == 0) RequestReplan("start");
+}
+
+void NavStack::OnState(const VehicleState& state) {
+  flown_ += (state.p_WB - last_p_).norm();
+  last_p_ = state.p_WB;
+  state_ = state;
+}
+
+void NavStack::Stop(const char* why) {
+  stopped_ = true;
+  hold_ = HoldAt(state_.p_WB, YawOf(state_.q_WB));
+  AddEvent(why);
 }
 
 void NavStack::SetRates(const TaskRates& rates) {
@@ -140,11 +166,8 @@ JobOutput NavStack::CollisionJob() {
     if (trajectory_ != traj) return;  // a newer plan landed meanwhile
     const double now = executor_->now();
     AddEvent("collision_predicted", "in " + std::to_string(hit.t_hit - now) + " s");
-    if (hit.t_hit - now < options_.emergency_horizon_s) {
-      stopped_ = true;
-      hold_ = HoldAt(state_.p_WB, YawOf(state_.q_WB));
-      AddEvent("emergency_stop");
-    }
+    if (hit.t_hit - now < options_.emergency_horizon_s) Stop("emergency_stop");
+    if (strategy_) strategy_->OnCollisionTrigger(now);
     RequestReplan("collision");
   };
   return out;
@@ -192,7 +215,17 @@ JobOutput NavStack::PlanningJob() {
       map_->ExtractGrid(PlanningVolume(start.p, options_.goal, options_.flight_bounds, options_.planner), &out.work));
   auto result = std::make_shared<PlanResult>(Plan(request, options_.planner));
   out.work += result->work;
-  out.commit = [this, result, t] {
+  // The Resolution Adapter scores the path against the map's obstacle density (paper Sec. V.A).
+  PathScoreInputs score;
+  if (strategy_ && result->ok()) {
+    for (const CellState c : request.grid->cells) score.occupied_cells += c == CellState::kOccupied;
+    score.total_cells = static_cast<double>(request.grid->cells.size());
+    out.work.Add(WorkUnit::kGridCell, static_cast<std::int64_t>(request.grid->cells.size()));
+    score.path_length = result->path_length;
+    score.straight_length = (result->goal_used_W - start.p).norm();
+  }
+  out.commit = [this, result, t, score] {
+    if (strategy_) strategy_->OnPlanned(executor_->now(), result->ok(), score);
     // Latency = board time from start to finish; the next plan aims that far ahead.
     const double latency = executor_->now() - t;
     plan_latency_estimate_ = std::clamp(0.7 * plan_latency_estimate_ + 0.3 * 1.2 * latency, 0.02, 0.5);
@@ -201,6 +234,7 @@ JobOutput NavStack::PlanningJob() {
       AddEvent("plan_failed", std::string(ToString(result->status)) + ": " + result->message);
       return;
     }
+    if (failsafe_) return;  // hovering until the overload clears
     previous_trajectory_ = stopped_ ? nullptr : trajectory_;
     trajectory_ = result->trajectory;
     stopped_ = false;
@@ -209,6 +243,97 @@ JobOutput NavStack::PlanningJob() {
     AddEvent("replan", result->goal_is_local ? "local goal" : "goal");
   };
   return out;
+}
+
+JobOutput NavStack::EciJob() {
+  JobOutput out;
+  const DepthFramePtr frame = latest_frame_;
+  if (!frame || frame == last_eci_frame_) return out;
+  last_eci_frame_ = frame;
+  const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * frame->v_W;
+  const double eci = ComputeEci(frame->image, options_.camera, v_C, options_.eci, &out.work).eci;
+  out.commit = [this, eci] {
+    d_eci_ = eci_tracker_.Update(eci);
+    eci_ = eci;
+    strategy_->ObserveEci(executor_->now(), eci);
+  };
+  return out;
+}
+
+StrategyInputs NavStack::GatherStrategyInputs(double t) {
+  StrategyInputs in;
+  in.t = t;
+  in.f_sen = options_.f_sen;
+  in.cores = executor_->cores();
+  // System monitor: navigation utilisation over the epoch since the last decision, in cores.
+  double busy = 0;
+  for (int i = 0; i < kTaskCount; ++i)
+    if (IsNavigationTask(static_cast<TaskId>(i))) busy += executor_->stats(static_cast<TaskId>(i)).busy_s;
+  in.u_cur = t > last_adapt_t_ ? (busy - last_adapt_busy_) / (t - last_adapt_t_) : 0.0;
+  last_adapt_t_ = t;
+  last_adapt_busy_ = busy;
+  in.wcet = {executor_->stats(TaskId::kPerception).cost_recent_s, executor_->stats(TaskId::kPlanning).cost_recent_s,
+             executor_->stats(TaskId::kCollision).cost_recent_s, executor_->stats(TaskId::kDifference).cost_recent_s};
+  in.trajectory_duration = trajectory_ ? trajectory_->duration() : std::numeric_limits<double>::infinity();
+  in.current = {rates_.f_per, rates_.f_col, rates_.f_dif};
+  in.flight.eci = eci_;
+  in.flight.d_eci = d_eci_;
+  in.flight.resolution = map_->resolution();
+  in.flight.p_WB = state_.p_WB;
+  in.flight.v_WB = state_.v_WB;
+  in.flight.q_WB = state_.q_WB;
+  in.flight.p_goal_W = options_.goal;
+  in.distance_to_goal = (options_.goal - state_.p_WB).norm();
+  in.straight_length = straight_length_;
+  // |L_e|: flown so far + what the current plan still covers + straight on to the goal.
+  double planned = 0;
+  Eigen::Vector3d end = state_.p_WB;
+  if (trajectory_ && !stopped_ && t < trajectory_->end_time()) {
+    Eigen::Vector3d p = trajectory_->Sample(t).p;
+    for (double s = t + 0.2; s < trajectory_->end_time() + 0.2; s += 0.2) {
+      const Eigen::Vector3d q = trajectory_->Sample(s).p;
+      planned += (q - p).norm();
+      p = q;
+    }
+    end = p;
+  }
+  in.expected_path = flown_ + planned + (options_.goal - end).norm();
+  return in;
+}
+
+JobOutput NavStack::AdapterJob() {
+  JobOutput out;
+  const StrategyInputs in = GatherStrategyInputs(executor_->now());
+  auto decision = std::make_shared<StrategyDecision>(strategy_->Decide(in, options_.goal));
+  out.work = decision->work;
+  out.commit = [this, decision] {
+    TaskRates r = rates_;
+    r.f_per = decision->f.f_per;
+    r.f_col = decision->f.f_col;
+    r.f_dif = decision->f.f_dif;
+    r.resolution = decision->resolution;
+    SetRates(r);
+    if (decision->fallback) AddEvent("constraint_fallback");
+    if (decision->scaled) AddEvent("period_scaling");
+    if (decision->failsafe && !failsafe_) {
+      failsafe_ = true;
+      Stop("failsafe");
+    }
+    if (decision->recovered && failsafe_) {
+      failsafe_ = false;
+      AddEvent("failsafe_recovered");
+      RequestReplan("recovered");
+    }
+  };
+  return out;
+}
+
+void NavStack::FinishEpisode(bool collided, bool reached_goal) {
+  if (strategy_) strategy_->Finish(GatherStrategyInputs(executor_->now()), collided, reached_goal);
+}
+
+const rl::Rollout* NavStack::rollout() const {
+  return strategy_ && strategy_->options().record ? &strategy_->rollout() : nullptr;
 }
 
 }  // namespace enavi::navstack

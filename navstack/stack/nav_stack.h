@@ -20,6 +20,7 @@
 #include "navstack/perception/points.h"
 #include "navstack/planning/planner.h"
 #include "navstack/runtime/executor.h"
+#include "navstack/stack/strategy_controller.h"
 
 namespace enavi::navstack {
 
@@ -54,6 +55,9 @@ struct NavStackOptions {
   std::uint64_t seed = 1;
   Eigen::AlignedBox3d flight_bounds;
   Eigen::Vector3d goal = Eigen::Vector3d::Zero();
+  /// E-Navi: the Strategy Controller adapts rates and resolution, planning is triggered, the eci
+  /// and the adapter run as tasks on the board. Absent: the fixed configuration `rates`.
+  std::optional<StrategyOptions> strategy;
 };
 
 struct NavEvent {
@@ -71,7 +75,7 @@ class NavStack {
   /// A new sensor frame (call at capture time, before advancing the executor).
   void OnFrame(DepthFramePtr frame);
   /// Latest odometry.
-  void OnState(const VehicleState& state) { state_ = state; }
+  void OnState(const VehicleState& state);
 
   /// What the flight controller tracks at time t.
   TrajectorySample Reference(double t) const;
@@ -90,11 +94,21 @@ class NavStack {
   /// Events since the last call (replans, triggers, emergency stops).
   std::vector<NavEvent> TakeEvents();
 
+  /// E-Navi only: ends the Strategy Controller's rollout (training) with the episode's outcome.
+  void FinishEpisode(bool collided, bool reached_goal);
+  /// The recorded rollout, or null (baseline, or not recording).
+  const rl::Rollout* rollout() const;
+  double eci() const { return eci_; }
+
  private:
   JobOutput PerceptionJob();
   JobOutput PlanningJob();
   JobOutput CollisionJob();
   JobOutput DifferenceJob();
+  JobOutput EciJob();
+  JobOutput AdapterJob();
+  StrategyInputs GatherStrategyInputs(double t);
+  void Stop(const char* why);
   void AddEvent(std::string kind, std::string detail = {});
   void RequestReplan(const char* why);
   /// Bounding box of the trajectory from t on, padded by the check radius.
@@ -119,6 +133,17 @@ class NavStack {
   std::int64_t plan_calls_ = 0;
   double plan_latency_estimate_ = 0.05;
   std::vector<NavEvent> events_;
+
+  // E-Navi: the Strategy Controller and what it observes.
+  std::unique_ptr<StrategyController> strategy_;
+  EciTracker eci_tracker_;
+  DepthFramePtr last_eci_frame_;
+  double eci_ = 0, d_eci_ = 0;
+  double straight_length_ = 0;
+  double flown_ = 0;
+  Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
+  double last_adapt_t_ = 0, last_adapt_busy_ = 0;
+  bool failsafe_ = false;
 };
 
 }  // namespace enavi::navstack

@@ -1,7 +1,10 @@
 // `enavi calibrate`: fits the board cost model to this host (DESIGN.md section 4).
 #include <sys/utsname.h>
 
+#include <unistd.h>
+
 #include <cstdio>
+#include <filesystem>
 #include <ctime>
 #include <fstream>
 #include <memory>
@@ -9,6 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "navstack/adapt/action_grid.h"
+#include "navstack/rl/policy_io.h"
 #include "server/cli/commands.h"
 #include "workers/board/board_profile.h"
 #include "workers/board/calibration.h"
@@ -42,21 +47,34 @@ void Run(const CalibrateArgs& args) {
     std::string world;
     double res;
     double f_dif;  // difference detection is off in the baseline; two runs turn it on
+    bool enavi;    // E-Navi prices the eci and the adapter's network on the board
   };
-  const std::vector<Run> runs = {{"s1", 0.1, 0},  {"s2", 0.1, 15}, {"s3", 0.1, 0}, {"s4", 0.1, 0},
-                                 {"s5", 0.1, 30}, {"s2", 0.2, 0},  {"s3", 0.3, 0}};
-  for (const auto& [world, res, f_dif] : runs) {
+  const std::vector<Run> runs = {{"s1", 0.1, 0, false},  {"s2", 0.1, 15, false}, {"s3", 0.1, 0, false},
+                                 {"s4", 0.1, 0, false},  {"s5", 0.1, 30, false}, {"s2", 0.2, 0, false},
+                                 {"s3", 0.3, 0, false},  {"s2", 0.0, 0, true}};
+  // Calibration prices work, not decisions: a freshly initialised network costs what a trained one does.
+  const std::string policy = (std::filesystem::temp_directory_path() / ("enavi-calibrate-policy-" + std::to_string(getpid()) + ".json")).string();
+  navstack::rl::SavePolicyFile(policy, navstack::rl::MakeFrequencyPolicy(navstack::ActionGrid(), 1));
+  for (const auto& [world, res, f_dif, enavi] : runs) {
     api::EpisodeSpec spec;
     spec.world = world;
     spec.seed = 1;
     spec.board = "host";
     spec.cost = "measured";
     spec.timeout_s = args.episode_seconds;
-    spec.overrides["map.resolution"] = res;
-    spec.overrides["rates.f_dif"] = f_dif;
-    if (!args.json) std::fprintf(stderr, "calibrate: flying %s at %.1f m for %.0f s\n", world.c_str(), res, args.episode_seconds);
+    if (enavi) {
+      spec.method = "enavi";
+      spec.policy = policy;
+    } else {
+      spec.overrides["map.resolution"] = res;
+      spec.overrides["rates.f_dif"] = f_dif;
+    }
+    if (!args.json)
+      std::fprintf(stderr, "calibrate: flying %s %s for %.0f s\n", world.c_str(),
+                   enavi ? "with E-Navi" : ("at " + std::to_string(res).substr(0, 4) + " m").c_str(), args.episode_seconds);
     sim::RunEpisode(spec, options);
   }
+  std::filesystem::remove(policy);
   board::CostFit fit = board::FitCosts(samples);
   const board::ReferenceCosts reference = board::LoadReferenceCosts();
   const double speed = board::RelativeSpeed(samples, reference);

@@ -20,6 +20,8 @@ void RegisterFlyCommand(CLI::App& app);
 void RegisterBenchCommands(CLI::App& app);
 /// `enavi calibrate` (server/cli/calibrate_cmd.cc).
 void RegisterCalibrateCommand(CLI::App& app);
+/// `enavi train` (server/cli/train_cmd.cc).
+void RegisterTrainCommand(CLI::App& app);
 // The farm (server/cli/{serve,worker,client,eval}_cmd.cc).
 void RegisterServeCommand(CLI::App& app);
 void RegisterWorkerCommand(CLI::App& app);

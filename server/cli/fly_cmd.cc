@@ -13,7 +13,9 @@
 #include "server/cli/commands.h"
 #include "server/report/flight_report.h"
 #include "workers/board/board_profile.h"
+#include "navstack/rl/rollout.h"
 #include "workers/sim/episode.h"
+#include "workers/sim/episode_config.h"
 #include "worlds/resolve.h"
 
 namespace enavi::cli {
@@ -27,6 +29,7 @@ struct FlyArgs {
   std::string out_dir;
   bool json = false;
   std::string spec_file, result_file;
+  std::string rollout_file;
 };
 
 api::Vec3 ParseVec3(const std::string& text, const char* flag) {
@@ -78,6 +81,8 @@ void Run(FlyArgs args) {
   }
 
   sim::EpisodeOptions options;
+  navstack::rl::Rollout rollout;
+  if (!args.rollout_file.empty()) options.rollout = &rollout;
   const bool tty = isatty(STDERR_FILENO) && !args.json;
   if (tty) {
     options.progress = [](double t, double distance) {
@@ -93,6 +98,12 @@ void Run(FlyArgs args) {
   if (tty) std::fprintf(stderr, "\n");
 
   if (!args.result_file.empty()) WriteText(args.result_file, nlohmann::json(result).dump() + "\n");
+  if (!args.rollout_file.empty()) {
+    rollout.id = spec.world + "-" + std::to_string(spec.seed) + "-" + spec.board;
+    rollout.info = {{"success", result.success ? 1.0 : 0.0}, {"collided", result.collided ? 1.0 : 0.0},
+                    {"flight_time_s", result.flight_time_s}, {"nav_cpu_util_pct", result.nav_cpu_util_pct}};
+    WriteText(args.rollout_file, navstack::rl::SerializeRollout(rollout));
+  }
   if (!args.out_dir.empty()) {
     const std::filesystem::path dir(args.out_dir);
     std::filesystem::create_directories(dir);
@@ -135,11 +146,16 @@ void RegisterFlyCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::IsMember({"model", "measured"}));
   fly->add_option("--timeout", args->spec.timeout_s, "episode timeout in sim seconds (0: from the distance)");
-  fly->add_option("--set", args->overrides, "override a tunable, name=value (repeatable)");
+  fly->add_option("--policy", args->spec.policy, "E-Navi frequency-adapter policy (default: the shipped one)");
+  std::string tunables = "override a tunable, name=value (repeatable):";
+  for (const auto& t : sim::Tunables())
+    tunables += "\n    " + t.name + " [" + CLI::detail::to_string(t.min) + ", " + CLI::detail::to_string(t.max) + "]: " + t.help;
+  fly->add_option("--set", args->overrides, tunables);
   fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv and plots here");
   fly->add_flag("--json", args->json, "print one JSON object with the results on stdout");
   fly->add_option("--spec-file", args->spec_file, "read the episode spec (JSON) from this file")->group("");
   fly->add_option("--result-file", args->result_file, "write the full result (JSON) to this file")->group("");
+  fly->add_option("--rollout-file", args->rollout_file, "E-Navi: write the training rollout to this file")->group("");
   fly->callback([args] { Run(*args); });
 }
 

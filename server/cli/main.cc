@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   RegisterFlyCommand(app);
   RegisterBenchCommands(app);
   RegisterCalibrateCommand(app);
+  RegisterTrainCommand(app);
   RegisterServeCommand(app);
   RegisterWorkerCommand(app);
   RegisterClientCommands(app);

@@ -83,6 +83,7 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   const worlds::World& world = prepared.world;
   const board::BoardProfile board = board::LoadBoard(spec.board);
   EpisodeConfig config = MakeEpisodeConfig(spec);
+  if (options.rollout && config.nav.strategy) config.nav.strategy->record = true;
 
   api::EpisodeResult result;
   result.spec = spec;
@@ -209,6 +210,11 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
     quad.Step();
   }
 
+  nav->FinishEpisode(result.collided, result.success);
+  if (options.rollout) {
+    if (const navstack::rl::Rollout* r = nav->rollout()) *options.rollout = *r;
+  }
+
   // Results (DESIGN.md section 8).
   const NavAccounting acc = nav->Accounting();
   const double T = quad.time();
@@ -236,7 +242,10 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   result.deadline_miss_ratio =
       result.jobs_released > 0 ? static_cast<double>(result.deadline_misses) / result.jobs_released : 0.0;
   result.eci = {frame_index > 0 ? eci_min : 0.0, frame_index > 0 ? eci_sum / frame_index : 0.0, eci_max};
-  result.eci_time_ms_mean = frame_index > 0 ? 1e3 * eci_cost_sum / frame_index : 0.0;
+  // E-Navi runs the eci on the board (a task); for the baseline it is what it would cost there.
+  result.eci_time_ms_mean = acc[TaskId::kEci].started > 0 ? 1e3 * acc[TaskId::kEci].MeanCost()
+                            : frame_index > 0             ? 1e3 * eci_cost_sum / frame_index
+                                                          : 0.0;
   result.adapter_time_ms_mean = 1e3 * acc[TaskId::kAdapter].MeanCost();
   result.notes["plan_failures"] = std::to_string(acc.plan_failures);
   for (const auto& [k, v] : acc.notes) result.notes[k] = v;

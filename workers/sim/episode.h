@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "api/episode.h"
+#include "navstack/rl/rollout.h"
 #include "navstack/runtime/executor.h"
 #include "worlds/world.h"
 
@@ -33,6 +34,8 @@ struct EpisodeOptions {
   std::function<void(double t, double distance_to_goal)> progress;
   /// Sees every navstack job (and every eci computation) with its host CPU time: calibration.
   navstack::JobObserver job_observer;
+  /// E-Navi training: when set, the Strategy Controller records its decisions and rewards here.
+  navstack::rl::Rollout* rollout = nullptr;
 };
 
 /// Flies `spec` in `world`. Bad specs (unknown board/method, bad overrides) throw

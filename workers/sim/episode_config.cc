@@ -2,10 +2,22 @@
 
 #include <cmath>
 #include <functional>
+#include <map>
+#include <memory>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
+
+#include "navstack/rl/policy_io.h"
+
 namespace enavi::sim {
+
+// Generated from navstack/rl/policies/*.json by cmake/EmbedFiles.cmake.
+const std::map<std::string, std::string>& EmbeddedPolicies();
+
 namespace {
+
+constexpr const char* kDefaultPolicyName = "enavi_default.json";
 
 struct Setter {
   Tunable tunable;
@@ -37,6 +49,14 @@ const std::vector<Setter>& Setters() {
        }},
       {{"camera.noise_k", 0.0, 0.05, false, "depth noise sigma = k d^2, 1/m"},
        [](EpisodeConfig& c, double v) { c.noise.k = v; }},
+      {{"strategy.explore", 0, 1, true, "E-Navi: 1 samples the policy's actions (training), 0 greedy"},
+       [](EpisodeConfig& c, double v) {
+         if (c.nav.strategy) c.nav.strategy->mode = v > 0 ? navstack::rl::ActMode::kSample : navstack::rl::ActMode::kGreedy;
+       }},
+      {{"strategy.f_adapt", 1.0, 30.0, false, "E-Navi: strategy controller decisions per second, Hz"},
+       [](EpisodeConfig& c, double v) {
+         if (c.nav.strategy) c.nav.strategy->f_adapt = v;
+       }},
       {{"sched.threads", 0, 64, true, "threads the jobs run on (0: all board cores)"},
        [](EpisodeConfig& c, double v) { c.scheduler.threads = static_cast<int>(v); }},
       {{"sched.global_edf", 0, 1, true, "1: preemptive global EDF, 0: FIFO without preemption"},
@@ -70,6 +90,32 @@ navstack::TaskRates BaselineRates() {
   return r;
 }
 
+navstack::TaskRates EnaviInitialRates() {
+  navstack::TaskRates r;
+  r.f_per = 10.0;
+  r.f_plan = 0.0;  // planning on triggers: collision, difference, end of trajectory
+  r.f_col = 5.0;
+  r.collision_on_map_update = false;
+  r.f_dif = 5.0;
+  r.resolution = 0.5;  // the Resolution Adapter's coarsest level; it refines from there
+  return r;
+}
+
+std::shared_ptr<const navstack::rl::PolicyFile> LoadPolicy(const std::string& path) {
+  if (!path.empty()) return std::make_shared<const navstack::rl::PolicyFile>(navstack::rl::LoadFrequencyPolicy(path));
+  static const std::shared_ptr<const navstack::rl::PolicyFile> shipped = [] {
+    const auto& files = EmbeddedPolicies();
+    const auto it = files.find(kDefaultPolicyName);
+    if (it == files.end()) return std::shared_ptr<const navstack::rl::PolicyFile>();
+    return std::make_shared<const navstack::rl::PolicyFile>(
+        navstack::rl::PolicyFromJson(nlohmann::json::parse(it->second), std::string("shipped ") + kDefaultPolicyName));
+  }();
+  if (!shipped)
+    throw std::invalid_argument(std::string("policy: this build ships no trained E-Navi policy (") + kDefaultPolicyName +
+                                "); train one with `enavi train` and pass it with --policy FILE");
+  return shipped;
+}
+
 EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
   EpisodeConfig config;
   if (spec.method == "baseline") {
@@ -77,9 +123,12 @@ EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
     config.nav.map.resolution = config.nav.rates.resolution;
     config.scheduler = {navstack::SchedulingPolicy::kFifoNonPreemptive, 1};
   } else if (spec.method == "enavi") {
-    throw std::invalid_argument(
-        "method: 'enavi' is not available in this build yet: its strategy controller and trained "
-        "policy are not integrated (use --method baseline)");
+    config.nav.rates = EnaviInitialRates();
+    navstack::StrategyOptions strategy;
+    strategy.policy = LoadPolicy(spec.policy);
+    strategy.seed = spec.seed;
+    config.nav.strategy = strategy;
+    config.scheduler = {navstack::SchedulingPolicy::kGlobalEdf, 0};
   } else {
     throw std::invalid_argument("method: unknown method '" + spec.method + "' (known: baseline, enavi)");
   }

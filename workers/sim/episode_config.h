@@ -43,6 +43,14 @@ const std::vector<Tunable>& Tunables();
 /// contrasts E-Navi with (Sec. I).
 navstack::TaskRates BaselineRates();
 
+/// E-Navi's configuration before its first decision: triggered planning, periodic collision and
+/// difference checks, the coarsest resolution of the adapter's ladder, global EDF on all cores.
+navstack::TaskRates EnaviInitialRates();
+
+/// The E-Navi frequency-adapter policy at `path`, or the shipped default when empty. Throws
+/// std::invalid_argument naming the file and field for a missing or corrupt file.
+std::shared_ptr<const navstack::rl::PolicyFile> LoadPolicy(const std::string& path);
+
 /// Builds the configuration for `spec.method` and applies `spec.overrides`. Throws
 /// std::invalid_argument naming an unknown override or an out-of-range value with its range.
 EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec);

@@ -41,6 +41,10 @@ class NavLink {
   virtual navstack::TaskRates rates() const = 0;
   virtual double map_resolution() const = 0;
   virtual NavAccounting Accounting() const = 0;
+  /// The episode ended: E-Navi closes its rollout (reward of the last epoch, terminal flag).
+  virtual void FinishEpisode(bool collided, bool reached_goal) = 0;
+  /// The E-Navi rollout recorded for training, or null.
+  virtual const navstack::rl::Rollout* rollout() const = 0;
   /// Board seconds of work done outside the stack's schedule (the metrics' eci of every frame).
   virtual double OffBoardSeconds(navstack::TaskId task, const navstack::WorkCounts& work,
                                  double host_cpu_s) const = 0;

@@ -24,6 +24,8 @@ class VirtualNavLink final : public NavLink {
   navstack::TaskRates rates() const override { return nav_.rates(); }
   double map_resolution() const override { return nav_.map_resolution(); }
   NavAccounting Accounting() const override;
+  void FinishEpisode(bool collided, bool reached_goal) override { nav_.FinishEpisode(collided, reached_goal); }
+  const navstack::rl::Rollout* rollout() const override { return nav_.rollout(); }
   double OffBoardSeconds(navstack::TaskId task, const navstack::WorkCounts& work, double host_cpu_s) const override {
     return cost_->JobSeconds(task, work, host_cpu_s);
   }

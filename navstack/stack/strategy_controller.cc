@@ -1,0 +1,98 @@
+#include "navstack/stack/strategy_controller.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace enavi::navstack {
+namespace {
+
+ConstraintInputs ToConstraints(const StrategyInputs& in) {
+  ConstraintInputs c;
+  c.f_sen = in.f_sen;
+  c.trajectory_duration = in.trajectory_duration > 0 ? in.trajectory_duration : std::numeric_limits<double>::infinity();
+  c.wcet = in.wcet;
+  c.num_cores = in.cores;
+  c.u_cur = in.u_cur;
+  c.current = in.current;
+  return c;
+}
+
+rl::PolicyFile RequirePolicy(const StrategyOptions& o) {
+  if (!o.policy) throw std::invalid_argument("strategy: E-Navi needs a frequency-adapter policy");
+  return *o.policy;
+}
+
+}  // namespace
+
+StrategyController::StrategyController(const StrategyOptions& options)
+    : options_(options),
+      adapter_(RequirePolicy(options), options.constraints),
+      resolution_(options.resolution),
+      overload_(options.overload),
+      rng_(options.seed) {}
+
+double StrategyController::Reward(const StrategyInputs& in, bool collided, bool reached_goal) const {
+  rl::RewardInputs r;
+  r.dt = previous_ ? in.t - previous_->t : 0.0;
+  r.u_nav = in.u_cur;
+  r.u_total = in.cores;
+  r.dist_prev = previous_ ? previous_->distance_to_goal : in.distance_to_goal;
+  r.dist = in.distance_to_goal;
+  r.straight_length = std::max(in.straight_length, 1e-3);
+  r.path_prev = previous_ ? previous_->expected_path : 0.0;
+  r.path = in.expected_path;
+  r.collided = collided;
+  r.reached_goal = reached_goal;
+  return rl::ComputeReward(r, options_.rewards).total;
+}
+
+StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eigen::Vector3d& goal_W) {
+  StrategyDecision d;
+  // The previous action's reward is known now: what its epoch cost and achieved.
+  if (options_.record && !rollout_.steps.empty()) rollout_.steps.back().reward = Reward(in, false, false);
+
+  const ConstraintInputs constraints = ToConstraints(in);
+  rl::RolloutStep step;
+  const rl::FrequencyDecision f = adapter_.Decide(constraints, in.flight, options_.mode, &rng_, &d.work,
+                                                  options_.record ? &step : nullptr);
+  d.f = f.f;
+  d.fallback = f.fallback_used;
+  if (options_.record) rollout_.steps.push_back(std::move(step));
+
+  // Paper Sec. V.D: over capacity, periods are scaled down proportionally, and overload that
+  // persists sends the vehicle into a hover.
+  if (in.u_cur > in.cores * options_.constraints.capacity_fraction) {
+    const ScaledFrequencies scaled = ScaleToCapacity(constraints, options_.constraints);
+    d.f = scaled.f;
+    d.scaled = scaled.scaled;
+  }
+  const OverloadMonitor::Update overload = overload_.Observe(in.t, in.u_cur, in.cores);
+  failsafe_ = overload.mode == OverloadMonitor::Mode::kFailSafe;
+  d.failsafe = failsafe_;
+  d.recovered = overload.recovered;
+
+  d.resolution = resolution_.Select(in.flight.p_WB, goal_W).resolution;
+  previous_ = in;
+  return d;
+}
+
+void StrategyController::OnPlanned(double t, bool found, const PathScoreInputs& path) {
+  resolution_.ReportPlanningOutcome(resolution_.level(), found);
+  if (found) resolution_.OnPathPlanned(t, path);
+}
+
+void StrategyController::Finish(const StrategyInputs& last, bool collided, bool reached_goal) {
+  if (!options_.record || rollout_.steps.empty()) return;
+  rl::RolloutStep& tail = rollout_.steps.back();
+  tail.reward = Reward(last, collided, reached_goal);
+  tail.done = collided || reached_goal;
+  if (!tail.done) {
+    // Time-out: not a terminal; bootstrap from the critic's value of the final state.
+    rl::RolloutStep probe;
+    adapter_.Decide(ToConstraints(last), last.flight, rl::ActMode::kGreedy, nullptr, nullptr, &probe);
+    rollout_.bootstrap_value = probe.value;
+  }
+}
+
+}  // namespace enavi::navstack

@@ -1,0 +1,44 @@
+// `enavi train`: PPO training of E-Navi's frequency adapter from farm rollouts.
+#include <unistd.h>
+
+#include <cstdio>
+#include <memory>
+
+#include "server/cli/commands.h"
+#include "server/train/trainer.h"
+
+namespace enavi::cli {
+
+void RegisterTrainCommand(CLI::App& app) {
+  auto o = std::make_shared<train::TrainOptions>();
+  auto out = std::make_shared<std::string>("policy.json");
+  auto work = std::make_shared<std::string>();
+  CLI::App* cmd = app.add_subcommand(
+      "train", "Train E-Navi's frequency adapter with PPO from episodes flown in parallel worker processes");
+  cmd->add_option("--boards", o->boards, "boards to train on")->delimiter(',')->capture_default_str();
+  cmd->add_option("--scenarios", o->scenarios, "scenarios to train in")->delimiter(',')->capture_default_str();
+  cmd->add_option("--iterations", o->iterations, "PPO iterations")->capture_default_str();
+  cmd->add_option("--episodes-per-iter", o->episodes_per_iteration, "episodes flown per iteration")
+      ->capture_default_str();
+  cmd->add_option("--workers", o->workers, "parallel episode processes")->capture_default_str();
+  cmd->add_option("--seed", o->seed, "training seed (policy init, minibatches, training-world seeds)")
+      ->capture_default_str();
+  cmd->add_option("--out", *out, "where the trained policy is written")->capture_default_str();
+  cmd->add_option("--work-dir", *work, "checkpoint, learning curve (CSV, PNG) and episode files (default: OUT.train)");
+  cmd->add_option("--init", o->init_policy, "start from this policy instead of a fresh network");
+  cmd->add_flag("--resume", o->resume, "continue from the work dir's checkpoint");
+  cmd->add_option("--learning-rate", o->ppo.learning_rate, "Adam step size")->capture_default_str();
+  cmd->add_option("--entropy-coef", o->ppo.entropy_coef, "entropy bonus weight")->capture_default_str();
+  cmd->callback([o, out, work] {
+    o->out = *out;
+    o->work_dir = *work;
+    o->progress = true;
+    const auto log = train::Train(*o);
+    const auto& last = log.back();
+    std::printf("trained %lld iterations: policy %s (mean return %.2f, success %.0f%%, nav cpu %.1f%%)\n",
+                static_cast<long long>(last.iteration + 1), out->c_str(), last.mean_return, 100 * last.success_rate,
+                last.mean_nav_cpu);
+  });
+}
+
+}  // namespace enavi::cli

@@ -1,0 +1,285 @@
+#include "server/train/trainer.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <deque>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "api/episode.h"
+#include "navstack/adapt/action_grid.h"
+#include "navstack/rl/policy_io.h"
+#include "navstack/rl/rollout.h"
+#include "server/report/chart.h"
+#include "workers/board/board_profile.h"
+#include "workers/worker/process.h"
+
+namespace enavi::train {
+namespace fs = std::filesystem;
+namespace rl = navstack::rl;
+namespace {
+
+void Check(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+
+void Validate(const TrainOptions& o) {
+  Check(!o.boards.empty(), "--boards: at least one board");
+  const auto known = board::KnownBoards();
+  for (const auto& b : o.boards)
+    Check(std::find(known.begin(), known.end(), b) != known.end(), "--boards: unknown board '" + b + "'");
+  Check(!o.scenarios.empty(), "--scenarios: at least one scenario");
+  for (const auto& s : o.scenarios)
+    Check(s == "forest" || s == "empty" || (s.size() == 2 && s[0] == 's' && s[1] >= '1' && s[1] <= '5'),
+          "--scenarios: unknown scenario '" + s + "' (known: s1..s5, forest, empty)");
+  Check(o.iterations >= 1 && o.iterations <= 100000, "--iterations: must be in [1, 100000]");
+  Check(o.episodes_per_iteration >= 1 && o.episodes_per_iteration <= 10000,
+        "--episodes-per-iter: must be in [1, 10000]");
+  Check(o.workers >= 1 && o.workers <= 256, "--workers: must be in [1, 256]");
+  o.ppo.Validate();
+}
+
+std::string ReadFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void WriteFile(const fs::path& p, const std::string& text) {
+  const fs::path tmp = p.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    out << text;
+    if (!out) throw std::runtime_error("cannot write " + tmp.string());
+  }
+  fs::rename(tmp, p);
+}
+
+struct EpisodeJob {
+  api::EpisodeSpec spec;
+  fs::path dir;
+};
+
+struct EpisodeData {
+  bool ok = false;
+  std::string error;
+  rl::Rollout rollout;
+};
+
+// Flies the episodes in up to `workers` child processes at once: each one is `enavi fly`
+// with the current policy, sampling its actions, writing its rollout.
+std::vector<EpisodeData> FlyAll(const std::vector<EpisodeJob>& jobs, int workers) {
+  std::vector<EpisodeData> data(jobs.size());
+  std::deque<std::size_t> queue;
+  for (std::size_t i = 0; i < jobs.size(); ++i) queue.push_back(i);
+  std::map<std::size_t, worker::ChildProcess> running;
+  const fs::path exe = worker::SelfExecutable();
+  while (!queue.empty() || !running.empty()) {
+    while (!queue.empty() && static_cast<int>(running.size()) < workers) {
+      const std::size_t i = queue.front();
+      queue.pop_front();
+      const EpisodeJob& job = jobs[i];
+      fs::create_directories(job.dir);
+      WriteFile(job.dir / "spec.json", nlohmann::json(job.spec).dump());
+      worker::SpawnOptions spawn;
+      spawn.argv = {exe.string(), "fly", "--spec-file", (job.dir / "spec.json").string(), "--result-file",
+                    (job.dir / "result.json").string(), "--rollout-file", (job.dir / "rollout.json").string()};
+      spawn.stderr_file = job.dir / "stderr.txt";
+      spawn.stdout_file = job.dir / "stdout.txt";
+      running.emplace(i, worker::ChildProcess::Spawn(spawn));
+    }
+    for (auto it = running.begin(); it != running.end();) {
+      const auto status = it->second.Poll();
+      if (!status) {
+        ++it;
+        continue;
+      }
+      EpisodeData& d = data[it->first];
+      const fs::path dir = jobs[it->first].dir;
+      if (status->ok()) {
+        try {
+          d.rollout = rl::DeserializeRollout(ReadFile(dir / "rollout.json"), (dir / "rollout.json").string());
+          d.ok = !d.rollout.steps.empty();
+          if (!d.ok) d.error = "empty rollout";
+        } catch (const std::exception& e) {
+          d.error = e.what();
+        }
+      } else {
+        d.error = status->Describe() + ": " + ReadFile(dir / "stderr.txt");
+      }
+      it = running.erase(it);
+    }
+    if (!running.empty()) usleep(20000);
+  }
+  return data;
+}
+
+void SaveCurvePng(const std::vector<IterationLog>& log, const fs::path& path) {
+  std::vector<double> x, ret, success, cpu, time;
+  for (const auto& r : log) {
+    x.push_back(static_cast<double>(r.iteration));
+    ret.push_back(r.mean_return);
+    success.push_back(100.0 * r.success_rate);
+    cpu.push_back(r.mean_nav_cpu);
+    time.push_back(r.mean_flight_time);
+  }
+  report::ChartStack stack("E-Navi frequency adapter: PPO learning curve", "iteration");
+  stack.AddPanel("mean episode return", "return").AddSeries("return", x, ret);
+  stack.AddPanel("success rate", "%").AddSeries("success", x, success);
+  stack.AddPanel("navigation CPU (% of one core)", "%").AddSeries("nav cpu", x, cpu);
+  stack.AddPanel("flight time", "s").AddSeries("flight time", x, time);
+  stack.SavePng(path.string());
+}
+
+}  // namespace
+
+std::string LearningCurveCsv(const std::vector<IterationLog>& log) {
+  std::string out =
+      "iteration,episodes,failed_episodes,mean_return,success_rate,collision_rate,mean_nav_cpu,mean_flight_time,"
+      "policy_loss,value_loss,entropy,approx_kl,episodes_per_s\n";
+  char line[512];
+  for (const auto& r : log) {
+    std::snprintf(line, sizeof line, "%lld,%d,%d,%.6f,%.4f,%.4f,%.3f,%.3f,%.6f,%.6f,%.6f,%.6f,%.4f\n",
+                  static_cast<long long>(r.iteration), r.episodes, r.failed_episodes, r.mean_return, r.success_rate,
+                  r.collision_rate, r.mean_nav_cpu, r.mean_flight_time, r.policy_loss, r.value_loss, r.entropy,
+                  r.approx_kl, r.episodes_per_s);
+    out += line;
+  }
+  return out;
+}
+
+std::vector<IterationLog> Train(const TrainOptions& options) {
+  Validate(options);
+  const fs::path work = options.work_dir.empty() ? fs::path(options.out.string() + ".train") : options.work_dir;
+  fs::create_directories(work);
+  const fs::path checkpoint = work / "checkpoint.json";
+  const fs::path curve_json = work / "learning_curve.json";
+
+  // The trainer: resumed from its checkpoint, or a fresh (or given) policy.
+  std::vector<IterationLog> log;
+  auto trainer = [&]() -> rl::PpoTrainer {
+    if (options.resume) {
+      if (!fs::exists(checkpoint)) throw std::invalid_argument("--resume: no checkpoint at " + checkpoint.string());
+      return rl::PpoTrainer::LoadCheckpoint(checkpoint.string());
+    }
+    rl::PolicyFile init = options.init_policy.empty() ? rl::MakeFrequencyPolicy(navstack::ActionGrid(), options.seed)
+                                                      : rl::LoadFrequencyPolicy(options.init_policy);
+    return rl::PpoTrainer(std::move(init), options.ppo, options.seed);
+  }();
+  if (options.resume && fs::exists(curve_json)) {
+    for (const auto& r : nlohmann::json::parse(ReadFile(curve_json))) {
+      IterationLog l;
+      l.iteration = r.at("iteration");
+      if (l.iteration >= trainer.iteration()) break;
+      l.episodes = r.at("episodes");
+      l.failed_episodes = r.at("failed_episodes");
+      l.mean_return = r.at("mean_return");
+      l.success_rate = r.at("success_rate");
+      l.collision_rate = r.at("collision_rate");
+      l.mean_nav_cpu = r.at("mean_nav_cpu");
+      l.mean_flight_time = r.at("mean_flight_time");
+      l.policy_loss = r.at("policy_loss");
+      l.value_loss = r.at("value_loss");
+      l.entropy = r.at("entropy");
+      l.approx_kl = r.at("approx_kl");
+      l.episodes_per_s = r.at("episodes_per_s");
+      log.push_back(l);
+    }
+  }
+
+  const auto t_start = std::chrono::steady_clock::now();
+  const std::int64_t first = trainer.iteration();
+  for (std::int64_t it = first; it < options.iterations; ++it) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const fs::path iter_dir = work / ("iter-" + std::to_string(it));
+    fs::create_directories(iter_dir);
+    const fs::path policy_path = iter_dir / "policy.json";
+    rl::SavePolicyFile(policy_path.string(), trainer.policy());
+
+    // This iteration's episodes: boards and scenarios in turn, training-only world seeds.
+    std::vector<EpisodeJob> jobs;
+    const int E = options.episodes_per_iteration;
+    for (int e = 0; e < E; ++e) {
+      const std::uint64_t k = static_cast<std::uint64_t>(it) * E + e;
+      EpisodeJob job;
+      job.spec.board = options.boards[k % options.boards.size()];
+      job.spec.world = options.scenarios[(k / options.boards.size()) % options.scenarios.size()];
+      job.spec.seed = options.world_seed_base + (options.seed * 7919 + k) % options.world_seed_count;
+      job.spec.method = "enavi";
+      job.spec.policy = fs::absolute(policy_path).string();
+      job.spec.overrides["strategy.explore"] = 1;
+      job.dir = iter_dir / ("ep-" + std::to_string(e));
+      jobs.push_back(job);
+    }
+    const std::vector<EpisodeData> data = FlyAll(jobs, options.workers);
+
+    IterationLog row;
+    row.iteration = it;
+    std::vector<rl::Rollout> rollouts;
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      if (!data[i].ok) {
+        ++row.failed_episodes;
+        std::fprintf(stderr, "\ntrain: episode %s failed: %s\n", jobs[i].dir.string().c_str(), data[i].error.c_str());
+        continue;
+      }
+      rl::Rollout r = data[i].rollout;
+      r.policy_iteration = trainer.iteration();
+      row.success_rate += r.info.count("success") ? r.info.at("success") : 0.0;
+      row.collision_rate += r.info.count("collided") ? r.info.at("collided") : 0.0;
+      row.mean_nav_cpu += r.info.count("nav_cpu_util_pct") ? r.info.at("nav_cpu_util_pct") : 0.0;
+      row.mean_flight_time += r.info.count("flight_time_s") ? r.info.at("flight_time_s") : 0.0;
+      rollouts.push_back(std::move(r));
+    }
+    if (rollouts.empty()) throw std::runtime_error("train: every episode of iteration " + std::to_string(it) + " failed");
+    const double n = static_cast<double>(rollouts.size());
+    row.episodes = static_cast<int>(rollouts.size());
+    row.success_rate /= n;
+    row.collision_rate /= n;
+    row.mean_nav_cpu /= n;
+    row.mean_flight_time /= n;
+    const rl::PpoUpdateStats stats = trainer.Update(rollouts);
+    row.mean_return = stats.mean_rollout_return;
+    row.policy_loss = stats.loss.policy;
+    row.value_loss = stats.loss.value;
+    row.entropy = stats.loss.entropy;
+    row.approx_kl = stats.loss.approx_kl;
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    row.episodes_per_s = wall > 0 ? E / wall : 0;
+    log.push_back(row);
+
+    // Checkpoint after every iteration: a killed run resumes here.
+    trainer.SaveCheckpoint(checkpoint.string());
+    nlohmann::json curve = nlohmann::json::array();
+    for (const auto& r : log)
+      curve.push_back({{"iteration", r.iteration}, {"episodes", r.episodes}, {"failed_episodes", r.failed_episodes},
+                       {"mean_return", r.mean_return}, {"success_rate", r.success_rate},
+                       {"collision_rate", r.collision_rate}, {"mean_nav_cpu", r.mean_nav_cpu},
+                       {"mean_flight_time", r.mean_flight_time}, {"policy_loss", r.policy_loss},
+                       {"value_loss", r.value_loss}, {"entropy", r.entropy}, {"approx_kl", r.approx_kl},
+                       {"episodes_per_s", r.episodes_per_s}});
+    WriteFile(curve_json, curve.dump(1));
+    WriteFile(work / "learning_curve.csv", LearningCurveCsv(log));
+    SaveCurvePng(log, work / "learning_curve.png");
+    fs::remove_all(iter_dir);  // rollouts are in the checkpointed update now
+
+    if (options.progress) {
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+      const double per_iter = elapsed / static_cast<double>(it - first + 1);
+      std::fprintf(stderr,
+                   "iter %lld/%d  %d episodes  %.2f ep/s  return %.2f  success %.0f%%  nav cpu %.1f%%  ETA %.0f s\n",
+                   static_cast<long long>(it + 1), options.iterations, row.episodes, row.episodes_per_s, row.mean_return,
+                   100 * row.success_rate, row.mean_nav_cpu, per_iter * (options.iterations - it - 1));
+    }
+  }
+  rl::SavePolicyFile(options.out.string(), trainer.policy());
+  return log;
+}
+
+}  // namespace enavi::train

@@ -1,0 +1,54 @@
+#pragma once
+// `enavi train`: PPO training of E-Navi's frequency adapter from farm rollouts (paper Sec. V.C).
+// Each iteration flies episodes with the current policy (sampling its actions) in parallel child
+// processes, gathers their rollouts, runs one PPO update, and checkpoints; a run resumes from its
+// checkpoint.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "navstack/rl/ppo.h"
+
+namespace enavi::train {
+
+struct TrainOptions {
+  std::vector<std::string> boards = {"tx2", "pi4b"};
+  std::vector<std::string> scenarios = {"s1", "s2", "s3", "s4", "s5"};
+  int iterations = 20;
+  int episodes_per_iteration = 10;
+  int workers = 2;                 ///< parallel episode processes
+  std::uint64_t seed = 1;
+  /// Training worlds use seeds from here on, so evaluation seeds (1, 2, 3 ...) stay unseen.
+  std::uint64_t world_seed_base = 100;
+  int world_seed_count = 400;
+  std::filesystem::path out = "policy.json";
+  std::filesystem::path work_dir;  ///< default: <out>.train
+  std::string init_policy;         ///< start from this policy instead of a fresh one
+  bool resume = false;             ///< continue from <work_dir>/checkpoint.json
+  navstack::rl::PpoOptions ppo;
+  bool progress = true;            ///< progress line on stderr
+};
+
+/// One row of the learning curve.
+struct IterationLog {
+  std::int64_t iteration = 0;
+  int episodes = 0;
+  int failed_episodes = 0;  ///< child errors (not flights that failed: those are data)
+  double mean_return = 0;
+  double success_rate = 0;
+  double collision_rate = 0;
+  double mean_nav_cpu = 0;
+  double mean_flight_time = 0;
+  double policy_loss = 0, value_loss = 0, entropy = 0, approx_kl = 0;
+  double episodes_per_s = 0;
+};
+
+/// Runs the training; returns the learning curve (all iterations, resumed ones included).
+/// Throws std::invalid_argument for bad options (unknown board or scenario, counts out of range).
+std::vector<IterationLog> Train(const TrainOptions& options);
+
+std::string LearningCurveCsv(const std::vector<IterationLog>& log);
+
+}  // namespace enavi::train
