@@ -7,6 +7,10 @@
 namespace enavi::navstack {
 namespace {
 
+// Tolerance on sim-time comparisons, so a period that ends exactly on a sample counts as elapsed.
+constexpr double kTimeSlack = 1e-9;
+
+
 void RequireNonNegative(double v, const char* name) {
   if (!(v >= 0.0) || std::isinf(v)) {
     throw std::domain_error(std::string("path score: ") + name + " = " + std::to_string(v) +
@@ -69,6 +73,7 @@ ResolutionAdapter::ResolutionAdapter(const ResolutionAdapterOptions& options) : 
   RequireRange(options_.low_eci, 0.0, 1.0, "low_eci");
   RequireRange(options_.coarsen_after, 0.0, 1e6, "coarsen_after", /*lo_open=*/true);
   RequireRange(options_.refine_hold, 0.0, 1e6, "refine_hold");
+  RequireRange(options_.min_refine_interval, 0.0, 1e6, "min_refine_interval");
   if (!options_.grid_origin.allFinite()) {
     throw std::invalid_argument("resolution adapter: grid_origin must be finite");
   }
@@ -111,6 +116,9 @@ void ResolutionAdapter::ReportPlanningOutcome(int level, bool found_path) {
 }
 
 void ResolutionAdapter::Refine(double t) {
+  // Several triggers in a row usually report the same obstacle coming into view: one step each
+  // min_refine_interval, so a burst does not jump straight to the finest (costliest) map.
+  if (has_refined_ && t - last_refine_t_ + kTimeSlack < options_.min_refine_interval) return;
   floor_ = std::min(std::max(floor_, level_ + 1), num_levels() - 1);
   has_refined_ = true;
   last_refine_t_ = t;
@@ -138,7 +146,6 @@ void ResolutionAdapter::ObserveEci(double t, double eci) {
     eci_low_ = true;
     eci_low_since_ = t;
   }
-  constexpr double kTimeSlack = 1e-9;
   const bool sustained = t - eci_low_since_ + kTimeSlack >= options_.coarsen_after;
   const bool held = !has_refined_ || t - last_refine_t_ + kTimeSlack >= options_.refine_hold;
   if (!sustained || !held || level_ == 0) return;

@@ -47,6 +47,8 @@ struct ResolutionAdapterOptions {
   /// No coarsening within this time (sim s) after a refinement: the hysteresis that stops
   /// refine / coarsen oscillation. Range >= 0.
   double refine_hold = 3.0;
+  /// At most one refinement per this many sim seconds. Range >= 0.
+  double min_refine_interval = 2.0;
   /// Anchor of the map grid, for the Manhattan rule.
   Eigen::Vector3d grid_origin = Eigen::Vector3d::Zero();
 };

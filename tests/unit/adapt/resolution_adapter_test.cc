@@ -45,16 +45,25 @@ TEST(ResolutionAdapterTest, CollisionTriggerRefinesOneStep) {
   ra.ReportPlanningOutcome(0, true);
   ra.OnCollisionTrigger(1.0);
   EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 1);
-  ra.OnCollisionTrigger(2.0);
+  ra.OnCollisionTrigger(3.0);
   EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 2);
   EXPECT_EQ(ra.floor_level(), 2);
+}
+
+TEST(ResolutionAdapterTest, ABurstOfTriggersRefinesOnlyOnce) {
+  ResolutionAdapter ra;  // min_refine_interval 2 s
+  ra.Select(kStart, kFarGoal);
+  for (double t : {1.0, 1.2, 1.5, 2.9}) ra.OnCollisionTrigger(t);
+  EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 1) << "one step for the whole burst";
+  ra.OnCollisionTrigger(3.0);
+  EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 2) << "2 s after the last refinement";
 }
 
 TEST(ResolutionAdapterTest, RefinementStopsAtTheFinestLevel) {
   ResolutionAdapter ra;
   for (int i = 0; i < 10; ++i) {
     ra.Select(kStart, kFarGoal);
-    ra.OnCollisionTrigger(i);
+    ra.OnCollisionTrigger(2.0 * i);
   }
   EXPECT_DOUBLE_EQ(ra.Select(kStart, kFarGoal).resolution, 0.1);
 }
@@ -81,7 +90,9 @@ TEST(ResolutionAdapterTest, LowPathScoreRefinesAndAGoodOneDoesNot) {
 }
 
 TEST(ResolutionAdapterTest, SustainedLowEciCoarsensOneStepPerPeriod) {
-  ResolutionAdapter ra;  // low_eci 0.3, coarsen_after 3 s, refine_hold 3 s
+  ResolutionAdapterOptions o;  // low_eci 0.3, coarsen_after 3 s, refine_hold 3 s
+  o.min_refine_interval = 0.0;
+  ResolutionAdapter ra(o);
   ra.Select(kStart, kFarGoal);
   ra.OnCollisionTrigger(0.0);
   ra.Select(kStart, kFarGoal);
