@@ -71,6 +71,7 @@ struct EpisodeData {
   bool ok = false;
   std::string error;
   rl::Rollout rollout;
+  nlohmann::json summary;  ///< the episode's result record (no time series)
 };
 
 // Flies the episodes in up to `workers` child processes at once: each one is `enavi fly`
@@ -106,6 +107,8 @@ std::vector<EpisodeData> FlyAll(const std::vector<EpisodeJob>& jobs, int workers
       if (status->ok()) {
         try {
           d.rollout = rl::DeserializeRollout(ReadFile(dir / "rollout.json"), (dir / "rollout.json").string());
+          d.summary = nlohmann::json::parse(ReadFile(dir / "result.json"));
+          d.summary.erase("series");
           d.ok = !d.rollout.steps.empty();
           if (!d.ok) d.error = "empty rollout";
         } catch (const std::exception& e) {
@@ -223,6 +226,15 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
     IterationLog row;
     row.iteration = it;
     std::vector<rl::Rollout> rollouts;
+    // Every training flight's result, for looking back at what the policy did (episodes.jsonl).
+    {
+      std::ofstream episodes(work / "episodes.jsonl", std::ios::app);
+      for (std::size_t i = 0; i < data.size(); ++i) {
+        nlohmann::json line = data[i].ok ? data[i].summary : nlohmann::json{{"error", data[i].error}};
+        line["iteration"] = it;
+        episodes << line.dump() << "\n";
+      }
+    }
     for (std::size_t i = 0; i < data.size(); ++i) {
       if (!data[i].ok) {
         ++row.failed_episodes;
