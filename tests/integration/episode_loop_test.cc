@@ -91,7 +91,6 @@ TEST(BoardTest, Tx2MissesMoreDeadlinesOrFliesLongerThanHostAndTheNotesSayWhy) {
   // The effect: a weaker board misses more deadlines (or flies longer for it).
   EXPECT_TRUE(tx2.deadline_miss_ratio > host.deadline_miss_ratio || tx2.flight_time_s > host.flight_time_s)
       << "host: " << Describe(host) << "\ntx2: " << Describe(tx2);
-  EXPECT_GT(tx2.deadline_miss_ratio, host.deadline_miss_ratio) << Describe(tx2);
 
   // The cause, as the notes state it: every job of the heavy tasks takes longer on the tx2...
   for (const char* task : {"perception", "planning"}) {
