@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/episode.h"
+#include "api/job_spec.h"
 #include "server/cli/commands.h"
 #include "server/report/flight_report.h"
 #include "workers/board/board_profile.h"
@@ -54,16 +55,41 @@ void WriteText(const std::filesystem::path& path, const std::string& text) {
   if (!out) throw std::runtime_error("cannot write " + path.string());
 }
 
+// A spec file is one JSON object of EpisodeSpec fields: anything else (an array, a misspelt
+// field) would otherwise fly the default spec instead of the one meant.
+void CheckSpecFields(const nlohmann::json& j, const std::string& file) {
+  if (!j.is_object())
+    throw std::invalid_argument(file + ": not an episode spec: expected a JSON object, got " + j.type_name());
+  api::EpisodeSpec every;  // every optional field set, so its JSON names all fields
+  every.start = every.goal = api::Vec3{};
+  every.world_params = {{"k", "v"}};
+  every.policy = "p";
+  every.overrides = {{"k", 0.0}};
+  const nlohmann::json known = every;
+  for (const auto& item : j.items()) {
+    if (known.contains(item.key())) continue;
+    std::string names;
+    for (const auto& k : known.items()) names += (names.empty() ? "" : ", ") + k.key();
+    throw std::invalid_argument(file + ": " + item.key() + ": unknown field (known: " + names + ")");
+  }
+}
+
 void Run(FlyArgs args) {
   api::EpisodeSpec spec = args.spec;
   if (!args.spec_file.empty()) {
     std::ifstream in(args.spec_file);
     if (!in) throw std::invalid_argument(args.spec_file + ": cannot read the spec file");
     try {
-      spec = nlohmann::json::parse(in).get<api::EpisodeSpec>();
+      const nlohmann::json j = nlohmann::json::parse(in);
+      CheckSpecFields(j, args.spec_file);
+      spec = j.get<api::EpisodeSpec>();
     } catch (const nlohmann::json::exception& e) {
       throw std::invalid_argument(args.spec_file + ": not an episode spec: " + e.what());
     }
+    if (!(spec.timeout_s >= 0 && spec.timeout_s <= api::kMaxTimeoutS))
+      throw std::invalid_argument(args.spec_file + ": timeout_s: must be in [0, " +
+                                  std::to_string(static_cast<int>(api::kMaxTimeoutS)) + "] s (got " +
+                                  nlohmann::json(spec.timeout_s).dump() + ")");
   } else {
     if (!args.start.empty()) spec.start = ParseVec3(args.start, "--start");
     if (!args.goal.empty()) spec.goal = ParseVec3(args.goal, "--goal");
@@ -129,7 +155,14 @@ void RegisterFlyCommand(CLI::App& app) {
   auto args = std::make_shared<FlyArgs>();
   CLI::App* fly = app.add_subcommand("fly", "Fly one episode locally (no server) and print or write its results");
   fly->add_option("--world", args->spec.world, "s1..s5, forest, empty, FILE.yaml or FILE.obj")->capture_default_str();
-  fly->add_option("--seed", args->spec.seed, "world and episode seed")->capture_default_str();
+  fly->add_option("--seed", args->spec.seed, "world and episode seed")
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            // CLI11 would wrap "-3" around to 2^64 - 3.
+            return text.find('-') == std::string::npos ? std::string() : "must be >= 0 (got " + text + ")";
+          },
+          ""));
   fly->add_option("--start", args->start, "start x,y,z (required for .obj worlds)");
   fly->add_option("--goal", args->goal, "goal x,y,z (required for .obj worlds)");
   fly->add_option("--param", args->params, "world generator parameter k=v (repeatable)");
@@ -145,11 +178,13 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--cost", args->spec.cost, "virtual clock cost mode: model (work counts) or measured (host CPU)")
       ->capture_default_str()
       ->check(CLI::IsMember({"model", "measured"}));
-  fly->add_option("--timeout", args->spec.timeout_s, "episode timeout in sim seconds (0: from the distance)");
+  fly->add_option("--timeout", args->spec.timeout_s, "episode timeout in sim seconds (0: from the distance)")
+      ->check(CLI::Range(0.0, api::kMaxTimeoutS));
   fly->add_option("--policy", args->spec.policy, "E-Navi frequency-adapter policy (default: the shipped one)");
   std::string tunables = "override a tunable, name=value (repeatable):";
   for (const auto& t : sim::Tunables())
-    tunables += "\n    " + t.name + " [" + CLI::detail::to_string(t.min) + ", " + CLI::detail::to_string(t.max) + "]: " + t.help;
+    tunables += "
+    " + t.name + " [" + CLI::detail::to_string(t.min) + ", " + CLI::detail::to_string(t.max) + "]: " + t.help;
   fly->add_option("--set", args->overrides, tunables);
   fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv and plots here");
   fly->add_flag("--json", args->json, "print one JSON object with the results on stdout");

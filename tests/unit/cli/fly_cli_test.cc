@@ -1,0 +1,144 @@
+// `enavi fly` refuses bad input before flying: exit code 2, one message on stderr naming the flag
+// or file, the field and the reason, and no output written. Runs the built binary.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "tests/unit/worlds/test_util.h"
+
+namespace enavi::cli {
+namespace {
+
+using worlds::testing::ReadFile;
+using worlds::testing::TempDir;
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+CliRun Fly(const TempDir& dir, const std::string& args) {
+  const auto out = dir.path() / "stdout.txt", err = dir.path() / "stderr.txt";
+  const std::string cmd =
+      std::string(ENAVI_BINARY_DIR) + "/bin/enavi fly " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = ReadFile(out);
+  r.err = ReadFile(err);
+  return r;
+}
+
+bool Has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// Bad input: exit 2, the expected parts in the message, nothing on stdout.
+void ExpectRefused(const CliRun& r, std::initializer_list<const char*> parts, const std::string& what) {
+  EXPECT_EQ(r.code, 2) << what << "\nstderr: " << r.err;
+  for (const char* part : parts) EXPECT_TRUE(Has(r.err, part)) << what << ": no '" << part << "' in: " << r.err;
+  EXPECT_EQ(r.out, "") << what;
+}
+
+TEST(FlyCliInputTest, UnknownBoardMethodOrWorldIsRefusedWithTheKnownOnes) {
+  TempDir dir;
+  ExpectRefused(Fly(dir, "--board zz"), {"--board", "zz", "tx2", "pi4b"}, "unknown board");
+  ExpectRefused(Fly(dir, "--method rrt"), {"--method", "rrt", "baseline"}, "unknown method");
+  ExpectRefused(Fly(dir, "--world s9"), {"world", "'s9'", "s1", "forest", ".yaml"}, "unknown scenario");
+  const std::string missing = (dir.path() / "nowhere.yaml").string();
+  ExpectRefused(Fly(dir, "--world " + missing), {missing.c_str(), "not found"}, "missing world file");
+  ExpectRefused(Fly(dir, "--world forest --param density=99"), {"params.density", "[0.0, 10.0]", "99"},
+                "world parameter out of range");
+}
+
+TEST(FlyCliInputTest, MalformedStartOrGoalIsRefused) {
+  TempDir dir;
+  ExpectRefused(Fly(dir, "--world empty --start 1,2"), {"--start", "x,y,z", "'1,2'"}, "two coordinates");
+  ExpectRefused(Fly(dir, "--world empty --start 1,2,x"), {"--start", "'1,2,x'"}, "not a number");
+  ExpectRefused(Fly(dir, "--world empty --goal '1;2;3'"), {"--goal", "'1;2;3'"}, "wrong separator");
+}
+
+TEST(FlyCliInputTest, SetOfAnUnknownTunableListsTheKnownOnes) {
+  TempDir dir;
+  ExpectRefused(Fly(dir, "--world empty --set planner.vmax=1"),
+                {"planner.vmax", "unknown parameter", "planner.v_max", "map.resolution"}, "misspelt tunable");
+  ExpectRefused(Fly(dir, "--world empty --set planner.v_max"), {"--set", "key=value"}, "no value");
+  ExpectRefused(Fly(dir, "--world empty --set planner.v_max=fast"), {"--set planner.v_max", "'fast'", "not a number"},
+                "value not a number");
+}
+
+TEST(FlyCliInputTest, SetOutOfRangeNamesTheFieldAndItsRange) {
+  TempDir dir;
+  ExpectRefused(Fly(dir, "--world empty --set planner.v_max=99"), {"planner.v_max", "99", "outside", "0.2", "10"},
+                "above the range");
+  ExpectRefused(Fly(dir, "--world empty --set map.resolution=0.01"), {"map.resolution", "0.01", "0.05", "1"},
+                "below the range");
+  ExpectRefused(Fly(dir, "--world empty --set perception.stride=2.5"), {"perception.stride", "integer"},
+                "integer tunable given a fraction");
+}
+
+TEST(FlyCliInputTest, ObjWorldNeedsStartAndGoal) {
+  TempDir dir;
+  const std::string obj = dir.Write("tri.obj", "v 0 0 0\nv 4 0 0\nv 0 4 0\nf 1 2 3\n").string();
+  ExpectRefused(Fly(dir, "--world " + obj), {obj.c_str(), "start", "required for an OBJ world"}, "no start");
+  ExpectRefused(Fly(dir, "--world " + obj + " --start 1,1,1"), {obj.c_str(), "goal", "required for an OBJ world"},
+                "no goal");
+}
+
+TEST(FlyCliInputTest, MissingOrCorruptSpecFileIsRefusedNamingTheFile) {
+  TempDir dir;
+  const std::string missing = (dir.path() / "none.json").string();
+  ExpectRefused(Fly(dir, "--spec-file " + missing), {missing.c_str(), "cannot read"}, "missing spec file");
+
+  const std::string truncated = dir.Write("truncated.json", "{\"world\": \"s3\", \"seed\": ").string();
+  ExpectRefused(Fly(dir, "--spec-file " + truncated), {truncated.c_str(), "not an episode spec", "parse error"},
+                "truncated JSON");
+  const std::string wrong_type = dir.Write("type.json", "{\"world\": \"s3\", \"seed\": \"one\"}").string();
+  ExpectRefused(Fly(dir, "--spec-file " + wrong_type), {wrong_type.c_str(), "not an episode spec"},
+                "seed is a string");
+  const std::string board = dir.Write("board.json", "{\"world\": \"s3\", \"board\": \"zz\"}").string();
+  ExpectRefused(Fly(dir, "--spec-file " + board), {"board", "'zz'"}, "unknown board in the spec");
+}
+
+TEST(FlyCliInputTest, SpecFileThatIsNotAnObjectOrHasUnknownFieldsIsRefused) {
+  // Either would otherwise fly the default spec (s1 on host) instead of the one meant.
+  TempDir dir;
+  const std::string array = dir.Write("array.json", "[\"s3\", 1]").string();
+  ExpectRefused(Fly(dir, "--spec-file " + array), {array.c_str(), "object"}, "a JSON array");
+  const std::string typo = dir.Write("typo.json", "{\"world\": \"s3\", \"bord\": \"tx2\"}").string();
+  ExpectRefused(Fly(dir, "--spec-file " + typo), {typo.c_str(), "bord", "unknown field", "board"}, "misspelt field");
+}
+
+TEST(FlyCliInputTest, NegativeSeedOrTimeoutIsRefused) {
+  TempDir dir;
+  ExpectRefused(Fly(dir, "--world empty --seed -3"), {"--seed"}, "negative seed");
+  ExpectRefused(Fly(dir, "--world empty --timeout -1"), {"--timeout"}, "negative timeout");
+  const std::string spec = dir.Write("spec.json", "{\"world\": \"empty\", \"timeout_s\": -1}").string();
+  ExpectRefused(Fly(dir, "--spec-file " + spec), {"timeout_s", "-1"}, "negative timeout in a spec file");
+}
+
+TEST(FlyCliInputTest, BadInputWritesNoOutput) {
+  TempDir dir;
+  const auto out = dir.path() / "out";
+  const auto result = dir.path() / "result.json";
+  ExpectRefused(Fly(dir, "--world empty --set planner.v_max=99 --out " + out.string()), {"planner.v_max"}, "--out");
+  EXPECT_FALSE(std::filesystem::exists(out)) << "bad input must not create the output directory";
+  const std::string spec = dir.Write("spec.json", "{\"world\": \"empty\", \"overrides\": {\"nope\": 1}}").string();
+  ExpectRefused(Fly(dir, "--spec-file " + spec + " --result-file " + result.string()), {"overrides.nope"},
+                "--result-file");
+  EXPECT_FALSE(std::filesystem::exists(result)) << "bad input must not write a result file";
+}
+
+TEST(FlyCliInputTest, HelpExitsZeroAndListsTheFlags) {
+  TempDir dir;
+  const CliRun r = Fly(dir, "--help");
+  EXPECT_EQ(r.code, 0) << r.err;
+  for (const char* flag : {"--world", "--seed", "--start", "--goal", "--param", "--board", "--method", "--clock",
+                           "--cost", "--timeout", "--set", "--out", "--json"})
+    EXPECT_TRUE(Has(r.out, flag)) << flag << " missing from --help:\n" << r.out;
+}
+
+}  // namespace
+}  // namespace enavi::cli
