@@ -183,8 +183,7 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--policy", args->spec.policy, "E-Navi frequency-adapter policy (default: the shipped one)");
   std::string tunables = "override a tunable, name=value (repeatable):";
   for (const auto& t : sim::Tunables())
-    tunables += "
-    " + t.name + " [" + CLI::detail::to_string(t.min) + ", " + CLI::detail::to_string(t.max) + "]: " + t.help;
+    tunables += "\n    " + t.name + " [" + CLI::detail::to_string(t.min) + ", " + CLI::detail::to_string(t.max) + "]: " + t.help;
   fly->add_option("--set", args->overrides, tunables);
   fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv and plots here");
   fly->add_flag("--json", args->json, "print one JSON object with the results on stdout");
