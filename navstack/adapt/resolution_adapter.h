@@ -39,7 +39,7 @@ struct ResolutionAdapterOptions {
   /// gamma of L* (paper: scaling hyperparameter, > 0). Range [0, 100].
   double gamma = 1.0;
   /// Refine one step when a planned path scores below this. Range [0, 1].
-  double score_threshold = 0.8;
+  double score_threshold = 0.9;
   /// eci at or below this counts as "low" (open space). Range [0, 1].
   double low_eci = 0.3;
   /// eci must stay low this long (sim s) before going one step coarser. Range > 0.

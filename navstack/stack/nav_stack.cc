@@ -95,6 +95,12 @@ void NavStack::OnFrame(DepthFramePtr frame) {
     const bool ends_at_goal = (trajectory_->end_point() - options_.goal).norm() < 0.1;
     if (left < options_.replan_before_end_s && !ends_at_goal) RequestReplan("trajectory_end");
   }
+  // Without a trajectory to follow (stopped, or the last plan failed) triggered planning retries
+  // at a bounded rate; a failsafe hover waits for the overload to clear instead.
+  if (rates_.f_plan == 0 && !failsafe_ && (stopped_ || !trajectory_) && latest_frame_->t >= next_retry_t_) {
+    next_retry_t_ = latest_frame_->t + options_.plan_retry_period_s;
+    RequestReplan("retry");
+  }
 }
 
 TrajectorySample NavStack::Reference(double t) const {
@@ -160,7 +166,12 @@ JobOutput NavStack::CollisionJob() {
   if (!traj || stopped_ || t >= traj->end_time()) return out;
   const double radius = options_.planner.robot_radius;
   const VoxelGrid grid = map_->ExtractGrid(RemainingBox(*traj, t, radius + map_->resolution()), &out.work);
-  const CollisionCheckResult hit = CheckTrajectory(*traj, t, traj->end_time(), grid, radius, &out.work);
+  CollisionCheckResult hit = CheckTrajectory(*traj, t, traj->end_time(), grid, radius, &out.work);
+  // A hit right where the vehicle is means it is already inside inflated space and the plan is
+  // escaping from it (the planner relaxes clearance near its start): look further along instead
+  // of stopping the escape over and over.
+  if (hit.collides && hit.t_hit - t < options_.escape_window_s && t + 2 * options_.escape_window_s < traj->end_time())
+    hit = CheckTrajectory(*traj, t + 2 * options_.escape_window_s, traj->end_time(), grid, radius, &out.work);
   if (!hit.collides) return out;
   out.commit = [this, traj, hit] {
     if (trajectory_ != traj) return;  // a newer plan landed meanwhile

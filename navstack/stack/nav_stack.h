@@ -45,7 +45,11 @@ struct NavStackOptions {
   double f_sen = 30.0;    ///< sensor rate, Hz
   /// Replan when the current trajectory has less than this left and the goal is not its end
   /// (planning "by reaching the end of the current trajectory").
-  double replan_before_end_s = 1.0;
+  double replan_before_end_s = 2.0;
+  /// Triggered planning retries this often while there is no trajectory to follow, s.
+  double plan_retry_period_s = 0.2;
+  /// A predicted collision sooner than this is the vehicle already inside inflated space, s.
+  double escape_window_s = 0.15;
   /// A collision predicted sooner than this triggers an emergency stop, not only a replan.
   double emergency_horizon_s = 0.6;
   /// Relative deadline of a triggered (sporadic) planning job, s.
@@ -144,6 +148,7 @@ class NavStack {
   Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
   double last_adapt_t_ = 0, last_adapt_busy_ = 0;
   bool failsafe_ = false;
+  double next_retry_t_ = 0;
 };
 
 }  // namespace enavi::navstack

@@ -206,14 +206,15 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
     const fs::path policy_path = iter_dir / "policy.json";
     rl::SavePolicyFile(policy_path.string(), trainer.policy());
 
-    // This iteration's episodes: boards and scenarios in turn, training-only world seeds.
+    // This iteration's episodes: every scenario in turn (so each iteration sees the same mix and
+    // its statistics compare across iterations), boards in turn, training-only world seeds.
     std::vector<EpisodeJob> jobs;
     const int E = options.episodes_per_iteration;
     for (int e = 0; e < E; ++e) {
       const std::uint64_t k = static_cast<std::uint64_t>(it) * E + e;
       EpisodeJob job;
-      job.spec.board = options.boards[k % options.boards.size()];
-      job.spec.world = options.scenarios[(k / options.boards.size()) % options.scenarios.size()];
+      job.spec.world = options.scenarios[k % options.scenarios.size()];
+      job.spec.board = options.boards[(k / options.scenarios.size()) % options.boards.size()];
       job.spec.seed = options.world_seed_base + (options.seed * 7919 + k) % options.world_seed_count;
       job.spec.method = "enavi";
       job.spec.policy = fs::absolute(policy_path).string();

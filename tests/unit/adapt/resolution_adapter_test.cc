@@ -79,13 +79,13 @@ TEST(PathScoreTest, MatchesThePaperFormulaAndClampsShortPaths) {
 }
 
 TEST(ResolutionAdapterTest, LowPathScoreRefinesAndAGoodOneDoesNot) {
-  ResolutionAdapter ra;  // threshold 0.8, gamma 1
+  ResolutionAdapter ra;  // threshold 0.9, gamma 1
   ra.Select(kStart, kFarGoal);
   // L* = 10.1; |L| = 10.5 scores exp(-0.04) = 0.96: keep.
-  EXPECT_GT(ra.OnPathPlanned(1.0, {10.5, 10.0, 10.0, 1000.0}), 0.8);
+  EXPECT_GT(ra.OnPathPlanned(1.0, {10.5, 10.0, 10.0, 1000.0}), 0.9);
   EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 0);
   // |L| = 14 scores exp(-0.39) = 0.68: refine.
-  EXPECT_LT(ra.OnPathPlanned(2.0, {14.0, 10.0, 10.0, 1000.0}), 0.8);
+  EXPECT_LT(ra.OnPathPlanned(2.0, {14.0, 10.0, 10.0, 1000.0}), 0.9);
   EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 1);
 }
 
