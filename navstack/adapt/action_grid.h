@@ -20,16 +20,17 @@ struct TaskFrequencies {
 /// Levels of the default grid. Every non-zero level divides the 30 Hz sensor rate, so each task
 /// runs on every k-th depth frame (no beat between task period and frame period), and the levels
 /// are roughly geometric (x2-x2.5 steps) so the policy can move utilisation in proportional steps.
-/// 1 Hz is the slowest useful perception rate: C1 needs f_per >= 1 / C_L and trajectories last a
-/// few seconds. Collision checking never goes below 1 Hz either (C2 would allow 0): without it the
-/// vehicle follows a several-second trajectory blind to what the map learnt meanwhile, and a
-/// policy still exploring crashed that way in training. 0 Hz switches difference detection off.
+/// Floors: the map is updated at least every 0.4 m at 2 m/s (f_per >= 5 Hz) and the trajectory is
+/// checked against it at least twice a second (f_col >= 2 Hz). C1 and C2 alone would allow
+/// 1 Hz / 0 Hz, but in training, policies that slowed down that far flew round corners into
+/// what the map had not caught up with; those rates save almost nothing on a coarse map anyway.
+/// 0 Hz switches difference detection off.
 inline const std::vector<double>& DefaultPerceptionLevels() {
-  static const std::vector<double> levels = {1, 2, 5, 10, 15, 30};
+  static const std::vector<double> levels = {5, 10, 15, 30};
   return levels;
 }
 inline const std::vector<double>& DefaultCollisionLevels() {
-  static const std::vector<double> levels = {1, 2, 5, 10, 15, 30};
+  static const std::vector<double> levels = {2, 5, 10, 15, 30};
   return levels;
 }
 inline const std::vector<double>& DefaultDifferenceLevels() {
@@ -43,7 +44,7 @@ class ActionGrid {
  public:
   /// The default grid: the Cartesian product of the default levels, minus the triples with
   /// f_col > f_per (C2's cascade part can never hold for them, whatever the board), ordered
-  /// f_per-major, then f_col, then f_dif, all ascending: 21 (f_per, f_col) pairs x 7 = 147 actions.
+  /// f_per-major, then f_col, then f_dif, all ascending: 14 (f_per, f_col) pairs x 7 = 98 actions.
   ActionGrid();
 
   /// Product of the given levels, dropping triples with f_col > f_per when `drop_cascade_violations`.

@@ -45,6 +45,7 @@ void PlannerOptions::Validate() const {
   CheckRange("max_clearance_retries", max_clearance_retries, 0, 10, false);
   CheckRange("yaw_speed_threshold", yaw_speed_threshold, 0.0, 20.0, false);
   CheckRange("yaw_rate_max", yaw_rate_max, 0.0, 100.0, true);
+  CheckRange("yaw_lookahead", yaw_lookahead, 0.0, 10.0, false);
 }
 
 }  // namespace enavi::navstack

@@ -44,6 +44,7 @@ struct PlannerOptions {
   // Yaw: along the horizontal velocity; held below the speed threshold; rate limited.
   double yaw_speed_threshold = 0.3;  ///< [m/s], [0, 20]
   double yaw_rate_max = 2.0;         ///< [rad/s], (0, 100]
+  double yaw_lookahead = 1.0;        ///< [s] heading towards the trajectory point this far ahead, [0, 10]
 
   /// Throws std::invalid_argument naming the field, its value and the allowed range.
   void Validate() const;

@@ -44,13 +44,18 @@ Trajectory::Trajectory(UniformBspline spline, double t0, double yaw0, const Plan
   for (int k = 1; k <= n; ++k) {
     const double t = k * yaw_step_;
     const Eigen::Vector2d v = spline_.Velocity(t).head<2>();
-    const Eigen::Vector2d ahead =
-        (spline_.Position(t + kLookAhead) - spline_.Position(t)).head<2>();
+    // Look where the vehicle will be `yaw_lookahead` from now: in a turn the camera sees the
+    // inside of the bend before the vehicle gets there (the velocity would point at the wall).
+    const double look = std::max(options.yaw_lookahead, kLookAhead);
+    const Eigen::Vector2d ahead = (spline_.Position(std::min(t + look, duration)) - spline_.Position(t)).head<2>();
+    const Eigen::Vector2d near = (spline_.Position(t + kLookAhead) - spline_.Position(t)).head<2>();
     double desired = yaw_[k - 1];
-    if (v.norm() >= threshold && v.norm() > 0.0) {
-      desired = std::atan2(v.y(), v.x());
-    } else if (ahead.norm() >= threshold * kLookAhead && ahead.norm() > 0.0) {
+    if (v.norm() >= threshold && ahead.norm() >= threshold * look) {
       desired = std::atan2(ahead.y(), ahead.x());
+    } else if (v.norm() >= threshold && v.norm() > 0.0) {
+      desired = std::atan2(v.y(), v.x());
+    } else if (near.norm() >= threshold * kLookAhead && near.norm() > 0.0) {
+      desired = std::atan2(near.y(), near.x());
     }
     const double turn = std::clamp(WrapAngle(desired - yaw_[k - 1]), -max_turn, max_turn);
     yaw_[k] = yaw_[k - 1] + turn;

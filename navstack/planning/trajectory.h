@@ -13,10 +13,12 @@ namespace enavi::navstack {
 
 /// A uniform cubic B-spline that starts at absolute time t0, plus a yaw profile.
 ///
-/// Yaw rule (the depth camera looks along body x): face the horizontal velocity when its speed is
-/// at least options.yaw_speed_threshold; when slower, face the horizontal direction the curve
-/// will have moved in the next 0.5 s if that is at least threshold x 0.5 s (start from hover);
-/// otherwise keep the previous heading. The heading starts at yaw0 (continuity with the previous
+/// Yaw rule (the depth camera looks along body x): when moving at least
+/// options.yaw_speed_threshold, face the point the curve reaches options.yaw_lookahead seconds
+/// later (in a bend the camera sees round the corner first), or the horizontal velocity when that
+/// point is too close; when slower, face the horizontal direction the curve will have moved in
+/// the next 0.5 s if that is at least threshold x 0.5 s (start from hover); otherwise keep the
+/// previous heading. The heading starts at yaw0 (continuity with the previous
 /// reference) and turns at most options.yaw_rate_max. Immutable after construction: Sample() is
 /// safe to call from several threads.
 class Trajectory {

@@ -145,6 +145,8 @@ JobOutput NavStack::PerceptionJob() {
   out.commit = [this, next, update] {
     if (next) map_ = next;
     if (update) map_->Apply(*update);
+    // A refined (or coarsened) map is what the Resolution Adapter asked for: plan on it now.
+    if (next && strategy_) RequestReplan("resolution");
     if (rates_.collision_on_map_update && trajectory_) executor_->Trigger(TaskId::kCollision, 1.0 / rates_.f_per);
   };
   return out;

@@ -149,7 +149,7 @@ TEST(FeasibleSetTest, FallbackIsTheCheapestActionWhenNothingIsFeasible) {
   const FeasibleSet fs = ComputeFeasibleSet(grid, in);
   EXPECT_TRUE(fs.fallback_used);
   EXPECT_EQ(fs.num_feasible, 0);
-  ASSERT_EQ(fs.fallback_action, *grid.Find({1, 1, 0}));
+  ASSERT_EQ(fs.fallback_action, *grid.Find({5, 2, 0}));
   int ones = 0;
   for (std::uint8_t m : fs.mask) ones += m;
   EXPECT_EQ(ones, 1) << "the mask holds exactly the fallback";
@@ -157,7 +157,7 @@ TEST(FeasibleSetTest, FallbackIsTheCheapestActionWhenNothingIsFeasible) {
 }
 
 TEST(FeasibleSetTest, FallbackRespectsTheC1FloorWhenPossible) {
-  // C_L = 0.3 s -> f_per >= 3.33 Hz: the cheapest action keeping C1 and C2 is (5, 1, 0).
+  // C_L = 0.3 s -> f_per >= 3.33 Hz: the cheapest action keeping C1 and C2 is (5, 2, 0).
   const ActionGrid grid;
   ConstraintInputs in = Nominal();
   in.num_cores = 1;
@@ -165,18 +165,18 @@ TEST(FeasibleSetTest, FallbackRespectsTheC1FloorWhenPossible) {
   in.trajectory_duration = 0.3;
   const FeasibleSet fs = ComputeFeasibleSet(grid, in);
   ASSERT_TRUE(fs.fallback_used);
-  EXPECT_EQ(grid.At(fs.fallback_action), (TaskFrequencies{5, 1, 0}));
+  EXPECT_EQ(grid.At(fs.fallback_action), (TaskFrequencies{5, 2, 0}));
 }
 
 TEST(FeasibleSetTest, FallbackIsCheapestOverallWhenC1CannotHold) {
-  // A 0.5 Hz sensor: every grid perception rate (>= 1 Hz) breaks C1.
+  // A 0.5 Hz sensor: every grid perception rate (>= 5 Hz) breaks C1.
   const ActionGrid grid;
   ConstraintInputs in = Nominal();
   in.f_sen = 0.5;
   in.current = {0.5, 0, 0};
   const FeasibleSet fs = ComputeFeasibleSet(grid, in);
   ASSERT_TRUE(fs.fallback_used);
-  EXPECT_EQ(grid.At(fs.fallback_action), (TaskFrequencies{1, 1, 0}));
+  EXPECT_EQ(grid.At(fs.fallback_action), (TaskFrequencies{5, 2, 0}));
 }
 
 TEST(ScaleToCapacityTest, NoOverloadLeavesFrequenciesAlone) {
@@ -298,7 +298,7 @@ TEST(OverloadMonitorTest, RefusesBadOptionsAndBackwardTime) {
 
 TEST(ActionGridTest, DefaultGridDropsCascadeViolationsAndRoundTripsIndices) {
   const ActionGrid grid;
-  EXPECT_EQ(grid.size(), 147) << "21 (f_per, f_col) pairs with f_col <= f_per, x 7 f_dif levels";
+  EXPECT_EQ(grid.size(), 98) << "14 (f_per, f_col) pairs with f_col <= f_per, x 7 f_dif levels";
   for (int i = 0; i < grid.size(); ++i) {
     const TaskFrequencies& f = grid.At(i);
     EXPECT_LE(f.f_col, f.f_per);
@@ -306,11 +306,11 @@ TEST(ActionGridTest, DefaultGridDropsCascadeViolationsAndRoundTripsIndices) {
     EXPECT_EQ(*grid.Find(f), i);
     EXPECT_EQ(grid.Nearest(f), i);
   }
-  EXPECT_EQ(grid.At(0), (TaskFrequencies{1, 1, 0})) << "cheapest first";
+  EXPECT_EQ(grid.At(0), (TaskFrequencies{5, 2, 0})) << "cheapest first";
   EXPECT_EQ(grid.At(grid.size() - 1), (TaskFrequencies{30, 30, 30}));
   EXPECT_FALSE(grid.Find({20, 0, 0}).has_value());
-  EXPECT_EQ(grid.At(grid.Nearest({19, 0.2, 0.4})), (TaskFrequencies{15, 1, 0}));
-  EXPECT_THROW(grid.At(147), std::out_of_range);
+  EXPECT_EQ(grid.At(grid.Nearest({19, 0.2, 0.4})), (TaskFrequencies{15, 2, 0}));
+  EXPECT_THROW(grid.At(98), std::out_of_range);
 }
 
 TEST(ActionGridTest, RefusesBadLevels) {

@@ -40,7 +40,7 @@ TEST(FrequencyAdapterTest, GreedyDecisionIsAFeasibleGridTripleAndCountsItsWork) 
   EXPECT_TRUE(CheckConstraints(Board(), d.f).AllHold());
   EXPECT_FALSE(d.fallback_used);
   EXPECT_TRUE(d.current_status.AllHold());
-  EXPECT_EQ(d.macs, 16 * 150 + 150 * 150 + 150 * 147 + FrequencyAdapter::kMaskMacsPerAction * 147);
+  EXPECT_EQ(d.macs, 16 * 150 + 150 * 150 + 150 * 98 + FrequencyAdapter::kMaskMacsPerAction * 98);
   EXPECT_EQ(work.Get(WorkUnit::kPolicyFlop), d.macs);
 }
 
@@ -63,7 +63,7 @@ TEST(FrequencyAdapterTest, FallbackIsTakenAndFlaggedWhenNothingIsFeasible) {
   FrequencyAdapter fa(MakeFrequencyPolicy(ActionGrid(), 2));
   const FrequencyDecision d = fa.Decide(c, Flight(), ActMode::kGreedy);
   EXPECT_TRUE(d.fallback_used);
-  EXPECT_EQ(d.f, (TaskFrequencies{1, 1, 0}));
+  EXPECT_EQ(d.f, (TaskFrequencies{5, 2, 0}));
   EXPECT_FALSE(d.current_status.holds[3]) << "the running configuration breaks C4";
 }
 
@@ -74,12 +74,12 @@ TEST(FrequencyAdapterTest, RecordingFillsARolloutStep) {
   const FrequencyDecision d = fa.Decide(Board(), Flight(), ActMode::kSample, &rng, nullptr, &step);
   EXPECT_EQ(step.action, d.action);
   EXPECT_EQ(step.obs.size(), kPolicyStateDim);
-  EXPECT_EQ(step.mask.size(), 147u);
+  EXPECT_EQ(step.mask.size(), 98u);
   EXPECT_TRUE(step.mask[static_cast<std::size_t>(d.action)]);
   EXPECT_LT(step.log_prob, 0.0);
   EXPECT_EQ(step.log_prob, d.log_prob);
   EXPECT_EQ(step.value, d.value);
-  EXPECT_EQ(d.macs, fa.policy().net.MacsPerDecision(true) + FrequencyAdapter::kMaskMacsPerAction * 147);
+  EXPECT_EQ(d.macs, fa.policy().net.MacsPerDecision(true) + FrequencyAdapter::kMaskMacsPerAction * 98);
 }
 
 TEST(FrequencyAdapterTest, RefusesPoliciesWithoutGridOrWithOtherFeatures) {

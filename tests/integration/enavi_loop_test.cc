@@ -1,0 +1,122 @@
+// E-Navi in the closed loop: the Strategy Controller's tasks run on the board, adapt the rates
+// and the resolution, and the same episode twice gives the same result; policy files are checked.
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "navstack/adapt/action_grid.h"
+#include "navstack/rl/policy_io.h"
+#include "navstack/rl/rollout.h"
+#include "tests/integration/loop_test_util.h"
+#include "workers/sim/episode.h"
+
+namespace enavi::integration {
+namespace {
+
+// A policy of this build (freshly initialised: what these tests check does not depend on training).
+std::string WritePolicy(const TempDir& dir) {
+  const std::string path = (dir.path() / "policy.json").string();
+  navstack::rl::SavePolicyFile(path, navstack::rl::MakeFrequencyPolicy(navstack::ActionGrid(), 7));
+  return path;
+}
+
+api::EpisodeSpec EnaviSpec(const std::string& policy) {
+  api::EpisodeSpec spec = Spec("s3", 1);
+  spec.board = "tx2";
+  spec.method = "enavi";
+  spec.policy = policy;
+  spec.timeout_s = 8.0;
+  return spec;
+}
+
+TEST(EnaviLoopTest, StrategyTasksRunOnTheBoardAndAdaptTheConfiguration) {
+  const TempDir dir;
+  const api::EpisodeResult r = sim::RunEpisode(EnaviSpec(WritePolicy(dir)));
+  ASSERT_FALSE(r.collided) << Describe(r);
+  EXPECT_GT(r.adapter_time_ms_mean, 0.0) << "the adapter is a task with a board cost";
+  EXPECT_GT(r.eci_time_ms_mean, 0.0);
+  EXPECT_GT(r.replans, 0) << "triggered planning planned at least once";
+  EXPECT_EQ(r.notes.at("scheduler"), "global EDF on 4 thread(s)");
+  // The configuration moved: several distinct perception rates or resolutions over the flight.
+  std::set<double> f_per(r.series.f_per.begin(), r.series.f_per.end());
+  std::set<double> res(r.series.res.begin(), r.series.res.end());
+  EXPECT_GT(f_per.size() + res.size(), 2u) << "rates or resolution adapted";
+  EXPECT_EQ(*res.begin() >= 0.1 - 1e-9 && *res.rbegin() <= 0.5 + 1e-9, true) << "resolution stays on the ladder";
+}
+
+TEST(EnaviLoopTest, SameEpisodeTwiceIsIdentical) {
+  const TempDir dir;
+  const api::EpisodeSpec spec = EnaviSpec(WritePolicy(dir));
+  const std::string a = nlohmann::json(sim::RunEpisode(spec)).dump();
+  const std::string b = nlohmann::json(sim::RunEpisode(spec)).dump();
+  EXPECT_EQ(a, b);
+}
+
+TEST(EnaviLoopTest, ExploringEpisodeRecordsARolloutWithRewards) {
+  const TempDir dir;
+  api::EpisodeSpec spec = EnaviSpec(WritePolicy(dir));
+  spec.overrides["strategy.explore"] = 1;
+  navstack::rl::Rollout rollout;
+  sim::EpisodeOptions options;
+  options.rollout = &rollout;
+  const api::EpisodeResult r = sim::RunEpisode(spec, options);
+  // 5 decisions per second over the flight.
+  EXPECT_NEAR(static_cast<double>(rollout.steps.size()), 5.0 * r.sim_time_s, 3.0);
+  ASSERT_FALSE(rollout.steps.empty());
+  EXPECT_EQ(rollout.steps.back().done, r.success || r.collided);
+  double sum = 0;
+  for (const auto& s : rollout.steps) {
+    EXPECT_EQ(s.obs.size(), 16);
+    EXPECT_EQ(s.mask.at(static_cast<std::size_t>(s.action)), 1) << "only feasible actions are taken";
+    sum += s.reward;
+  }
+  EXPECT_NE(sum, 0.0) << "rewards were assigned";
+}
+
+TEST(EnaviLoopTest, MissingOrCorruptPolicyIsAClearError) {
+  const TempDir dir;
+  api::EpisodeSpec spec = EnaviSpec((dir.path() / "nope.json").string());
+  try {
+    sim::RunEpisode(spec);
+    FAIL() << "a missing policy must be an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("nope.json"), std::string::npos) << e.what();
+  }
+  const std::string corrupt = (dir.path() / "corrupt.json").string();
+  std::ofstream(corrupt) << "{\"format\": \"enavi-policy\", \"version\": 1, \"actor\": [1, 2";
+  spec.policy = corrupt;
+  try {
+    sim::RunEpisode(spec);
+    FAIL() << "a corrupt policy must be an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("corrupt.json"), std::string::npos) << e.what();
+  }
+  // The CLI turns it into exit code 2 with the file named.
+  const CliRun run = Enavi(dir, "fly --world s3 --method enavi --policy " + corrupt + " --json");
+  EXPECT_EQ(run.code, 2) << run.err;
+  EXPECT_NE(run.err.find("corrupt.json"), std::string::npos) << run.err;
+}
+
+TEST(EnaviTrainTest, TrainsCheckpointsAndResumes) {
+  const TempDir dir;
+  const std::string out = (dir.path() / "policy.json").string();
+  const std::string common = "train --boards tx2 --scenarios s3 --episodes-per-iter 2 --workers 2 --seed 3 --out " + out;
+  const CliRun first = Enavi(dir, common + " --iterations 1");
+  ASSERT_EQ(first.code, 0) << first.err;
+  const auto work = dir.path() / "policy.json.train";
+  EXPECT_TRUE(std::filesystem::exists(work / "checkpoint.json"));
+  EXPECT_TRUE(std::filesystem::exists(work / "learning_curve.png"));
+  const CliRun resumed = Enavi(dir, common + " --iterations 2 --resume");
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("iter 2/2"), std::string::npos) << "resumes at the second iteration: " << resumed.err;
+  EXPECT_EQ(resumed.err.find("iter 1/2"), std::string::npos) << resumed.err;
+  const std::string csv = ReadFile(work / "learning_curve.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << "header + 2 iterations:\n" << csv;
+  // The trained policy flies.
+  const CliRun fly = Enavi(dir, "fly --world s3 --board tx2 --method enavi --timeout 3 --json --policy " + out);
+  EXPECT_EQ(fly.code, 0) << fly.err;
+}
+
+}  // namespace
+}  // namespace enavi::integration
