@@ -39,6 +39,7 @@ NavStack::NavStack(const NavStackOptions& options, TaskExecutor* executor, const
       pending_resolution_(options.map.resolution),
       state_(initial) {
   options_.planner.Validate();
+  options_.flight_bounds.max().z() = std::min(options_.flight_bounds.max().z(), initial.p_WB.z() + options_.max_climb);
   const Eigen::Vector3d to_goal = options_.goal - initial.p_WB;
   hold_ = HoldAt(initial.p_WB, std::atan2(to_goal.y(), to_goal.x()));
   executor_->Register(TaskId::kPerception, [this] { return PerceptionJob(); });
@@ -226,7 +227,12 @@ JobOutput NavStack::PlanningJob() {
   request.seed = static_cast<std::uint32_t>(Mix(options_.seed ^ Mix(static_cast<std::uint64_t>(plan_calls_++))));
   request.grid = std::make_shared<const VoxelGrid>(
       map_->ExtractGrid(PlanningVolume(start.p, options_.goal, options_.flight_bounds, options_.planner), &out.work));
-  auto result = std::make_shared<PlanResult>(Plan(request, options_.planner));
+  // The planner measures clearance to occupied cell centres (minus half a cell); the collision
+  // check to whole cells. At a coarse resolution a cell's corner is up to (sqrt(3) - 1) / 2 of a
+  // cell nearer than that, so plan with that much more radius, or every plan is "in collision".
+  PlannerOptions planner = options_.planner;
+  planner.robot_radius += 0.5 * (std::sqrt(3.0) - 1.0) * map_->resolution();
+  auto result = std::make_shared<PlanResult>(Plan(request, planner));
   out.work += result->work;
   // The Resolution Adapter scores the path against the map's obstacle density (paper Sec. V.A).
   PathScoreInputs score;

@@ -56,6 +56,10 @@ struct NavStackOptions {
   double triggered_plan_deadline_s = 0.1;
   /// Plan from the measured state instead of the reference when tracking error exceeds this, m.
   double max_tracking_error = 0.5;
+  /// Plans stay at most this far above the start, m: the camera's 58 deg vertical field of view
+  /// sees little of what is above, and optimistic planning through that unknown space is how
+  /// vehicles climbed into buildings.
+  double max_climb = 1.5;
   std::uint64_t seed = 1;
   Eigen::AlignedBox3d flight_bounds;
   Eigen::Vector3d goal = Eigen::Vector3d::Zero();
