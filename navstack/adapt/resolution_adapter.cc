@@ -74,6 +74,7 @@ ResolutionAdapter::ResolutionAdapter(const ResolutionAdapterOptions& options) : 
   RequireRange(options_.coarsen_after, 0.0, 1e6, "coarsen_after", /*lo_open=*/true);
   RequireRange(options_.refine_hold, 0.0, 1e6, "refine_hold");
   RequireRange(options_.min_refine_interval, 0.0, 1e6, "min_refine_interval");
+  RequireRange(options_.high_eci, options_.low_eci, 1.0, "high_eci");
   if (!options_.grid_origin.allFinite()) {
     throw std::invalid_argument("resolution adapter: grid_origin must be finite");
   }
@@ -140,6 +141,9 @@ void ResolutionAdapter::ObserveEci(double t, double eci) {
   }
   if (eci > options_.low_eci) {
     eci_low_ = false;
+    // Cluttered view ahead: plan on a finer map before the triggers ask for it (paper Sec. VI:
+    // higher eci, finer resolution).
+    if (eci >= options_.high_eci) Refine(t);
     return;
   }
   if (!eci_low_) {

@@ -42,6 +42,8 @@ struct ResolutionAdapterOptions {
   double score_threshold = 0.9;
   /// eci at or below this counts as "low" (open space). Range [0, 1].
   double low_eci = 0.3;
+  /// eci at or above this refines one step (at most every min_refine_interval). Range [low_eci, 1].
+  double high_eci = 0.5;
   /// eci must stay low this long (sim s) before going one step coarser. Range > 0.
   double coarsen_after = 3.0;
   /// No coarsening within this time (sim s) after a refinement: the hysteresis that stops
@@ -73,8 +75,8 @@ struct ResolutionDecision {
 /// State: a refinement floor (the coarsest level currently allowed) and, per level, the outcome of
 /// the last planning attempt there. Select() takes the coarsest level >= floor whose cells separate
 /// start and goal (Manhattan distance > 0) and whose last attempt did not fail (untried levels are
-/// tried optimistically). The floor moves one step finer after a collision-check trigger or a path
-/// scoring below the threshold; it moves one step coarser (and that level gets another try) when
+/// tried optimistically). The floor moves one step finer after a collision-check trigger, a path
+/// scoring below the threshold or an eci at or above high_eci; it moves one step coarser (and that level gets another try) when
 /// eci has stayed low for `coarsen_after`, no sooner than `refine_hold` after a refinement, and
 /// again only after another full low-eci period.
 class ResolutionAdapter {

@@ -89,6 +89,17 @@ TEST(ResolutionAdapterTest, LowPathScoreRefinesAndAGoodOneDoesNot) {
   EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 1);
 }
 
+TEST(ResolutionAdapterTest, HighEciRefinesAtMostOncePerInterval) {
+  ResolutionAdapter ra;  // high_eci 0.5, min_refine_interval 2 s
+  ra.Select(kStart, kFarGoal);
+  ra.ObserveEci(1.0, 0.4);
+  EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 0) << "moderate eci changes nothing";
+  for (double t = 1.1; t < 3.0; t += 0.1) ra.ObserveEci(t, 0.8);
+  EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 1);
+  ra.ObserveEci(3.2, 0.8);
+  EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 2);
+}
+
 TEST(ResolutionAdapterTest, SustainedLowEciCoarsensOneStepPerPeriod) {
   ResolutionAdapterOptions o;  // low_eci 0.3, coarsen_after 3 s, refine_hold 3 s
   o.min_refine_interval = 0.0;
@@ -121,7 +132,7 @@ TEST(ResolutionAdapterTest, HighEciRestartsTheLowEciPeriod) {
   ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
   for (int k = 0; k <= 40; ++k) {
     const double t = 0.1 * k;
-    ra.ObserveEci(t, k == 20 ? 0.6 : 0.1);  // one dense frame at t = 2 s
+    ra.ObserveEci(t, k == 20 ? 0.4 : 0.1);  // one busier frame at t = 2 s (not high enough to refine)
     ra.Select(kStart, kFarGoal);
   }
   EXPECT_EQ(ra.level(), 1) << "low again only since t = 2.1 s";
