@@ -1,0 +1,804 @@
+#include "workers/sim/emulated_nav_link.h"
+
+#include <fcntl.h>
+#include <pthread.h>
+#include <signal.h>
+#include <sys/mman.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <new>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "navstack/runtime/proc_stat.h"
+#include "navstack/runtime/realtime_executor.h"
+#include "navstack/runtime/sched_deadline.h"
+#include "navstack/stack/nav_stack.h"
+#include "workers/board/board_quota.h"
+#include "workers/board/cgroup.h"
+#include "workers/board/host_calibration.h"
+#include "workers/board/shm_channel.h"
+#include "workers/sim/emulated_wire.h"
+
+namespace enavi::sim {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using navstack::TaskId;
+
+constexpr int kEventRing = 1024;
+
+enum ChildState : std::int32_t { kStarting = 0, kReady = 1, kRunning = 2, kFailed = 3, kDone = 4 };
+
+// The shared anonymous mapping between the simulator and the navstack process (besides the
+// ShmChannel): control words, the stack's outputs, its accounting and its events.
+struct LinkShared {
+  std::atomic<std::int64_t> epoch_ns{0};  // CLOCK_MONOTONIC of sim time 0; 0 = not yet
+  std::atomic<std::int32_t> child_state{kStarting};
+  std::atomic<std::int32_t> stop{0};
+  std::atomic<std::int32_t> deadline_workers{0};
+  char error[1024] = {};       // written before child_state = kFailed
+  char sched_note[1024] = {};  // written before child_state = kReady
+  SeqSlot<ReferenceWire> reference;
+  SeqSlot<StatsWire> stats;
+  std::atomic<std::uint64_t> event_head{0};
+  SeqSlot<EventWire> events[kEventRing];
+};
+
+void CopyText(char* dst, std::size_t size, const std::string& text) {
+  const std::size_t n = std::min(size - 1, text.size());
+  std::memcpy(dst, text.data(), n);
+  dst[n] = '\0';
+}
+
+std::string Fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+std::int64_t ToNs(Clock::time_point t) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
+}
+
+// --- Signals: SIGINT/SIGTERM end the episode cleanly (child and cgroup removed first).
+
+std::atomic<int> g_signal{0};
+std::mutex g_signal_mutex;
+int g_signal_users = 0;
+struct sigaction g_old_int{}, g_old_term{};
+bool g_installed_int = false, g_installed_term = false;
+
+extern "C" void OnTerminationSignal(int sig) { g_signal.store(sig); }
+
+void InstallSignalHandlers() {
+  std::lock_guard l(g_signal_mutex);
+  if (g_signal_users++ > 0) return;
+  g_signal.store(0);
+  struct sigaction sa{};
+  sa.sa_handler = OnTerminationSignal;
+  sigemptyset(&sa.sa_mask);
+  // Only where nobody else handles the signal: a host process with its own shutdown keeps it.
+  struct sigaction current{};
+  if (sigaction(SIGINT, nullptr, &current) == 0 && current.sa_handler == SIG_DFL) {
+    g_installed_int = sigaction(SIGINT, &sa, &g_old_int) == 0;
+  }
+  if (sigaction(SIGTERM, nullptr, &current) == 0 && current.sa_handler == SIG_DFL) {
+    g_installed_term = sigaction(SIGTERM, &sa, &g_old_term) == 0;
+  }
+}
+
+// Restores the old dispositions; returns the signal that arrived while installed (0: none).
+int RemoveSignalHandlers() {
+  std::lock_guard l(g_signal_mutex);
+  if (--g_signal_users > 0) return 0;
+  if (g_installed_int) sigaction(SIGINT, &g_old_int, nullptr);
+  if (g_installed_term) sigaction(SIGTERM, &g_old_term, nullptr);
+  g_installed_int = g_installed_term = false;
+  return g_signal.exchange(0);
+}
+
+// --- The navstack process.
+
+struct ChildArgs {
+  const navstack::NavStackOptions* options = nullptr;
+  const navstack::VehicleState* initial = nullptr;
+  int threads = 1;
+  navstack::SchedulingPolicy policy = navstack::SchedulingPolicy::kGlobalEdf;
+  double dilation = 1.0;
+  double speed = 1.0;  // board core speed / host core speed
+  bool sched_deadline = true;
+  std::int64_t server_period_ns = 10'000'000;
+  LinkShared* shared = nullptr;
+  int channel_fd = -1;
+  int go_fd = -1;
+};
+
+void NameThread(const char* name) { pthread_setname_np(pthread_self(), name); }
+
+bool SameSample(const navstack::TrajectorySample& a, const navstack::TrajectorySample& b) {
+  return a.p == b.p && a.v == b.v && a.a == b.a && a.j == b.j && a.yaw == b.yaw && a.yaw_rate == b.yaw_rate;
+}
+
+// Publishes the stack's outputs. Every call happens under the exclusive JobLock (after a commit
+// or after the IPC thread fed a frame), so NavStack is read consistently and there is one
+// writer at a time.
+class OutputPublisher {
+ public:
+  OutputPublisher(LinkShared* shared) : shared_(shared), wire_(std::make_unique<ReferenceWire>()) {}
+
+  void Publish(navstack::NavStack& nav, double now) {
+    ReferenceWire& w = *wire_;
+    const std::shared_ptr<const navstack::Trajectory> traj = nav.trajectory();
+    // NavStack hands a new plan's predecessor over as `previous` unless it was holding.
+    if (traj != last_traj_) {
+      previous_ = following_ ? last_traj_ : nullptr;
+      last_traj_ = traj;
+      if (traj) {
+        ToWire(*traj, &w.current);
+      } else {
+        w.current.count = 0;
+      }
+      if (previous_) {
+        ToWire(*previous_, &w.previous);
+      } else {
+        w.previous.count = 0;
+      }
+    }
+    // Holding (emergency stop, fail-safe) shows as a reference that is not the trajectory's.
+    following_ = false;
+    if (traj) {
+      const double t1 = std::max(now, traj->start_time());
+      const double t2 = traj->end_time() + 1.0;
+      following_ = SameSample(nav.Reference(t1), traj->Sample(t1)) && SameSample(nav.Reference(t2), traj->Sample(t2));
+    }
+    w.mode = following_ ? ReferenceWire::kTrajectory : ReferenceWire::kHold;
+    w.hold = ToWire(nav.Reference(now));
+    const navstack::TaskRates& r = nav.rates();
+    w.f_per = r.f_per;
+    w.f_plan = r.f_plan;
+    w.f_col = r.f_col;
+    w.f_dif = r.f_dif;
+    w.resolution = r.resolution;
+    w.collision_on_map_update = r.collision_on_map_update ? 1 : 0;
+    w.map_resolution = nav.map_resolution();
+    w.plan_failures = nav.plan_failures();
+    ++w.publications;
+    shared_->reference.Write(w);
+
+    for (const navstack::NavEvent& e : nav.TakeEvents()) {
+      EventWire ew;
+      ew.t = e.t;
+      CopyText(ew.kind, sizeof ew.kind, e.kind);
+      CopyText(ew.detail, sizeof ew.detail, e.detail);
+      const std::uint64_t head = shared_->event_head.load(std::memory_order_relaxed);
+      shared_->events[head % kEventRing].Write(ew);
+      shared_->event_head.store(head + 1, std::memory_order_release);
+    }
+  }
+
+ private:
+  LinkShared* shared_;
+  std::unique_ptr<ReferenceWire> wire_;
+  std::shared_ptr<const navstack::Trajectory> last_traj_, previous_;
+  bool following_ = false;
+};
+
+std::string DescribeSched(const std::vector<navstack::DeadlineResult>& results, bool requested,
+                          const navstack::DeadlineParams& params, double rate) {
+  const int n = static_cast<int>(results.size());
+  int granted = 0;
+  std::string reason;
+  for (const auto& r : results) {
+    if (r.deadline) {
+      ++granted;
+    } else if (reason.empty()) {
+      reason = r.reason;
+    }
+  }
+  const std::string server = "runtime " + std::to_string(params.runtime_ns / 1000) + " us / period " +
+                             std::to_string(params.period_ns / 1000) + " us (" + Fixed(rate, 3) +
+                             " of a host core = one board core)";
+  if (!requested)
+    return "SCHED_DEADLINE not requested; " + std::to_string(n) +
+           " worker thread(s) SCHED_OTHER, held to one board core each by their per-thread cgroup quota";
+  if (granted == n) return "SCHED_DEADLINE speed server on each of " + std::to_string(n) + " worker thread(s): " + server;
+  return "fallback on " + std::to_string(n - granted) + " of " + std::to_string(n) +
+         " worker thread(s): SCHED_OTHER held to one board core by the per-thread cgroup quota (" + reason + ")" +
+         (granted > 0 ? "; " + std::to_string(granted) + " with a SCHED_DEADLINE speed server: " + server : "");
+}
+
+// The navstack process's main: returns its exit code.
+int RunNavstackChild(const ChildArgs& a) {
+  LinkShared* shared = a.shared;
+  NameThread("enavi-navstack");
+  char go = 0;
+  while (true) {
+    const ssize_t n = read(a.go_fd, &go, 1);
+    if (n == 1) break;
+    if (n == 0 || errno != EINTR) return 3;  // the simulator gave up before placing us
+  }
+  close(a.go_fd);
+  board::ShmChannel channel = board::ShmChannel::Attach(a.channel_fd, board::ShmChannel::Role::kNavstack);
+
+  const double rate = a.speed / a.dilation;
+  const navstack::DeadlineParams server = navstack::SpeedServerParams(std::min(1.0, rate), a.server_period_ns);
+  std::vector<navstack::DeadlineResult> sched(static_cast<std::size_t>(a.threads));
+  navstack::NavStack* nav = nullptr;
+  OutputPublisher publisher(shared);
+
+  navstack::RealtimeExecutorOptions eo;
+  eo.threads = a.threads;
+  eo.policy = a.policy;
+  eo.dilation = a.dilation;
+  eo.host_to_board = 1.0 / a.speed;
+  eo.on_worker_start = [&](int w) {
+    const std::string name = "nav-worker-" + std::to_string(w);
+    NameThread(name.c_str());
+    if (a.sched_deadline) sched[static_cast<std::size_t>(w)] = navstack::EnterDeadline(server);
+  };
+  navstack::RealtimeExecutor* exec_ptr = nullptr;
+  eo.after_commit = [&](TaskId) { publisher.Publish(*nav, exec_ptr->now()); };
+  navstack::RealtimeExecutor exec(eo);
+  exec_ptr = &exec;
+  navstack::NavStack stack(*a.options, &exec, *a.initial);
+  nav = &stack;
+  // Jobs use the stack: the workers must be gone before it is, also when this function throws.
+  struct StopFirst {
+    navstack::RealtimeExecutor& e;
+    ~StopFirst() { e.Stop(); }
+  } stop_first{exec};
+  exec.Launch();
+  {
+    std::ofstream comm("/proc/self/task/" + std::to_string(exec.ReleaseThreadTid()) + "/comm");
+    comm << "nav-release";
+  }
+  int granted = 0;
+  for (const auto& r : sched) granted += r.deadline ? 1 : 0;
+  shared->deadline_workers.store(granted);
+  CopyText(shared->sched_note, sizeof shared->sched_note, DescribeSched(sched, a.sched_deadline, server, rate));
+  publisher.Publish(stack, 0.0);
+  shared->child_state.store(kReady, std::memory_order_release);
+
+  // Sim time 0 is set by the simulator when it starts flying.
+  std::int64_t epoch_ns = 0;
+  while ((epoch_ns = shared->epoch_ns.load(std::memory_order_acquire)) == 0) {
+    if (shared->stop.load() || channel.Peer() == board::PeerState::kDead) return 0;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  exec.Start(Clock::time_point(std::chrono::nanoseconds(epoch_ns)));
+  shared->child_state.store(kRunning, std::memory_order_release);
+
+  auto stats = std::make_unique<StatsWire>();
+  board::OdometryMsg odom;
+  std::uint32_t odom_seq = 0;
+  bool odom_pending = false;
+  while (!shared->stop.load(std::memory_order_relaxed)) {
+    if (const std::string err = exec.error(); !err.empty()) throw std::runtime_error(err);
+    const board::WaitStatus w = channel.WaitFrame(std::chrono::milliseconds(5));
+    if (w == board::WaitStatus::kPeerDead) return 0;
+    if (channel.ReadOdometry(&odom, &odom_seq)) odom_pending = true;
+    if (w == board::WaitStatus::kNew) {
+      std::int64_t dropped = 0;
+      const board::FrameSlot slot = channel.AcquireFrame(&dropped);
+      if (slot.header != nullptr) {
+        auto frame = std::make_shared<navstack::DepthFrame>(board::ShmChannel::ToDepthFrame(slot));
+        std::unique_lock lock(exec.job_lock());
+        if (odom_pending) {
+          stack.OnState(board::ShmChannel::FromMsg(odom));
+          odom_pending = false;
+          ++stats->odometry_applied;
+        }
+        stack.OnFrame(std::move(frame));
+        publisher.Publish(stack, exec.now());
+        ++stats->frames_received;
+        stats->frames_dropped += std::max<std::int64_t>(0, dropped);
+      }
+    } else if (odom_pending && exec.job_lock().try_lock()) {
+      // Odometry does not wait for running jobs (they read the state at their start).
+      stack.OnState(board::ShmChannel::FromMsg(odom));
+      exec.job_lock().unlock();
+      odom_pending = false;
+      ++stats->odometry_applied;
+    }
+    const auto all = exec.AllStats();
+    for (int i = 0; i < navstack::kTaskCount; ++i) stats->tasks[i] = all[i];
+    stats->lock = exec.lock_stats();
+    stats->child_now = exec.now();
+    ++stats->publications;
+    shared->stats.Write(*stats);
+    channel.Heartbeat();
+  }
+  exec.Stop();
+  const auto all = exec.AllStats();
+  for (int i = 0; i < navstack::kTaskCount; ++i) stats->tasks[i] = all[i];
+  stats->lock = exec.lock_stats();
+  stats->child_now = exec.now();
+  shared->stats.Write(*stats);
+  shared->child_state.store(kDone, std::memory_order_release);
+  return 0;
+}
+
+// After fork, in the child: the fds and signals the navstack process keeps.
+void PrepareChildProcess(pid_t parent, int* channel_fd, int* go_fd) {
+  prctl(PR_SET_PDEATHSIG, SIGKILL);
+  if (getppid() != parent) _exit(1);  // the simulator died before the line above
+  struct sigaction dfl{};
+  dfl.sa_handler = SIG_DFL;
+  sigemptyset(&dfl.sa_mask);
+  for (int sig : {SIGINT, SIGTERM, SIGPIPE, SIGHUP}) sigaction(sig, &dfl, nullptr);
+  sigset_t none;
+  sigemptyset(&none);
+  pthread_sigmask(SIG_SETMASK, &none, nullptr);
+  // Nothing of the simulator's descriptors (stdout carries --json) except the two we need.
+  const int devnull = open("/dev/null", O_WRONLY | O_CLOEXEC);
+  if (devnull >= 0) dup2(devnull, STDOUT_FILENO);
+  const int ch = fcntl(*channel_fd, F_DUPFD, 100);
+  const int go = fcntl(*go_fd, F_DUPFD, 100);
+  if (ch < 0 || go < 0 || dup2(ch, 3) != 3 || dup2(go, 4) != 4) _exit(1);
+  close_range(5, ~0U, 0);
+  *channel_fd = 3;
+  *go_fd = 4;
+}
+
+std::string DescribeWait(int status) {
+  if (WIFEXITED(status)) return "exit code " + std::to_string(WEXITSTATUS(status));
+  if (WIFSIGNALED(status)) {
+    const char* name = strsignal(WTERMSIG(status));
+    return "killed by signal " + std::to_string(WTERMSIG(status)) + " (" + (name ? name : "?") + ")";
+  }
+  return "status " + std::to_string(status);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+struct EmulatedNavLink::Impl {
+  // Configuration.
+  navstack::NavStackOptions options;
+  navstack::VehicleState initial;
+  int threads = 1;
+  navstack::SchedulingPolicy policy = navstack::SchedulingPolicy::kGlobalEdf;
+  board::BoardProfile board;
+  EmulationOptions emulation;
+  double speed = 1.0, dilation = 1.0;
+  board::BoardQuota quota;
+  std::map<std::string, std::string> notes;
+
+  // Resources, released in reverse order by Shutdown().
+  bool signals_installed = false;
+  std::unique_ptr<board::CgroupManager> manager;
+  std::unique_ptr<board::EpisodeCgroup> group;
+  std::optional<board::ShmChannel> channel;
+  LinkShared* shared = nullptr;
+  pid_t child = -1;
+  std::string child_exit;  // how the child ended, once reaped
+
+  // Running state.
+  Clock::time_point epoch{};
+  bool epoch_set = false;
+  double last_t = 0;
+  ReferenceMirror mirror{navstack::PlannerOptions{}};
+  std::unique_ptr<ReferenceWire> reference_wire = std::make_unique<ReferenceWire>();
+  std::uint32_t reference_seq = 0;
+  navstack::TaskRates current_rates;
+  double current_map_resolution = 0;
+  std::int64_t plan_failures = 0;
+  std::uint64_t event_tail = 0;
+  std::int64_t events_lost = 0;
+  Clock::time_point next_liveness_check{}, next_sweep{};
+  // Pacing of the simulator: how far behind schedule it was when it reached each step.
+  std::int64_t steps = 0, steps_late = 0;
+  double lag_sum_s = 0, lag_max_s = 0;
+  // Accounting, refreshed lazily.
+  mutable std::unique_ptr<StatsWire> stats = std::make_unique<StatsWire>();
+  mutable std::uint32_t stats_seq = 0;
+  mutable Clock::time_point next_proc_sample{};
+  mutable std::map<pid_t, std::pair<std::string, double>> thread_cpu;  // tid -> (comm, cpu s)
+
+  ~Impl() { Shutdown(); }
+
+  void Start();
+  void Shutdown();
+  void CheckSignal(const char* where) const {
+    if (const int sig = g_signal.load()) {
+      throw std::runtime_error(std::string("emulated clock: interrupted by ") + strsignal(sig) + " " + where);
+    }
+  }
+  void CheckChild();
+  void TakeOutputs();
+  void SampleProc() const;
+};
+
+void EmulatedNavLink::Impl::Start() {
+  // 1. This host's speed (calibration) -> the board's speed relative to it.
+  const std::string path = board::CalibrationPath(emulation.calibration_file);
+  const board::CalibrationCheck check = board::CheckHostCalibration(path);
+  if (!check.ok()) throw std::invalid_argument("--clock emulated needs a valid host calibration: " + check.message);
+  const board::HostCalibration& cal = *check.calibration;
+  speed = board::SpeedVsHost(board, cal);
+  const double raw_speed = speed;
+  if (speed > 1.0 + board::kFasterBoardTolerance) {
+    throw std::invalid_argument("--clock emulated: board '" + board.id + "' has cores " + Fixed(speed, 3) +
+                                " x as fast as this host's (board " + Fixed(board.per_core_speed, 3) + ", host " +
+                                Fixed(cal.relative_speed, 3) +
+                                " x the reference core); a CPU throttle can only slow down, use the virtual clock");
+  }
+  speed = std::min(1.0, speed);
+  notes["emulation.speed"] = Fixed(speed, 4) + " of a host core per board core (board " +
+                             Fixed(board.per_core_speed, 3) + " / host " + Fixed(cal.relative_speed, 3) +
+                             " x the reference core; calibration " + path + ", " + cal.date + ")" +
+                             (raw_speed > 1.0 ? "; the board is " + Fixed(100 * (raw_speed - 1), 1) +
+                                                    " % faster than the host: emulated at full host speed"
+                                              : "");
+
+  // 2. cgroups: detect, reap stale groups, admit.
+  InstallSignalHandlers();
+  signals_installed = true;
+  board::CgroupOptions cg;
+  auto open = board::CgroupManager::Open(cg);
+  if (!open.ok()) {
+    throw std::invalid_argument("--clock emulated needs a writable cgroup hierarchy (run as root, cgroup v2 with "
+                                "cpu/cpuset/memory delegated or v1 cpu/cpuset/memory mounted read-write): " +
+                                open.error + "; the virtual clock (--clock virtual) needs none of this");
+  }
+  manager = std::move(open.manager);
+  if (!open.reaped.empty()) {
+    std::string list;
+    for (const auto& r : open.reaped) list += (list.empty() ? "" : ", ") + r;
+    notes["emulation.reaped"] = list;
+  }
+  const board::BoardCpu cpu{board.cores, speed};
+  const double host_cpus = manager->HostCpus();
+  const double reserved = manager->ReservedCpus();
+  const double free_cpus = host_cpus - cg.host_reserve_cpus - reserved;
+  if (dilation <= 0) {
+    if (free_cpus < 0.05) {
+      throw std::invalid_argument("--clock emulated: admission refused: no host CPU free (host " +
+                                  Fixed(host_cpus, 0) + " CPUs, " + Fixed(reserved, 3) +
+                                  " held by running emulations, " + Fixed(cg.host_reserve_cpus, 2) +
+                                  " kept for the simulator)");
+    }
+    dilation = board::MinimumDilation(cpu, free_cpus);
+    notes["emulation.dilation"] = Fixed(dilation, 2) + " (auto: smallest multiple of 0.25 at which " +
+                                  std::to_string(board.cores) + " x " + Fixed(speed, 3) + " = " +
+                                  Fixed(board.cores * speed, 3) + " host CPUs fit the " + Fixed(free_cpus, 2) +
+                                  " free)";
+  } else {
+    notes["emulation.dilation"] = Fixed(dilation, 2) + " (requested)";
+  }
+  board::QuotaOptions qo;
+  qo.dilation = dilation;
+  qo.period_us = emulation.cfs_period_us;
+  quota = board::ComputeBoardQuota(cpu, qo);
+  board::EpisodeLimits limits;
+  limits.cpus = emulation.cpus;
+  auto created = manager->CreateEpisode(quota, limits);
+  if (!created.ok()) throw std::invalid_argument("--clock emulated: " + created.refusal);
+  group = std::move(created.group);
+  notes["emulation.cgroup"] =
+      std::string(manager->layout().version == board::CgroupVersion::kV2 ? "v2 " : "v1 ") + group->name() +
+      ": board quota " + std::to_string(quota.board_quota_us) + " us / " + std::to_string(quota.period_us) + " us (" +
+      Fixed(quota.BoardCpus(), 3) + " host CPUs), per thread " + std::to_string(quota.core_quota_us) + " us (" +
+      Fixed(quota.CoreCpus(), 3) + ")" + (emulation.cpus.empty() ? "" : ", cpuset " + emulation.cpus);
+
+  // 3. Shared memory.
+  channel.emplace(board::ShmChannel::Create({options.camera.width, options.camera.height}));
+  void* mem = mmap(nullptr, sizeof(LinkShared), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+  if (mem == MAP_FAILED) throw std::runtime_error(std::string("emulated clock: mmap: ") + std::strerror(errno));
+  shared = new (mem) LinkShared();
+
+  // 4. The navstack process: forked, waits until it is inside the board's groups.
+  int go[2];
+  if (pipe2(go, O_CLOEXEC) != 0) throw std::runtime_error(std::string("emulated clock: pipe: ") + std::strerror(errno));
+  ChildArgs args;
+  args.options = &options;
+  args.initial = &initial;
+  args.threads = threads;
+  args.policy = policy;
+  args.dilation = dilation;
+  args.speed = speed;
+  args.sched_deadline = emulation.sched_deadline;
+  args.server_period_ns = emulation.server_period_us * 1000;
+  args.shared = shared;
+  args.channel_fd = channel->fd();
+  args.go_fd = go[0];
+  const pid_t parent = getpid();
+  const pid_t pid = fork();
+  if (pid < 0) {
+    close(go[0]);
+    close(go[1]);
+    throw std::runtime_error(std::string("emulated clock: fork: ") + std::strerror(errno));
+  }
+  if (pid == 0) {
+    int code = 1;
+    try {
+      PrepareChildProcess(parent, &args.channel_fd, &args.go_fd);
+      code = RunNavstackChild(args);
+    } catch (const std::exception& e) {
+      CopyText(shared->error, sizeof shared->error, e.what());
+      shared->child_state.store(kFailed, std::memory_order_release);
+      code = 1;
+    }
+    _exit(code);
+  }
+  child = pid;
+  close(go[0]);
+  if (board::CgroupStatus s = group->AddProcess(child); !s.ok) {
+    close(go[1]);
+    throw std::runtime_error("emulated clock: cannot move the navstack process into " + group->name() + ": " +
+                             s.message);
+  }
+  const char byte = 'g';
+  const bool sent = write(go[1], &byte, 1) == 1;
+  close(go[1]);
+  if (!sent) throw std::runtime_error("emulated clock: cannot start the navstack process");
+  notes["emulation.process"] = "navstack in its own process (fork, pid " + std::to_string(child) +
+                               "), simulator outside the throttled groups";
+  if (emulation.on_navstack_started) emulation.on_navstack_started(child);
+
+  // 5. Wait until its workers run (and asked for SCHED_DEADLINE), then give every thread its group.
+  const auto give_up = Clock::now() + std::chrono::seconds(30);
+  while (shared->child_state.load(std::memory_order_acquire) == kStarting) {
+    CheckSignal("while the navstack process started");
+    CheckChild();
+    if (Clock::now() > give_up) throw std::runtime_error("emulated clock: the navstack process did not start within 30 s");
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  CheckChild();
+  board::CgroupStatus sweep;
+  const int placed = group->SweepThreads(&sweep);
+  if (!sweep.ok) throw std::runtime_error("emulated clock: per-thread cgroups: " + sweep.message);
+  notes["emulation.threads"] = std::to_string(placed) + " navstack threads in per-thread groups (" +
+                               std::to_string(threads) + " worker(s), release, IPC)";
+  notes["emulation.sched"] = shared->sched_note;
+  notes["emulation.scheduler"] =
+      std::string(policy == navstack::SchedulingPolicy::kGlobalEdf ? "EDF" : "FIFO") + " without preemption on " +
+      std::to_string(threads) + " worker thread(s), releases in sim time = wall / " + Fixed(dilation, 2) +
+      "; jobs under a shared lock, commits exclusive";
+  notes["cost"] = "measured (job thread CPU time / board speed)";
+  mirror = ReferenceMirror(options.planner);
+  TakeOutputs();
+  if (!mirror.has_message()) throw std::runtime_error("emulated clock: the navstack process published no reference");
+  next_liveness_check = next_sweep = Clock::now();
+}
+
+void EmulatedNavLink::Impl::CheckChild() {
+  if (child <= 0) return;
+  if (shared->child_state.load(std::memory_order_acquire) == kFailed) {
+    throw std::runtime_error(std::string("emulated clock: the navstack process failed: ") + shared->error);
+  }
+  int status = 0;
+  const pid_t r = waitpid(child, &status, WNOHANG);
+  if (r == child) {
+    child = -1;
+    child_exit = DescribeWait(status);
+    if (shared->child_state.load(std::memory_order_acquire) == kFailed) {
+      throw std::runtime_error(std::string("emulated clock: the navstack process failed: ") + shared->error);
+    }
+    throw std::runtime_error("emulated clock: the navstack process died (" + child_exit + ")");
+  }
+}
+
+void EmulatedNavLink::Impl::TakeOutputs() {
+  if (shared->reference.Read(reference_wire.get(), &reference_seq)) {
+    const ReferenceWire& w = *reference_wire;
+    mirror.Update(w);
+    current_rates.f_per = w.f_per;
+    current_rates.f_plan = w.f_plan;
+    current_rates.f_col = w.f_col;
+    current_rates.f_dif = w.f_dif;
+    current_rates.resolution = w.resolution;
+    current_rates.collision_on_map_update = w.collision_on_map_update != 0;
+    current_map_resolution = w.map_resolution;
+    plan_failures = w.plan_failures;
+  }
+}
+
+void EmulatedNavLink::Impl::SampleProc() const {
+  if (child <= 0) return;
+  for (pid_t tid : navstack::ListThreads(child)) {
+    if (const auto t = navstack::ReadThreadCpu(child, tid)) thread_cpu[tid] = {t->comm, t->CpuSeconds()};
+  }
+}
+
+void EmulatedNavLink::Impl::Shutdown() {
+  if (child > 0) {
+    if (shared != nullptr) shared->stop.store(1);
+    // A job in flight may take a while at board speed; the results are already in.
+    int status = 0;
+    pid_t r = 0;
+    for (int i = 0; i < 60 && (r = waitpid(child, &status, WNOHANG)) == 0; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (r == 0) {
+      kill(child, SIGKILL);
+      r = waitpid(child, &status, 0);
+    }
+    if (r == child) child_exit = DescribeWait(status);
+    child = -1;
+  }
+  std::string cleanup_error;
+  if (group) {
+    if (board::CgroupStatus s = group->Remove(); !s.ok) cleanup_error = s.message;
+    group.reset();
+  }
+  manager.reset();  // removes the `enavi` parent unless other episodes live in it
+  channel.reset();
+  if (shared != nullptr) {
+    shared->~LinkShared();
+    munmap(shared, sizeof(LinkShared));
+    shared = nullptr;
+  }
+  if (!cleanup_error.empty()) std::fprintf(stderr, "enavi: emulated clock clean-up: %s\n", cleanup_error.c_str());
+  if (signals_installed) {
+    signals_installed = false;
+    if (const int sig = RemoveSignalHandlers()) {
+      // The episode was interrupted: now that nothing is left behind, die as the signal asked.
+      std::fprintf(stderr, "enavi: %s: navstack process stopped and its cgroup removed\n", strsignal(sig));
+      signal(sig, SIG_DFL);
+      raise(sig);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+EmulatedNavLink::EmulatedNavLink(const navstack::NavStackOptions& options, int threads,
+                                 navstack::SchedulingPolicy policy, const board::BoardProfile& board,
+                                 double dilation, const navstack::VehicleState& initial,
+                                 const EmulationOptions& emulation)
+    : impl_(std::make_unique<Impl>()) {
+  if (threads < 1) throw std::invalid_argument("emulated clock: threads must be >= 1");
+  if (options.strategy && options.strategy->record)
+    throw std::invalid_argument("emulated clock: E-Navi rollouts (training) are recorded on the virtual clock only");
+  impl_->options = options;
+  impl_->initial = initial;
+  impl_->threads = threads;
+  impl_->policy = policy;
+  impl_->board = board;
+  impl_->dilation = dilation;
+  impl_->emulation = emulation;
+  impl_->Start();  // on a throw, ~Impl cleans up what was created
+}
+
+EmulatedNavLink::~EmulatedNavLink() = default;
+
+pid_t EmulatedNavLink::navstack_pid() const { return impl_->child; }
+
+void EmulatedNavLink::OnState(const navstack::VehicleState& state) {
+  impl_->channel->PublishOdometry(board::ShmChannel::ToMsg(state));
+}
+
+void EmulatedNavLink::OnFrame(navstack::DepthFramePtr frame) { impl_->channel->PublishFrame(*frame); }
+
+void EmulatedNavLink::AdvanceTo(double t) {
+  Impl& m = *impl_;
+  m.CheckSignal("during the episode");
+  if (!m.epoch_set) {
+    // Sim time 0 a little ahead, so the navstack's first releases are not already late.
+    m.epoch = Clock::now() + std::chrono::milliseconds(5);
+    m.epoch_set = true;
+    m.shared->epoch_ns.store(ToNs(m.epoch), std::memory_order_release);
+  }
+  const Clock::time_point due =
+      m.epoch + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(t * m.dilation));
+  const Clock::time_point now = Clock::now();
+  ++m.steps;
+  if (now > due) {
+    const double lag = std::chrono::duration<double>(now - due).count();
+    m.lag_sum_s += lag;
+    m.lag_max_s = std::max(m.lag_max_s, lag);
+    if (lag > 1e-3) ++m.steps_late;
+  } else {
+    std::this_thread::sleep_until(due);
+  }
+  m.last_t = t;
+  m.TakeOutputs();
+  const Clock::time_point after = Clock::now();
+  if (after >= m.next_liveness_check) {
+    m.next_liveness_check = after + std::chrono::milliseconds(20);
+    m.CheckChild();
+  }
+  if (after >= m.next_sweep) {  // threads the stack may have started since
+    m.next_sweep = after + std::chrono::seconds(1);
+    m.group->SweepThreads();
+  }
+}
+
+navstack::TrajectorySample EmulatedNavLink::Reference(double t) { return impl_->mirror.Reference(t); }
+
+std::vector<navstack::NavEvent> EmulatedNavLink::TakeEvents() {
+  Impl& m = *impl_;
+  std::vector<navstack::NavEvent> out;
+  const std::uint64_t head = m.shared->event_head.load(std::memory_order_acquire);
+  if (head - m.event_tail > static_cast<std::uint64_t>(kEventRing)) {
+    m.events_lost += static_cast<std::int64_t>(head - m.event_tail - kEventRing);
+    m.event_tail = head - kEventRing;
+  }
+  for (; m.event_tail < head; ++m.event_tail) {
+    EventWire e;
+    std::uint32_t seen = 1;  // odd: never a settled sequence, so any settled copy is taken
+    if (!m.shared->events[m.event_tail % kEventRing].Read(&e, &seen)) {
+      ++m.events_lost;
+      continue;
+    }
+    e.kind[sizeof e.kind - 1] = '\0';
+    e.detail[sizeof e.detail - 1] = '\0';
+    out.push_back({e.t, e.kind, e.detail});
+  }
+  return out;
+}
+
+navstack::TaskRates EmulatedNavLink::rates() const { return impl_->current_rates; }
+
+double EmulatedNavLink::map_resolution() const { return impl_->current_map_resolution; }
+
+double EmulatedNavLink::OffBoardSeconds(navstack::TaskId, const navstack::WorkCounts&, double host_cpu_s) const {
+  return host_cpu_s / impl_->speed;
+}
+
+NavAccounting EmulatedNavLink::Accounting() const {
+  const Impl& m = *impl_;
+  if (m.shared != nullptr) {
+    auto fresh = std::make_unique<StatsWire>();
+    std::uint32_t seq = m.stats_seq;
+    if (m.shared->stats.Read(fresh.get(), &seq)) {
+      m.stats_seq = seq;
+      m.stats = std::move(fresh);
+    }
+  }
+  const Clock::time_point now = Clock::now();
+  if (now >= m.next_proc_sample) {
+    m.next_proc_sample = now + std::chrono::milliseconds(500);
+    m.SampleProc();
+  }
+  NavAccounting acc;
+  for (int i = 0; i < navstack::kTaskCount; ++i) acc.tasks[i] = m.stats->tasks[i];
+  acc.plan_failures = m.plan_failures;
+  acc.notes = m.notes;
+  const double T = m.last_t;
+  if (T > 0) {
+    // The paper's psutil figure: every thread of the navstack process from /proc, in board cores.
+    double total = 0;
+    std::string per_thread;
+    std::map<std::string, double> by_name;
+    for (const auto& [tid, v] : m.thread_cpu) by_name[v.first] += v.second;
+    for (const auto& [name, cpu] : by_name) {
+      total += cpu;
+      per_thread += (per_thread.empty() ? "" : ", ") + name + " " + Fixed(100.0 * cpu / m.speed / T, 1) + " %";
+    }
+    acc.notes["emulation.proc_util"] = "navstack process " + Fixed(100.0 * total / m.speed / T, 1) +
+                                       " % of a board core over the flight (/proc per thread: " + per_thread + ")";
+    acc.notes["emulation.pacing"] =
+        "simulator behind schedule by > 1 ms at " + std::to_string(m.steps_late) + " of " + std::to_string(m.steps) +
+        " steps (mean lag " + Fixed(m.steps > 0 ? 1e3 * m.lag_sum_s / static_cast<double>(m.steps) : 0.0, 3) +
+        " ms, max " + Fixed(1e3 * m.lag_max_s, 1) + " ms wall)";
+  }
+  const StatsWire& s = *m.stats;
+  acc.notes["emulation.ipc"] = std::to_string(s.frames_received) + " frames taken, " +
+                               std::to_string(s.frames_dropped) + " overwritten unread; " +
+                               std::to_string(s.odometry_applied) + " odometry updates applied" +
+                               (m.events_lost > 0 ? "; " + std::to_string(m.events_lost) + " events lost" : "");
+  acc.notes["emulation.lock"] = std::to_string(s.lock.commits) + " commits waited " +
+                                Fixed(1e3 * s.lock.commit_wait_s, 1) + " ms in total (longest " +
+                                Fixed(1e3 * s.lock.commit_wait_max_s, 1) + " ms wall) for running jobs";
+  return acc;
+}
+
+}  // namespace enavi::sim
