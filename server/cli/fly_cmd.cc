@@ -31,6 +31,8 @@ struct FlyArgs {
   bool json = false;
   std::string spec_file, result_file;
   std::string rollout_file;
+  double dilation = 0.0;  // emulated clock; 0 (absent): the smallest that fits the host
+  std::string calibration;
 };
 
 api::Vec3 ParseVec3(const std::string& text, const char* flag) {
@@ -109,6 +111,9 @@ void Run(FlyArgs args) {
   sim::EpisodeOptions options;
   navstack::rl::Rollout rollout;
   if (!args.rollout_file.empty()) options.rollout = &rollout;
+  options.emulation.calibration_file = args.calibration;
+  // On the command line an absent --dilation means "the smallest that fits" (a spec file says).
+  if (args.spec_file.empty()) spec.dilation = args.dilation;
   const bool tty = isatty(STDERR_FILENO) && !args.json;
   if (tty) {
     options.progress = [](double t, double distance) {
@@ -175,6 +180,13 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--clock", args->spec.clock, "virtual (sim-time EDF) or emulated (throttled cgroup)")
       ->capture_default_str()
       ->check(CLI::IsMember({"virtual", "emulated"}));
+  fly->add_option("--dilation", args->dilation,
+                  "emulated clock: 1 sim second = K wall seconds, quota divided by K (default: the smallest "
+                  "multiple of 0.25 at which the board fits this host)")
+      ->check(CLI::Range(1.0, 100.0));
+  fly->add_option("--calibration", args->calibration,
+                  "emulated clock: host calibration file (default: $ENAVI_CALIBRATION, else "
+                  "$XDG_STATE_HOME/enavi/calibration.json or ~/.local/state/enavi/calibration.json)");
   fly->add_option("--cost", args->spec.cost, "virtual clock cost mode: model (work counts) or measured (host CPU)")
       ->capture_default_str()
       ->check(CLI::IsMember({"model", "measured"}));
