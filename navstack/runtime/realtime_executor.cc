@@ -171,6 +171,13 @@ const TaskStats& RealtimeExecutor::stats(TaskId task) const {
   return copy[static_cast<int>(task)];
 }
 
+std::array<double, kTaskCount> RealtimeExecutor::ExecutionWallSeconds() const {
+  std::array<double, kTaskCount> out{};
+  std::lock_guard l(mutex_);
+  for (int i = 0; i < kTaskCount; ++i) out[i] = slots_[i].wall_s;
+  return out;
+}
+
 std::array<TaskStats, kTaskCount> RealtimeExecutor::AllStats() const {
   std::array<TaskStats, kTaskCount> out;
   std::lock_guard l(mutex_);
@@ -303,14 +310,16 @@ void RealtimeExecutor::WorkerLoop(int worker) {
     JobFn fn = s.fn;
     l.unlock();
 
-    double cpu = 0.0;
+    double cpu = 0.0, wall = 0.0;
     bool ok = true;
     JobOutput out;
     try {
       std::shared_lock job(job_lock_);
+      const auto wall0 = Clock::now();
       const double cpu0 = ThreadCpuSeconds();
       out = fn();
       cpu += ThreadCpuSeconds() - cpu0;
+      wall += Seconds(Clock::now() - wall0);
     } catch (const std::exception& e) {
       Fail(std::string(TaskName(static_cast<TaskId>(task))) + " job: " + e.what());
       ok = false;
@@ -328,6 +337,7 @@ void RealtimeExecutor::WorkerLoop(int worker) {
       f.stats.cost_max_s = std::max(f.stats.cost_max_s, cost);
       f.stats.cost_recent_s = f.stats.completed == 1 ? cost : 0.75 * f.stats.cost_recent_s + 0.25 * cost;
       f.stats.host_cpu_s += cpu;
+      f.wall_s += wall;
       if (f.pending_trigger) {
         const double d = *f.pending_trigger;
         f.pending_trigger.reset();
@@ -340,9 +350,11 @@ void RealtimeExecutor::WorkerLoop(int worker) {
       std::unique_lock commit(job_lock_);
       const double waited = Seconds(Clock::now() - wait0);
       try {
+        const auto wall0 = Clock::now();
         const double cpu0 = ThreadCpuSeconds();
         out.commit();
         cpu += ThreadCpuSeconds() - cpu0;
+        wall += Seconds(Clock::now() - wall0);
       } catch (const std::exception& e) {
         Fail(std::string(TaskName(static_cast<TaskId>(task))) + " commit: " + e.what());
       }
@@ -362,8 +374,10 @@ void RealtimeExecutor::WorkerLoop(int worker) {
         }
       }
       commit.unlock();
+      if (ok && options_.observer) options_.observer(static_cast<TaskId>(task), out.work, cpu);
       l.lock();
     } else {
+      if (ok && options_.observer) options_.observer(static_cast<TaskId>(task), out.work, cpu);
       l.lock();
       finish();
     }

@@ -66,6 +66,9 @@ struct RealtimeExecutorOptions {
   std::function<void(int worker)> on_worker_start;
   /// Runs after each commit, still under the exclusive JobLock (e.g. publish the stack's outputs).
   std::function<void(TaskId task)> after_commit;
+  /// Sees every finished job: its work counts and the host CPU time of its code and commit
+  /// (on the worker thread, no lock held).
+  JobObserver observer;
 };
 
 /// Time commits and the stack's other writers spent waiting for running jobs.
@@ -113,6 +116,10 @@ class RealtimeExecutor final : public TaskExecutor {
   std::vector<pid_t> WorkerTids() const;
   pid_t ReleaseThreadTid() const;
   std::array<TaskStats, kTaskCount> AllStats() const;
+  /// Wall seconds each task's jobs spent executing (code and commit, not waiting for a worker
+  /// or the lock): against host_cpu_s x dilation / speed it shows whether a job ran at the
+  /// board's speed (1.0) or was held back further by a busy host (> 1).
+  std::array<double, kTaskCount> ExecutionWallSeconds() const;
   JobLockStats lock_stats() const;
   /// What the first job or commit that threw said; empty while none did. After a throw no
   /// further jobs start: the stack's state is not trustworthy any more.
@@ -131,6 +138,7 @@ class RealtimeExecutor final : public TaskExecutor {
     std::optional<Job> job;
     std::optional<double> pending_trigger;
     TaskStats stats;
+    double wall_s = 0;
   };
 
   double NowLocked() const;

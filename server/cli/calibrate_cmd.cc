@@ -85,15 +85,17 @@ nlohmann::json BoardTableJson(const board::HostCalibration& cal) {
   nlohmann::json rows = nlohmann::json::array();
   for (const std::string& id : board::KnownBoards()) {
     const board::BoardEmulation e = board::DescribeBoardEmulation(board::LoadBoard(id), cal, EmulationCpusFree());
-    nlohmann::json wcet;
+    nlohmann::json wcet, p99;
     for (const auto& [task, s] : e.wcet_s) wcet[task] = s;
+    for (const auto& [task, s] : e.p99_s) p99[task] = s;
     rows.push_back({{"board", e.board},
                     {"cores", e.cores},
                     {"speed_vs_host", e.speed_vs_host},
                     {"emulable", e.emulable},
                     {"quota_cpus_k1", e.quota_cpus_k1},
                     {"min_dilation", e.min_dilation},
-                    {"wcet_s", wcet}});
+                    {"wcet_s", wcet},
+                    {"p99_s", p99}});
   }
   return rows;
 }
@@ -102,22 +104,29 @@ void PrintBoardTable(const board::HostCalibration& cal) {
   const char* tasks[] = {"perception", "planning", "collision", "difference", "eci", "adapter"};
   std::printf("boards on this host (speed %.3f x the reference core, %.2f host CPUs for emulations):\n",
               cal.relative_speed, EmulationCpusFree());
-  std::printf("  %-6s %5s %8s %10s %6s   WCET ms:", "board", "cores", "speed", "quota k=1", "min k");
-  for (const char* t : tasks) std::printf(" %10s", t);
+  std::printf("  %-6s %5s %8s %10s %6s   job ms, p99 / max:", "board", "cores", "speed", "quota k=1", "min k");
+  for (const char* t : tasks) std::printf(" %13s", t);
   std::printf("\n");
   for (const std::string& id : board::KnownBoards()) {
     const board::BoardEmulation e = board::DescribeBoardEmulation(board::LoadBoard(id), cal, EmulationCpusFree());
-    std::printf("  %-6s %5d %8.3f %10.2f %6s           ", e.board.c_str(), e.cores, e.speed_vs_host, e.quota_cpus_k1,
-                e.emulable ? std::to_string(e.min_dilation).substr(0, 4).c_str() : "n/a");
+    std::printf("  %-6s %5d %8.3f %10.2f %6s                     ", e.board.c_str(), e.cores, e.speed_vs_host,
+                e.quota_cpus_k1, e.emulable ? std::to_string(e.min_dilation).substr(0, 4).c_str() : "n/a");
     for (const char* t : tasks) {
       const auto it = e.wcet_s.find(t);
       if (it == e.wcet_s.end()) {
-        std::printf(" %10s", "-");
+        std::printf(" %13s", "-");
       } else {
-        std::printf(" %10.2f", 1e3 * it->second);
+        char cell[32];
+        std::snprintf(cell, sizeof cell, "%.1f/%.1f", 1e3 * e.p99_s.at(t), 1e3 * it->second);
+        std::printf(" %13s", cell);
       }
     }
-    std::printf("%s\n", e.emulable ? "" : "  (cores faster than the host's: virtual clock only)");
+    if (!e.emulable) {
+      std::printf("  (cores faster than the host's: virtual clock only)");
+    } else if (e.speed_vs_host > 1.0) {
+      std::printf("  (%.0f %% faster than the host: emulated at host speed)", 100 * (e.speed_vs_host - 1));
+    }
+    std::printf("\n");
   }
 }
 

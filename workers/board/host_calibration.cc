@@ -197,7 +197,10 @@ BoardEmulation DescribeBoardEmulation(const BoardProfile& board, const HostCalib
                        : 0.0;
   // A job that took x host seconds takes x / speed on the board.
   for (const auto& [task, t] : host.tasks)
-    if (t.jobs > 0) e.wcet_s[task] = t.max_s / e.speed_vs_host;
+    if (t.jobs > 0) {
+      e.wcet_s[task] = t.max_s / e.speed_vs_host;
+      e.p99_s[task] = t.p99_s / e.speed_vs_host;
+    }
   return e;
 }
 

@@ -88,6 +88,8 @@ struct BoardEmulation {
   double min_dilation = 1.0;   ///< smallest k that fits `host_cpus_free`
   /// Board WCET per task (max job time of the calibration flights on this board), seconds.
   std::map<std::string, double> wcet_s;
+  /// The same for the 99th percentile (the max is often one map rebuild).
+  std::map<std::string, double> p99_s;
 };
 /// `host_cpus_free`: host CPUs an emulation may use (e.g. HostCpus - 0.25 for the simulator).
 BoardEmulation DescribeBoardEmulation(const BoardProfile& board, const HostCalibration& host,

@@ -9,12 +9,15 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -124,6 +127,7 @@ struct ChildArgs {
   double speed = 1.0;  // board core speed / host core speed
   bool sched_deadline = true;
   std::int64_t server_period_ns = 10'000'000;
+  navstack::WorkCountCostModel::Coefficients board_costs;  // the virtual clock's prices
   LinkShared* shared = nullptr;
   int channel_fd = -1;
   int go_fd = -1;
@@ -252,6 +256,15 @@ int RunNavstackChild(const ChildArgs& a) {
     NameThread(name.c_str());
     if (a.sched_deadline) sched[static_cast<std::size_t>(w)] = navstack::EnterDeadline(server);
   };
+  // Every job priced as the virtual clock would: the in-situ check of the cost model.
+  const navstack::WorkCountCostModel model(a.board_costs);
+  std::mutex model_mutex;
+  std::array<double, navstack::kTaskCount> model_s{};
+  eo.observer = [&](TaskId task, const navstack::WorkCounts& work, double cpu) {
+    const double priced = model.JobSeconds(task, work, cpu);
+    std::lock_guard l(model_mutex);
+    model_s[static_cast<int>(task)] += priced;
+  };
   navstack::RealtimeExecutor* exec_ptr = nullptr;
   eo.after_commit = [&](TaskId) { publisher.Publish(*nav, exec_ptr->now()); };
   navstack::RealtimeExecutor exec(eo);
@@ -285,6 +298,22 @@ int RunNavstackChild(const ChildArgs& a) {
   shared->child_state.store(kRunning, std::memory_order_release);
 
   auto stats = std::make_unique<StatsWire>();
+  auto publish_stats = [&] {
+    const auto all = exec.AllStats();
+    const auto wall = exec.ExecutionWallSeconds();
+    for (int i = 0; i < navstack::kTaskCount; ++i) {
+      stats->tasks[i] = all[i];
+      stats->execution_wall_s[i] = wall[i];
+    }
+    {
+      std::lock_guard l(model_mutex);
+      for (int i = 0; i < navstack::kTaskCount; ++i) stats->model_board_s[i] = model_s[i];
+    }
+    stats->lock = exec.lock_stats();
+    stats->child_now = exec.now();
+    ++stats->publications;
+    shared->stats.Write(*stats);
+  };
   board::OdometryMsg odom;
   std::uint32_t odom_seq = 0;
   bool odom_pending = false;
@@ -316,20 +345,11 @@ int RunNavstackChild(const ChildArgs& a) {
       odom_pending = false;
       ++stats->odometry_applied;
     }
-    const auto all = exec.AllStats();
-    for (int i = 0; i < navstack::kTaskCount; ++i) stats->tasks[i] = all[i];
-    stats->lock = exec.lock_stats();
-    stats->child_now = exec.now();
-    ++stats->publications;
-    shared->stats.Write(*stats);
+    publish_stats();
     channel.Heartbeat();
   }
   exec.Stop();
-  const auto all = exec.AllStats();
-  for (int i = 0; i < navstack::kTaskCount; ++i) stats->tasks[i] = all[i];
-  stats->lock = exec.lock_stats();
-  stats->child_now = exec.now();
-  shared->stats.Write(*stats);
+  publish_stats();
   shared->child_state.store(kDone, std::memory_order_release);
   return 0;
 }
@@ -383,6 +403,10 @@ struct EmulatedNavLink::Impl {
 
   // Resources, released in reverse order by Shutdown().
   bool signals_installed = false;
+  // The simulator's own scheduling while the episode runs (restored by Shutdown()).
+  bool sim_fifo = false;
+  int sim_old_policy = SCHED_OTHER;
+  sched_param sim_old_param{};
   std::unique_ptr<board::CgroupManager> manager;
   std::unique_ptr<board::EpisodeCgroup> group;
   std::optional<board::ShmChannel> channel;
@@ -390,9 +414,22 @@ struct EmulatedNavLink::Impl {
   pid_t child = -1;
   std::string child_exit;  // how the child ended, once reaped
 
-  // Running state.
+  // Running state. The simulator runs `lead` ahead of the wall clock so that a frame is
+  // rendered before its capture time; the publisher thread hands frames and odometry to the
+  // navstack exactly at their due time epoch + t x k.
   Clock::time_point epoch{};
   bool epoch_set = false;
+  Clock::duration lead{};
+  Clock::duration frame_early{};
+  std::thread publisher;
+  mutable std::mutex pub_mutex;
+  std::condition_variable pub_cv;
+  bool pub_stop = false;
+  bool frame_staged = false;  // the channel's back slot holds a frame waiting for its due time
+  Clock::time_point frame_due{};
+  std::deque<std::pair<Clock::time_point, board::OdometryMsg>> odometry_queue;
+  std::int64_t frames_published = 0, frames_late = 0;
+  double frame_late_sum_s = 0, frame_late_max_s = 0;
   double last_t = 0;
   ReferenceMirror mirror{navstack::PlannerOptions{}};
   std::unique_ptr<ReferenceWire> reference_wire = std::make_unique<ReferenceWire>();
@@ -416,6 +453,12 @@ struct EmulatedNavLink::Impl {
 
   void Start();
   void Shutdown();
+  void SetEpoch();
+  Clock::time_point Due(double t) const {
+    return epoch + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(t * dilation));
+  }
+  void PublisherLoop();
+  void StopPublisher();
   void CheckSignal(const char* where) const {
     if (const int sig = g_signal.load()) {
       throw std::runtime_error(std::string("emulated clock: interrupted by ") + strsignal(sig) + " " + where);
@@ -516,6 +559,7 @@ void EmulatedNavLink::Impl::Start() {
   args.speed = speed;
   args.sched_deadline = emulation.sched_deadline;
   args.server_period_ns = emulation.server_period_us * 1000;
+  args.board_costs = board::BoardCoefficients(board, board::LoadReferenceCosts());
   args.shared = shared;
   args.channel_fd = channel->fd();
   args.go_fd = go[0];
@@ -577,6 +621,87 @@ void EmulatedNavLink::Impl::Start() {
   TakeOutputs();
   if (!mirror.has_message()) throw std::runtime_error("emulated clock: the navstack process published no reference");
   next_liveness_check = next_sweep = Clock::now();
+  // The simulator must keep its schedule whatever else runs on the host: its paced threads run
+  // SCHED_FIFO (above every CFS task, below the board's SCHED_DEADLINE servers). The navstack
+  // process was forked before, so it does not inherit this.
+  if (emulation.simulator_fifo) {
+    pthread_getschedparam(pthread_self(), &sim_old_policy, &sim_old_param);
+    sched_param fifo{};
+    fifo.sched_priority = 1;
+    const int err = pthread_setschedparam(pthread_self(), SCHED_FIFO, &fifo);
+    sim_fifo = err == 0;
+    notes["emulation.simulator"] =
+        sim_fifo ? "simulator threads SCHED_FIFO 1 while paced (outside the board's groups)"
+                 : std::string("simulator threads SCHED_OTHER (SCHED_FIFO refused: ") + std::strerror(err) +
+                       "); a busy host can delay frames, see emulation.pacing";
+  } else {
+    notes["emulation.simulator"] = "simulator threads SCHED_OTHER (option)";
+  }
+  lead = std::chrono::microseconds(emulation.lead_us);
+  frame_early = std::chrono::microseconds(emulation.frame_early_us);
+  publisher = std::thread([this] { PublisherLoop(); });
+}
+
+void EmulatedNavLink::Impl::SetEpoch() {
+  if (epoch_set) return;
+  // Sim time 0 a little ahead, so the navstack's first releases are not already late and the
+  // simulator has its lead from the start.
+  epoch = Clock::now() + lead + std::chrono::milliseconds(5);
+  epoch_set = true;
+  shared->epoch_ns.store(ToNs(epoch), std::memory_order_release);
+}
+
+void EmulatedNavLink::Impl::PublisherLoop() {
+  pthread_setname_np(pthread_self(), "sim-publisher");
+  if (sim_fifo) {
+    sched_param fifo{};
+    fifo.sched_priority = 1;
+    pthread_setschedparam(pthread_self(), SCHED_FIFO, &fifo);
+  }
+  std::unique_lock l(pub_mutex);
+  while (!pub_stop) {
+    Clock::time_point next = Clock::time_point::max();
+    if (frame_staged) next = frame_due;
+    if (!odometry_queue.empty()) next = std::min(next, odometry_queue.front().first);
+    if (next == Clock::time_point::max()) {
+      pub_cv.wait(l);
+      continue;
+    }
+    const Clock::time_point now = Clock::now();
+    if (now < next) {
+      pub_cv.wait_until(l, next);
+      continue;
+    }
+    // Odometry first: a frame's consumer should see the state of its capture instant.
+    bool have_odometry = false;
+    board::OdometryMsg odometry;
+    while (!odometry_queue.empty() && odometry_queue.front().first <= now) {
+      odometry = odometry_queue.front().second;
+      odometry_queue.pop_front();
+      have_odometry = true;
+    }
+    if (have_odometry) channel->PublishOdometry(odometry);
+    if (frame_staged && frame_due <= now) {
+      channel->PublishFrame();
+      frame_staged = false;
+      ++frames_published;
+      const double late = std::max(0.0, std::chrono::duration<double>(Clock::now() - (frame_due + frame_early)).count());
+      frame_late_sum_s += late;
+      frame_late_max_s = std::max(frame_late_max_s, late);
+      if (late > 1e-3) ++frames_late;
+      pub_cv.notify_all();
+    }
+  }
+}
+
+void EmulatedNavLink::Impl::StopPublisher() {
+  if (!publisher.joinable()) return;
+  {
+    std::lock_guard l(pub_mutex);
+    pub_stop = true;
+  }
+  pub_cv.notify_all();
+  publisher.join();
 }
 
 void EmulatedNavLink::Impl::CheckChild() {
@@ -619,6 +744,11 @@ void EmulatedNavLink::Impl::SampleProc() const {
 }
 
 void EmulatedNavLink::Impl::Shutdown() {
+  StopPublisher();
+  if (sim_fifo) {
+    pthread_setschedparam(pthread_self(), sim_old_policy, &sim_old_param);
+    sim_fifo = false;
+  }
   if (child > 0) {
     if (shared != nullptr) shared->stop.store(1);
     // A job in flight may take a while at board speed; the results are already in.
@@ -682,22 +812,56 @@ EmulatedNavLink::~EmulatedNavLink() = default;
 pid_t EmulatedNavLink::navstack_pid() const { return impl_->child; }
 
 void EmulatedNavLink::OnState(const navstack::VehicleState& state) {
-  impl_->channel->PublishOdometry(board::ShmChannel::ToMsg(state));
+  Impl& m = *impl_;
+  m.SetEpoch();
+  {
+    std::lock_guard l(m.pub_mutex);
+    m.odometry_queue.emplace_back(m.Due(state.t), board::ShmChannel::ToMsg(state));
+  }
+  m.pub_cv.notify_all();
 }
 
-void EmulatedNavLink::OnFrame(navstack::DepthFramePtr frame) { impl_->channel->PublishFrame(*frame); }
+void EmulatedNavLink::OnFrame(navstack::DepthFramePtr frame) {
+  Impl& m = *impl_;
+  m.SetEpoch();
+  {
+    // The previous frame is due long before this one is captured; wait if it is not out yet.
+    std::unique_lock l(m.pub_mutex);
+    m.pub_cv.wait(l, [&] { return !m.frame_staged || m.pub_stop; });
+  }
+  if (frame->image.width != m.channel->width() || frame->image.height != m.channel->height())
+    throw std::invalid_argument("emulated clock: frame is " + std::to_string(frame->image.width) + " x " +
+                                std::to_string(frame->image.height) + ", the channel " +
+                                std::to_string(m.channel->width()) + " x " + std::to_string(m.channel->height()));
+  // Rendered ahead of time: copied into the channel's back slot now, published at its due time.
+  const board::FrameSlot slot = m.channel->BeginFrame();
+  board::FrameHeader& h = *slot.header;
+  h.t = frame->t;
+  const Eigen::Vector3d p = frame->X_WC.translation();
+  const Eigen::Quaterniond q(frame->X_WC.rotation());
+  for (int i = 0; i < 3; ++i) {
+    h.p_WC[i] = p[i];
+    h.v_W[i] = frame->v_W[i];
+  }
+  h.q_WC[0] = q.w();
+  h.q_WC[1] = q.x();
+  h.q_WC[2] = q.y();
+  h.q_WC[3] = q.z();
+  std::memcpy(slot.depth, frame->image.data.data(), frame->image.data.size() * sizeof(float));
+  {
+    std::lock_guard l(m.pub_mutex);
+    m.frame_staged = true;
+    m.frame_due = m.Due(frame->t) - m.frame_early;
+  }
+  m.pub_cv.notify_all();
+}
 
 void EmulatedNavLink::AdvanceTo(double t) {
   Impl& m = *impl_;
   m.CheckSignal("during the episode");
-  if (!m.epoch_set) {
-    // Sim time 0 a little ahead, so the navstack's first releases are not already late.
-    m.epoch = Clock::now() + std::chrono::milliseconds(5);
-    m.epoch_set = true;
-    m.shared->epoch_ns.store(ToNs(m.epoch), std::memory_order_release);
-  }
-  const Clock::time_point due =
-      m.epoch + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(t * m.dilation));
+  m.SetEpoch();
+  // The simulator may run `lead` ahead: what it computes for t reaches the navstack at t.
+  const Clock::time_point due = m.Due(t) - m.lead;
   const Clock::time_point now = Clock::now();
   ++m.steps;
   if (now > due) {
@@ -785,16 +949,47 @@ NavAccounting EmulatedNavLink::Accounting() const {
     }
     acc.notes["emulation.proc_util"] = "navstack process " + Fixed(100.0 * total / m.speed / T, 1) +
                                        " % of a board core over the flight (/proc per thread: " + per_thread + ")";
+    std::int64_t frames = 0, late = 0;
+    double late_sum = 0, late_max = 0;
+    {
+      std::lock_guard l(m.pub_mutex);
+      frames = m.frames_published;
+      late = m.frames_late;
+      late_sum = m.frame_late_sum_s;
+      late_max = m.frame_late_max_s;
+    }
     acc.notes["emulation.pacing"] =
-        "simulator behind schedule by > 1 ms at " + std::to_string(m.steps_late) + " of " + std::to_string(m.steps) +
-        " steps (mean lag " + Fixed(m.steps > 0 ? 1e3 * m.lag_sum_s / static_cast<double>(m.steps) : 0.0, 3) +
-        " ms, max " + Fixed(1e3 * m.lag_max_s, 1) + " ms wall)";
+        "simulator " + Fixed(1e3 * std::chrono::duration<double>(m.lead).count(), 0) +
+        " ms wall ahead of the navstack; behind that schedule by > 1 ms at " + std::to_string(m.steps_late) + " of " +
+        std::to_string(m.steps) + " steps (mean " +
+        Fixed(m.steps > 0 ? 1e3 * m.lag_sum_s / static_cast<double>(m.steps) : 0.0, 3) + " ms, max " +
+        Fixed(1e3 * m.lag_max_s, 1) + " ms); frames handed over after their capture time x k (by > 1 ms) " +
+        std::to_string(late) + " of " + std::to_string(frames) + " (mean " +
+        Fixed(frames > 0 ? 1e3 * late_sum / static_cast<double>(frames) : 0.0, 2) + " ms, max " +
+        Fixed(1e3 * late_max, 1) + " ms wall)";
   }
   const StatsWire& s = *m.stats;
   acc.notes["emulation.ipc"] = std::to_string(s.frames_received) + " frames taken, " +
                                std::to_string(s.frames_dropped) + " overwritten unread; " +
                                std::to_string(s.odometry_applied) + " odometry updates applied" +
                                (m.events_lost > 0 ? "; " + std::to_string(m.events_lost) + " events lost" : "");
+  {
+    // Did each job run at the board's speed, and does the cost model price it as measured?
+    std::string speed_check, cost_check;
+    for (int i = 0; i < navstack::kTaskCount; ++i) {
+      const navstack::TaskStats& t = s.tasks[i];
+      if (t.completed == 0 || t.host_cpu_s <= 0) continue;
+      const std::string name(navstack::TaskName(static_cast<TaskId>(i)));
+      const double expected_wall = t.host_cpu_s * m.dilation / m.speed;
+      speed_check += (speed_check.empty() ? "" : ", ") + name + " " + Fixed(s.execution_wall_s[i] / expected_wall, 3);
+      cost_check += (cost_check.empty() ? "" : ", ") + name + " " + Fixed(s.model_board_s[i] / t.busy_s, 3);
+    }
+    acc.notes["emulation.speed_check"] =
+        "job execution wall time / (its CPU time x k / speed), 1 = exactly one board core: " + speed_check;
+    acc.notes["emulation.cost_check"] =
+        "the virtual clock's cost model prices the same jobs at this fraction of their measured board time: " +
+        cost_check;
+  }
   acc.notes["emulation.lock"] = std::to_string(s.lock.commits) + " commits waited " +
                                 Fixed(1e3 * s.lock.commit_wait_s, 1) + " ms in total (longest " +
                                 Fixed(1e3 * s.lock.commit_wait_max_s, 1) + " ms wall) for running jobs";

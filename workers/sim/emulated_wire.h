@@ -82,6 +82,11 @@ class ReferenceMirror {
 struct StatsWire {
   navstack::TaskStats tasks[navstack::kTaskCount];
   navstack::JobLockStats lock;
+  /// Wall seconds the jobs executed (RealtimeExecutor::ExecutionWallSeconds).
+  double execution_wall_s[navstack::kTaskCount] = {};
+  /// What the virtual clock's cost model charges for the same jobs on this board (their work
+  /// counts priced per unit), board seconds: the in-situ check of the cost model.
+  double model_board_s[navstack::kTaskCount] = {};
   double child_now = 0;            ///< the stack's sim time at this snapshot
   std::int64_t frames_received = 0;
   std::int64_t frames_dropped = 0;  ///< published but overwritten before the stack took them
