@@ -33,6 +33,7 @@ struct FlyArgs {
   std::string rollout_file;
   double dilation = 0.0;  // emulated clock; 0 (absent): the smallest that fits the host
   std::string calibration;
+  sim::EmulationOptions emulation;  // experiments: hidden flags
 };
 
 api::Vec3 ParseVec3(const std::string& text, const char* flag) {
@@ -111,6 +112,7 @@ void Run(FlyArgs args) {
   sim::EpisodeOptions options;
   navstack::rl::Rollout rollout;
   if (!args.rollout_file.empty()) options.rollout = &rollout;
+  options.emulation = args.emulation;
   options.emulation.calibration_file = args.calibration;
   // On the command line an absent --dilation means "the smallest that fits" (a spec file says).
   if (args.spec_file.empty()) spec.dilation = args.dilation;
@@ -187,6 +189,12 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--calibration", args->calibration,
                   "emulated clock: host calibration file (default: $ENAVI_CALIBRATION, else "
                   "$XDG_STATE_HOME/enavi/calibration.json or ~/.local/state/enavi/calibration.json)");
+  // Experiments with the emulation itself (defaults documented in workers/sim/emulation_options.h).
+  fly->add_option("--emulation-server-period-us", args->emulation.server_period_us)->group("")->check(CLI::Range(100, 1000000));
+  fly->add_option("--emulation-lead-us", args->emulation.lead_us)->group("")->check(CLI::Range(0, 1000000));
+  fly->add_option("--emulation-cpus", args->emulation.cpus)->group("");
+  fly->add_flag("!--emulation-no-deadline", args->emulation.sched_deadline)->group("");
+  fly->add_flag("!--emulation-no-fifo", args->emulation.simulator_fifo)->group("");
   fly->add_option("--cost", args->spec.cost, "virtual clock cost mode: model (work counts) or measured (host CPU)")
       ->capture_default_str()
       ->check(CLI::IsMember({"model", "measured"}));
