@@ -114,8 +114,9 @@ void Run(FlyArgs args) {
   if (!args.rollout_file.empty()) options.rollout = &rollout;
   options.emulation = args.emulation;
   options.emulation.calibration_file = args.calibration;
-  // On the command line an absent --dilation means "the smallest that fits" (a spec file says).
-  if (args.spec_file.empty()) spec.dilation = args.dilation;
+  // Emulated clock on the command line: an absent --dilation means "the smallest that fits"
+  // (spec.dilation 0; the value used is in the result's notes). A spec file says what it wants.
+  if (args.spec_file.empty() && (spec.clock == "emulated" || args.dilation > 0)) spec.dilation = args.dilation;
   const bool tty = isatty(STDERR_FILENO) && !args.json;
   if (tty) {
     options.progress = [](double t, double distance) {
