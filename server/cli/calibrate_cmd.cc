@@ -8,6 +8,7 @@
 #include <ctime>
 #include <fstream>
 #include <memory>
+#include <sched.h>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -17,6 +18,8 @@
 #include "server/cli/commands.h"
 #include "workers/board/board_profile.h"
 #include "workers/board/calibration.h"
+#include "workers/board/cgroup.h"
+#include "workers/board/host_calibration.h"
 #include "workers/sim/episode.h"
 
 namespace enavi::cli {
@@ -26,6 +29,10 @@ struct CalibrateArgs {
   std::string write_reference;
   double episode_seconds = 15.0;
   bool json = false;
+  // Host calibration file (emulated clock): where, whether to write it, or only check it.
+  std::string calibration;
+  bool no_store = false;
+  bool status = false;
 };
 
 std::string CpuModel() {
@@ -36,7 +43,130 @@ std::string CpuModel() {
   return "unknown";
 }
 
+
+// --- Host calibration file and board emulation table (emulated clock, DESIGN.md section 4) ---
+
+// Host CPUs an emulation may use: this process's CPUs minus what the simulator keeps.
+double EmulationCpusFree() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  const double cpus = sched_getaffinity(0, sizeof(set), &set) == 0 ? CPU_COUNT(&set) : 1.0;
+  return cpus - board::CgroupOptions{}.host_reserve_cpus;
+}
+
+std::string UtcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+// The host calibration from this run's fit and job samples.
+board::HostCalibration MakeHostCalibration(const board::CostFit& fit, double speed, const board::ReferenceCosts& reference,
+                                           const std::vector<board::JobSample>& samples) {
+  board::HostCalibration cal;
+  cal.relative_speed = speed;
+  cal.fitted = fit.costs.ns;
+  cal.samples = fit.samples;
+  cal.r2 = fit.r2;
+  cal.cpu_model = board::HostCpuModel();
+  cal.kernel = board::HostKernel();
+  cal.date = UtcNow();
+  cal.reference_calibration_id = reference.calibration_id;
+  std::map<std::string, std::vector<double>> times;
+  for (const board::JobSample& s : samples) times[std::string(navstack::TaskName(s.task))].push_back(s.host_cpu_s);
+  for (auto& [task, t] : times) cal.tasks[task] = board::SummariseTimes(std::move(t));
+  return cal;
+}
+
+nlohmann::json BoardTableJson(const board::HostCalibration& cal) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const std::string& id : board::KnownBoards()) {
+    const board::BoardEmulation e = board::DescribeBoardEmulation(board::LoadBoard(id), cal, EmulationCpusFree());
+    nlohmann::json wcet, p99;
+    for (const auto& [task, s] : e.wcet_s) wcet[task] = s;
+    for (const auto& [task, s] : e.p99_s) p99[task] = s;
+    rows.push_back({{"board", e.board},
+                    {"cores", e.cores},
+                    {"speed_vs_host", e.speed_vs_host},
+                    {"emulable", e.emulable},
+                    {"quota_cpus_k1", e.quota_cpus_k1},
+                    {"min_dilation", e.min_dilation},
+                    {"wcet_s", wcet},
+                    {"p99_s", p99}});
+  }
+  return rows;
+}
+
+void PrintBoardTable(const board::HostCalibration& cal) {
+  const char* tasks[] = {"perception", "planning", "collision", "difference", "eci", "adapter"};
+  std::printf("boards on this host (speed %.3f x the reference core, %.2f host CPUs for emulations):\n",
+              cal.relative_speed, EmulationCpusFree());
+  std::printf("  %-6s %5s %8s %10s %6s   job ms, p99 / max:", "board", "cores", "speed", "quota k=1", "min k");
+  for (const char* t : tasks) std::printf(" %13s", t);
+  std::printf("\n");
+  for (const std::string& id : board::KnownBoards()) {
+    const board::BoardEmulation e = board::DescribeBoardEmulation(board::LoadBoard(id), cal, EmulationCpusFree());
+    std::printf("  %-6s %5d %8.3f %10.2f %6s                     ", e.board.c_str(), e.cores, e.speed_vs_host,
+                e.quota_cpus_k1, e.emulable ? std::to_string(e.min_dilation).substr(0, 4).c_str() : "n/a");
+    for (const char* t : tasks) {
+      const auto it = e.wcet_s.find(t);
+      if (it == e.wcet_s.end()) {
+        std::printf(" %13s", "-");
+      } else {
+        char cell[32];
+        std::snprintf(cell, sizeof cell, "%.1f/%.1f", 1e3 * e.p99_s.at(t), 1e3 * it->second);
+        std::printf(" %13s", cell);
+      }
+    }
+    if (!e.emulable) {
+      std::printf("  (cores faster than the host's: virtual clock only)");
+    } else if (e.speed_vs_host > 1.0) {
+      std::printf("  (%.0f %% faster than the host: emulated at host speed)", 100 * (e.speed_vs_host - 1));
+    }
+    std::printf("\n");
+  }
+}
+
+// Writes the host calibration unless --no-store; returns the path written (empty if none).
+std::string StoreHostCalibration(const CalibrateArgs& args, const board::HostCalibration& cal) {
+  if (args.no_store) return {};
+  const std::string path = board::CalibrationPath(args.calibration);
+  board::SaveHostCalibration(cal, path);
+  return path;
+}
+
+// `enavi calibrate --status`: no flights; is the stored calibration usable here, and what it gives.
+void RunStatus(const CalibrateArgs& args) {
+  const board::CalibrationCheck check = board::CheckHostCalibration(board::CalibrationPath(args.calibration));
+  if (args.json) {
+    nlohmann::json j;
+    j["path"] = check.path;
+    j["valid"] = check.ok();
+    j["message"] = check.message;
+    if (check.calibration) {
+      const board::HostCalibration& c = *check.calibration;
+      j["relative_speed"] = c.relative_speed;
+      j["cpu_model"] = c.cpu_model;
+      j["kernel"] = c.kernel;
+      j["date"] = c.date;
+      j["reference_calibration_id"] = c.reference_calibration_id;
+      if (check.ok()) j["boards"] = BoardTableJson(c);
+    }
+    std::printf("%s\n", j.dump(2).c_str());
+  } else if (check.ok()) {
+    const board::HostCalibration& c = *check.calibration;
+    std::printf("host calibration %s: valid (%s, kernel %s, %s, reference %s)\n", check.path.c_str(),
+                c.cpu_model.c_str(), c.kernel.c_str(), c.date.c_str(), c.reference_calibration_id.c_str());
+    PrintBoardTable(c);
+  }
+  if (!check.ok()) throw std::invalid_argument(check.message);
+}
+
 void Run(const CalibrateArgs& args) {
+  if (args.status) return RunStatus(args);
   // A mix of scenes and resolutions so every unit of work varies independently enough to fit.
   std::vector<board::JobSample> samples;
   sim::EpisodeOptions options;
@@ -105,6 +235,10 @@ void Run(const CalibrateArgs& args) {
   for (const auto& [task, q] : fit.per_task)
     j["tasks"][task] = {{"jobs", q.jobs}, {"measured_s", q.measured_s}, {"predicted_s", q.predicted_s}};
   j["unobserved_units"] = fit.unobserved_units;
+  const board::HostCalibration host = MakeHostCalibration(fit, speed, reference, samples);
+  const std::string stored = StoreHostCalibration(args, host);
+  j["host_calibration_file"] = stored;
+  j["boards"] = BoardTableJson(host);
   if (args.json) {
     std::printf("%s\n", j.dump(2).c_str());
     return;
@@ -118,6 +252,8 @@ void Run(const CalibrateArgs& args) {
   std::printf("  %-12s %6s %12s %12s\n", "task", "jobs", "measured s", "model s");
   for (const auto& [task, q] : fit.per_task)
     std::printf("  %-12s %6d %12.3f %12.3f\n", task.c_str(), q.jobs, q.measured_s, q.predicted_s);
+  PrintBoardTable(host);
+  if (!stored.empty()) std::printf("host calibration written to %s\n", stored.c_str());
 }
 
 }  // namespace
@@ -131,6 +267,12 @@ void RegisterCalibrateCommand(CLI::App& app) {
   cmd->add_option("--write-reference", args->write_reference,
                   "write the fit as the reference costs file (workers/board/profiles/reference_costs.yaml)");
   cmd->add_flag("--json", args->json, "print the fit as JSON");
+  cmd->add_option("--calibration", args->calibration,
+                  "host calibration file to write or check (default: $ENAVI_CALIBRATION, else "
+                  "$XDG_STATE_HOME/enavi/calibration.json or ~/.local/state/enavi/calibration.json)");
+  cmd->add_flag("--no-store", args->no_store, "do not write the host calibration file");
+  cmd->add_flag("--status", args->status,
+                "fly nothing: check the stored host calibration (missing, stale) and print the board table");
   cmd->callback([args] { Run(*args); });
 }
 

@@ -31,6 +31,9 @@ struct FlyArgs {
   bool json = false;
   std::string spec_file, result_file;
   std::string rollout_file;
+  double dilation = 0.0;  // emulated clock; 0 (absent): the smallest that fits the host
+  std::string calibration;
+  sim::EmulationOptions emulation;  // experiments: hidden flags
 };
 
 api::Vec3 ParseVec3(const std::string& text, const char* flag) {
@@ -109,6 +112,11 @@ void Run(FlyArgs args) {
   sim::EpisodeOptions options;
   navstack::rl::Rollout rollout;
   if (!args.rollout_file.empty()) options.rollout = &rollout;
+  options.emulation = args.emulation;
+  options.emulation.calibration_file = args.calibration;
+  // Emulated clock on the command line: an absent --dilation means "the smallest that fits"
+  // (spec.dilation 0; the value used is in the result's notes). A spec file says what it wants.
+  if (args.spec_file.empty() && (spec.clock == "emulated" || args.dilation > 0)) spec.dilation = args.dilation;
   const bool tty = isatty(STDERR_FILENO) && !args.json;
   if (tty) {
     options.progress = [](double t, double distance) {
@@ -175,6 +183,19 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--clock", args->spec.clock, "virtual (sim-time EDF) or emulated (throttled cgroup)")
       ->capture_default_str()
       ->check(CLI::IsMember({"virtual", "emulated"}));
+  fly->add_option("--dilation", args->dilation,
+                  "emulated clock: 1 sim second = K wall seconds, quota divided by K (default: the smallest "
+                  "multiple of 0.25 at which the board fits this host)")
+      ->check(CLI::Range(1.0, 100.0));
+  fly->add_option("--calibration", args->calibration,
+                  "emulated clock: host calibration file (default: $ENAVI_CALIBRATION, else "
+                  "$XDG_STATE_HOME/enavi/calibration.json or ~/.local/state/enavi/calibration.json)");
+  // Experiments with the emulation itself (defaults documented in workers/sim/emulation_options.h).
+  fly->add_option("--emulation-server-period-us", args->emulation.server_period_us)->group("")->check(CLI::Range(100, 1000000));
+  fly->add_option("--emulation-lead-us", args->emulation.lead_us)->group("")->check(CLI::Range(0, 1000000));
+  fly->add_option("--emulation-cpus", args->emulation.cpus)->group("");
+  fly->add_flag("!--emulation-no-deadline", args->emulation.sched_deadline)->group("");
+  fly->add_flag("!--emulation-no-fifo", args->emulation.simulator_fifo)->group("");
   fly->add_option("--cost", args->spec.cost, "virtual clock cost mode: model (work counts) or measured (host CPU)")
       ->capture_default_str()
       ->check(CLI::IsMember({"model", "measured"}));

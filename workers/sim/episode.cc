@@ -11,6 +11,7 @@
 #include "workers/board/board_profile.h"
 #include "workers/sim/depth_camera.h"
 #include "workers/sim/embree_scene.h"
+#include "workers/sim/emulated_nav_link.h"
 #include "workers/sim/episode_config.h"
 #include "workers/sim/flight_recorder.h"
 #include "workers/sim/quadrotor.h"
@@ -73,7 +74,10 @@ std::unique_ptr<NavLink> MakeNavLink(const api::EpisodeSpec& spec, const Episode
   if (spec.clock == "virtual")
     return std::make_unique<VirtualNavLink>(config.nav, threads, config.scheduler.policy, MakeCostModel(spec, board),
                                             initial, options.job_observer);
-  throw std::invalid_argument("clock: '" + spec.clock + "' is not available in this build (known: virtual)");
+  if (spec.clock == "emulated")
+    return std::make_unique<EmulatedNavLink>(config.nav, threads, config.scheduler.policy, board, spec.dilation, initial,
+                                             options.emulation);
+  throw std::invalid_argument("clock: unknown clock '" + spec.clock + "' (known: virtual, emulated)");
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "api/episode.h"
 #include "navstack/rl/rollout.h"
 #include "navstack/runtime/executor.h"
+#include "workers/sim/emulation_options.h"
 #include "worlds/world.h"
 
 namespace enavi::sim {
@@ -36,6 +37,8 @@ struct EpisodeOptions {
   navstack::JobObserver job_observer;
   /// E-Navi training: when set, the Strategy Controller records its decisions and rewards here.
   navstack::rl::Rollout* rollout = nullptr;
+  /// The emulated clock (spec.clock == "emulated"): host calibration file and test knobs.
+  EmulationOptions emulation;
 };
 
 /// Flies `spec` in `world`. Bad specs (unknown board/method, bad overrides) throw

@@ -1,0 +1,224 @@
+// The emulated clock end to end against the running kernel (root; skipped otherwise): an episode
+// whose navstack runs in its own throttled process reaches the goal, the SCHED_DEADLINE path and
+// its fallback are recorded, a killed navstack process ends the episode with an error, SIGINT of
+// `enavi fly` cleans up, and no cgroup with "enavi" in its name is ever left behind.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "workers/board/board_profile.h"
+#include "workers/board/cgroup.h"
+#include "workers/board/host_calibration.h"
+#include "workers/sim/episode.h"
+
+namespace enavi::sim {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+std::vector<std::string> EnaviCgroups() {
+  std::vector<std::string> found;
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator("/sys/fs/cgroup", fs::directory_options::skip_permission_denied, ec);
+       it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (ec) break;
+    if (it->is_directory(ec) && it->path().filename().string().find("enavi") != std::string::npos)
+      found.push_back(it->path().string());
+  }
+  return found;
+}
+
+std::string Join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+// A calibration of this machine as the reference core (what `enavi calibrate` would store on
+// the farm's calibration host), so the tests need no minutes-long calibration run.
+std::string WriteHostCalibration(const fs::path& dir, const std::string& cpu_model) {
+  board::HostCalibration c;
+  c.relative_speed = 1.0;
+  c.cpu_model = cpu_model;
+  c.kernel = board::HostKernel();
+  c.date = "test";
+  c.reference_calibration_id = board::LoadReferenceCosts().calibration_id;
+  const std::string path = (dir / "calibration.json").string();
+  board::SaveHostCalibration(c, path);
+  return path;
+}
+
+api::EpisodeSpec ShortFlight(const std::string& board) {
+  api::EpisodeSpec spec;
+  spec.world = "empty";
+  spec.world_params["length"] = "10";
+  spec.seed = 1;
+  spec.board = board;
+  spec.method = "baseline";
+  spec.clock = "emulated";
+  spec.dilation = 0.0;  // the smallest that fits this host
+  return spec;
+}
+
+class EmulatedClockTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("enavi-emulated-test-" + std::to_string(getpid()));
+    fs::create_directories(dir_);
+    if (geteuid() != 0) GTEST_SKIP() << "the emulated clock needs root (cgroups, SCHED_DEADLINE)";
+    const board::CgroupLayout layout = board::DetectCgroups();
+    if (layout.version == board::CgroupVersion::kNone) GTEST_SKIP() << "no writable cgroup hierarchy: " << layout.problem;
+    ASSERT_TRUE(EnaviCgroups().empty()) << "enavi cgroups exist before the test: " << Join(EnaviCgroups());
+    options_.emulation.calibration_file = WriteHostCalibration(dir_, board::HostCpuModel());
+  }
+  void TearDown() override {
+    if (geteuid() == 0) {
+      EXPECT_TRUE(EnaviCgroups().empty()) << "left behind: " << Join(EnaviCgroups());
+    }
+    fs::remove_all(dir_);
+  }
+
+  fs::path dir_;
+  EpisodeOptions options_;
+};
+
+TEST_F(EmulatedClockTest, ShortEpisodeReachesTheGoalOnDeadlineServersAndLeavesNoCgroup) {
+  const api::EpisodeResult r = RunEpisode(ShortFlight("x86"), options_);
+  EXPECT_TRUE(r.success) << r.end_reason;
+  EXPECT_EQ(r.notes.at("clock"), "emulated");
+  EXPECT_GT(r.jobs_released, 0);
+  EXPECT_GT(r.nav_cpu_util_pct, 0.0);
+  EXPECT_GT(r.replans, 0) << "plans made in the navstack process reached the simulator's controller";
+  ASSERT_EQ(r.notes.count("emulation.sched"), 1u);
+  const std::string& sched = r.notes.at("emulation.sched");
+  EXPECT_NE(sched.find("SCHED_DEADLINE speed server on each of 1 worker"), std::string::npos)
+      << "as root with the episode cpuset spanning the host, the kernel grants DL: " << sched;
+  EXPECT_NE(r.notes.at("emulation.cgroup").find("board quota"), std::string::npos);
+  EXPECT_NE(r.notes.at("emulation.dilation").find("auto"), std::string::npos);
+}
+
+TEST_F(EmulatedClockTest, NarrowCpusetRefusesDeadlineAndTheFallbackIsRecorded) {
+  // A cpuset narrower than the root domain makes sched_setattr(SCHED_DEADLINE) fail with EPERM
+  // (workers/board/EMULATION.md, E4): the worker stays SCHED_OTHER under its cgroup quota.
+  options_.emulation.cpus = "0";
+  api::EpisodeSpec spec = ShortFlight("pi4b");
+  spec.timeout_s = 2.0;
+  const api::EpisodeResult r = RunEpisode(spec, options_);
+  ASSERT_EQ(r.notes.count("emulation.sched"), 1u);
+  const std::string& sched = r.notes.at("emulation.sched");
+  EXPECT_NE(sched.find("fallback"), std::string::npos) << sched;
+  EXPECT_NE(sched.find("EPERM"), std::string::npos) << sched;
+  EXPECT_NE(r.notes.at("emulation.cgroup").find("cpuset 0"), std::string::npos);
+  EXPECT_GT(r.jobs_released, 0);
+}
+
+TEST_F(EmulatedClockTest, DeadlineServersCanBeSwitchedOff) {
+  options_.emulation.sched_deadline = false;
+  api::EpisodeSpec spec = ShortFlight("tx2");
+  spec.timeout_s = 1.0;
+  const api::EpisodeResult r = RunEpisode(spec, options_);
+  EXPECT_NE(r.notes.at("emulation.sched").find("not requested"), std::string::npos) << r.notes.at("emulation.sched");
+}
+
+TEST_F(EmulatedClockTest, KilledNavstackProcessEndsTheEpisodeWithAnErrorAndNoCgroup) {
+  std::thread killer;
+  std::atomic<pid_t> navstack{0};
+  options_.emulation.on_navstack_started = [&](pid_t pid) {
+    navstack = pid;
+    killer = std::thread([pid] {
+      std::this_thread::sleep_for(1500ms);
+      kill(pid, SIGKILL);
+    });
+  };
+  std::string error;
+  try {
+    RunEpisode(ShortFlight("tx2"), options_);
+  } catch (const std::runtime_error& e) {
+    error = e.what();
+  }
+  if (killer.joinable()) killer.join();
+  ASSERT_NE(navstack.load(), 0) << "the navstack process never started";
+  EXPECT_NE(error.find("navstack process died"), std::string::npos) << "error: '" << error << "'";
+  EXPECT_NE(error.find("signal 9"), std::string::npos) << error;
+  EXPECT_EQ(kill(navstack.load(), 0), -1) << "the navstack process is gone (reaped)";
+}
+
+TEST_F(EmulatedClockTest, AdmissionRefusalAndSigintOfFlyAreCleanExits) {
+  const std::string enavi = std::string(ENAVI_BINARY_DIR) + "/bin/enavi";
+  ASSERT_TRUE(fs::exists(enavi)) << enavi;
+  auto spawn = [&](std::vector<std::string> args) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+      std::vector<char*> argv;
+      argv.push_back(const_cast<char*>(enavi.c_str()));
+      for (auto& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
+      const int null = open("/dev/null", O_WRONLY);
+      dup2(null, STDOUT_FILENO);
+      dup2(null, STDERR_FILENO);
+      execv(enavi.c_str(), argv.data());
+      _exit(127);
+    }
+    return pid;
+  };
+  const std::string cal = options_.emulation.calibration_file;
+  // nx: 6 x 0.53 = 3.18 host CPUs at dilation 1 cannot fit a small host: refused, exit 2.
+  int status = 0;
+  pid_t pid = spawn({"fly", "--world", "empty", "--param", "length=10", "--board", "nx", "--clock", "emulated",
+                     "--dilation", "1", "--calibration", cal, "--json"});
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2) << "admission refused is a refusal of the request";
+
+  // SIGINT mid-flight: child and groups removed, then fly dies of the signal.
+  pid = spawn({"fly", "--world", "empty", "--param", "length=30", "--board", "tx2", "--clock", "emulated",
+               "--calibration", cal, "--json"});
+  std::this_thread::sleep_for(2500ms);
+  EXPECT_FALSE(EnaviCgroups().empty()) << "the episode should be running in its cgroup by now";
+  kill(pid, SIGINT);
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << "status " << status;
+}
+
+TEST(EmulatedClockCalibrationTest, MissingCalibrationNamesEnaviCalibrate) {
+  EpisodeOptions options;
+  options.emulation.calibration_file = "/nonexistent/enavi/calibration.json";
+  try {
+    RunEpisode(ShortFlight("tx2"), options);
+    FAIL() << "an emulated episode without a host calibration must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("enavi calibrate"), std::string::npos) << e.what();
+  }
+}
+
+TEST(EmulatedClockCalibrationTest, StaleCalibrationIsRefusedWithTheReason) {
+  const fs::path dir = fs::temp_directory_path() / ("enavi-emulated-stale-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  EpisodeOptions options;
+  options.emulation.calibration_file = WriteHostCalibration(dir, "Some Other CPU @ 1 GHz");
+  std::string message;
+  try {
+    RunEpisode(ShortFlight("tx2"), options);
+  } catch (const std::invalid_argument& e) {
+    message = e.what();
+  }
+  fs::remove_all(dir);
+  EXPECT_NE(message.find("stale"), std::string::npos) << message;
+  EXPECT_NE(message.find("Some Other CPU"), std::string::npos) << message;
+  EXPECT_NE(message.find("enavi calibrate"), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace enavi::sim

@@ -1,0 +1,166 @@
+// The host calibration file: round trip, where it lives, stale or missing detection, and the
+// board emulation figures `enavi calibrate` prints.
+#include "workers/board/host_calibration.h"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace enavi::board {
+namespace {
+
+namespace fs = std::filesystem;
+
+class HostCalibrationTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("enavi-hostcal-" + std::to_string(getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  static HostCalibration Sample() {
+    HostCalibration c;
+    c.relative_speed = 1.25;
+    c.fitted.ns_per_unit[static_cast<int>(navstack::WorkUnit::kRayStep)] = 21.5;
+    c.samples = 1234;
+    c.r2 = 0.93;
+    c.cpu_model = "Test CPU 9000";
+    c.kernel = "6.1.0-test";
+    c.date = "2025-01-02T03:04:05Z";
+    c.reference_calibration_id = "ref-1";
+    c.tasks["perception"] = {100, 0.010, 0.020, 0.025};
+    c.tasks["planning"] = {50, 0.020, 0.040, 0.050};
+    return c;
+  }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  fs::path dir_;
+};
+
+TEST_F(HostCalibrationTest, SaveLoadRoundTrip) {
+  const std::string path = Path("sub/dir/calibration.json");
+  SaveHostCalibration(Sample(), path);
+  const HostCalibration c = LoadHostCalibration(path);
+  EXPECT_EQ(c.relative_speed, 1.25);
+  EXPECT_EQ(c.fitted.ns_per_unit[static_cast<int>(navstack::WorkUnit::kRayStep)], 21.5);
+  EXPECT_EQ(c.samples, 1234);
+  EXPECT_EQ(c.cpu_model, "Test CPU 9000");
+  EXPECT_EQ(c.kernel, "6.1.0-test");
+  EXPECT_EQ(c.date, "2025-01-02T03:04:05Z");
+  EXPECT_EQ(c.reference_calibration_id, "ref-1");
+  ASSERT_EQ(c.tasks.count("planning"), 1u);
+  EXPECT_EQ(c.tasks.at("planning").max_s, 0.050);
+  EXPECT_EQ(c.tasks.at("perception").jobs, 100);
+}
+
+TEST_F(HostCalibrationTest, ValidWhenCpuAndReferenceMatch) {
+  const std::string path = Path("c.json");
+  SaveHostCalibration(Sample(), path);
+  const CalibrationCheck check = CheckHostCalibration(path, "Test CPU 9000", "ref-1");
+  EXPECT_TRUE(check.ok()) << check.message;
+  ASSERT_TRUE(check.calibration.has_value());
+}
+
+TEST_F(HostCalibrationTest, MissingFileNamesTheCommandThatFixesIt) {
+  const CalibrationCheck check = CheckHostCalibration(Path("nope.json"), "Test CPU 9000", "ref-1");
+  EXPECT_EQ(check.status, CalibrationCheck::Status::kMissing);
+  EXPECT_NE(check.message.find("enavi calibrate"), std::string::npos) << check.message;
+  EXPECT_NE(check.message.find("nope.json"), std::string::npos) << check.message;
+}
+
+TEST_F(HostCalibrationTest, OtherCpuModelIsStale) {
+  const std::string path = Path("c.json");
+  SaveHostCalibration(Sample(), path);
+  const CalibrationCheck check = CheckHostCalibration(path, "Another CPU", "ref-1");
+  EXPECT_EQ(check.status, CalibrationCheck::Status::kStale);
+  EXPECT_NE(check.message.find("Test CPU 9000"), std::string::npos) << check.message;
+  EXPECT_NE(check.message.find("Another CPU"), std::string::npos) << check.message;
+  EXPECT_NE(check.message.find("enavi calibrate"), std::string::npos) << check.message;
+}
+
+TEST_F(HostCalibrationTest, OtherReferenceCalibrationIsStale) {
+  const std::string path = Path("c.json");
+  SaveHostCalibration(Sample(), path);
+  const CalibrationCheck check = CheckHostCalibration(path, "Test CPU 9000", "ref-2");
+  EXPECT_EQ(check.status, CalibrationCheck::Status::kStale);
+  EXPECT_NE(check.message.find("ref-2"), std::string::npos) << check.message;
+}
+
+TEST_F(HostCalibrationTest, CorruptFileIsInvalidWithTheFieldNamed) {
+  const std::string path = Path("c.json");
+  {
+    std::ofstream out(path);
+    out << R"({"format": "enavi-host-calibration", "version": 1, "relative_speed": -3})";
+  }
+  const CalibrationCheck check = CheckHostCalibration(path, "Test CPU 9000", "ref-1");
+  EXPECT_EQ(check.status, CalibrationCheck::Status::kInvalid);
+  EXPECT_NE(check.message.find("relative_speed"), std::string::npos) << check.message;
+  {
+    std::ofstream out(path);
+    out << "not json";
+  }
+  EXPECT_THROW(LoadHostCalibration(path), std::invalid_argument);
+}
+
+TEST_F(HostCalibrationTest, PathPrecedenceFlagThenEnvThenXdgThenHome) {
+  const char* saved[] = {std::getenv("ENAVI_CALIBRATION"), std::getenv("XDG_STATE_HOME"), std::getenv("HOME")};
+  const std::string keep[] = {saved[0] ? saved[0] : "", saved[1] ? saved[1] : "", saved[2] ? saved[2] : ""};
+  setenv("ENAVI_CALIBRATION", "/env/cal.json", 1);
+  setenv("XDG_STATE_HOME", "/xdg", 1);
+  setenv("HOME", "/home/u", 1);
+  EXPECT_EQ(CalibrationPath("/flag.json"), "/flag.json");
+  EXPECT_EQ(CalibrationPath(), "/env/cal.json");
+  unsetenv("ENAVI_CALIBRATION");
+  EXPECT_EQ(CalibrationPath(), "/xdg/enavi/calibration.json");
+  unsetenv("XDG_STATE_HOME");
+  EXPECT_EQ(CalibrationPath(), "/home/u/.local/state/enavi/calibration.json");
+  const char* names[] = {"ENAVI_CALIBRATION", "XDG_STATE_HOME", "HOME"};
+  for (int i = 0; i < 3; ++i) {
+    if (saved[i]) {
+      setenv(names[i], keep[i].c_str(), 1);
+    } else {
+      unsetenv(names[i]);
+    }
+  }
+}
+
+TEST_F(HostCalibrationTest, BoardEmulationFigures) {
+  HostCalibration host = Sample();
+  host.relative_speed = 1.0;
+  const BoardEmulation pi = DescribeBoardEmulation(LoadBoard("pi4b"), host, 1.75);
+  EXPECT_EQ(pi.cores, 4);
+  EXPECT_DOUBLE_EQ(pi.speed_vs_host, 0.56);
+  EXPECT_DOUBLE_EQ(pi.quota_cpus_k1, 4 * 0.56);
+  EXPECT_DOUBLE_EQ(pi.min_dilation, 1.5) << "2.24 CPUs need k >= 1.28, rounded up to a quarter";
+  EXPECT_TRUE(pi.emulable);
+  EXPECT_NEAR(pi.wcet_s.at("planning"), 0.050 / 0.56, 1e-12) << "host WCET / board speed";
+
+  host.relative_speed = 2.0;  // a host twice the reference: every board is slower still
+  EXPECT_DOUBLE_EQ(DescribeBoardEmulation(LoadBoard("opi5"), host, 1.75).speed_vs_host, 0.43);
+  host.relative_speed = 0.5;  // a slow host cannot emulate faster boards
+  EXPECT_FALSE(DescribeBoardEmulation(LoadBoard("opi5"), host, 1.75).emulable);
+  host.relative_speed = 0.93;  // x86 at 0.95 is 2 % faster: within the calibration's noise
+  EXPECT_TRUE(DescribeBoardEmulation(LoadBoard("x86"), host, 1.75).emulable);
+  EXPECT_DOUBLE_EQ(SpeedVsHost(LoadBoard("host"), host), 1.0) << "the host is itself, whatever the calibration";
+}
+
+TEST(HostCalibrationSummaryTest, SummariseTimes) {
+  std::vector<double> t;
+  for (int i = 1; i <= 200; ++i) t.push_back(i * 0.001);
+  const TaskTiming s = SummariseTimes(t);
+  EXPECT_EQ(s.jobs, 200);
+  EXPECT_DOUBLE_EQ(s.max_s, 0.2);
+  EXPECT_DOUBLE_EQ(s.p99_s, 0.198);
+  EXPECT_NEAR(s.mean_s, 0.1005, 1e-12);
+  EXPECT_EQ(SummariseTimes({}).jobs, 0);
+}
+
+}  // namespace
+}  // namespace enavi::board

@@ -1,0 +1,309 @@
+// The emulated clock's executor with fake jobs: dispatch order, overrun skips, locking, costs.
+// Orders are made deterministic by a gate job that holds the only worker while the test
+// releases the others; nothing here asserts on durations.
+#include "navstack/runtime/realtime_executor.h"
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "navstack/common/cpu_time.h"
+
+namespace enavi::navstack {
+namespace {
+
+using namespace std::chrono_literals;
+
+// A one-shot latch the test opens.
+class Gate {
+ public:
+  void Open() {
+    std::lock_guard l(m_);
+    open_ = true;
+    cv_.notify_all();
+  }
+  void Wait() {
+    std::unique_lock l(m_);
+    cv_.wait(l, [this] { return open_; });
+  }
+
+ private:
+  std::mutex m_;
+  std::condition_variable cv_;
+  bool open_ = false;
+};
+
+// Polls `done` for up to 10 s (a bound against hangs, not a timing assertion).
+template <typename F>
+bool Eventually(F done) {
+  for (int i = 0; i < 10'000; ++i) {
+    if (done()) return true;
+    std::this_thread::sleep_for(1ms);
+  }
+  return done();
+}
+
+struct OrderLog {
+  std::mutex m;
+  std::vector<TaskId> order;
+  void Add(TaskId t) {
+    std::lock_guard l(m);
+    order.push_back(t);
+  }
+  std::vector<TaskId> Get() {
+    std::lock_guard l(m);
+    return order;
+  }
+};
+
+// The gate job (perception) holds the single worker; then collision, difference and planning
+// are triggered in that order with deadlines 0.3, 0.1 and 0.2 s; the gate opens.
+std::vector<TaskId> RunOrderScenario(SchedulingPolicy policy) {
+  RealtimeExecutorOptions o;
+  o.threads = 1;
+  o.policy = policy;
+  RealtimeExecutor ex(o);
+  Gate gate;
+  std::atomic<bool> gate_running{false};
+  OrderLog log;
+  ex.Register(TaskId::kPerception, [&] {
+    gate_running = true;
+    gate.Wait();
+    return JobOutput{};
+  });
+  for (TaskId t : {TaskId::kCollision, TaskId::kDifference, TaskId::kPlanning})
+    ex.Register(t, [&log, t] {
+      log.Add(t);
+      return JobOutput{};
+    });
+  ex.Start(std::chrono::steady_clock::now());
+  ex.Trigger(TaskId::kPerception, 1.0);
+  EXPECT_TRUE(Eventually([&] { return gate_running.load(); }));
+  ex.Trigger(TaskId::kCollision, 0.3);
+  std::this_thread::sleep_for(2ms);  // distinct release instants
+  ex.Trigger(TaskId::kDifference, 0.1);
+  std::this_thread::sleep_for(2ms);
+  ex.Trigger(TaskId::kPlanning, 0.2);
+  gate.Open();
+  EXPECT_TRUE(Eventually([&] { return log.Get().size() == 3; }));
+  ex.Stop();
+  return log.Get();
+}
+
+TEST(RealtimeExecutorTest, EdfRunsTheEarliestDeadlineFirst) {
+  const std::vector<TaskId> order = RunOrderScenario(SchedulingPolicy::kGlobalEdf);
+  EXPECT_EQ(order, (std::vector<TaskId>{TaskId::kDifference, TaskId::kPlanning, TaskId::kCollision}))
+      << "deadlines 0.1 (difference) < 0.2 (planning) < 0.3 (collision)";
+}
+
+TEST(RealtimeExecutorTest, FifoRunsTheEarliestReleaseFirst) {
+  const std::vector<TaskId> order = RunOrderScenario(SchedulingPolicy::kFifoNonPreemptive);
+  EXPECT_EQ(order, (std::vector<TaskId>{TaskId::kCollision, TaskId::kDifference, TaskId::kPlanning}))
+      << "released in the order collision, difference, planning";
+}
+
+TEST(RealtimeExecutorTest, OverrunningTaskSkipsReleasesAndFinishesLate) {
+  RealtimeExecutorOptions o;
+  o.threads = 1;
+  RealtimeExecutor ex(o);
+  Gate gate;
+  std::atomic<int> runs{0};
+  ex.Register(TaskId::kPerception, [&] {
+    if (runs.fetch_add(1) == 0) gate.Wait();  // the first job overruns until the test opens the gate
+    return JobOutput{};
+  });
+  ex.SetRate(TaskId::kPerception, 200.0);
+  ex.Start(std::chrono::steady_clock::now());
+  ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPerception).skipped >= 3; }))
+      << "releases of a task whose job is still running must be dropped";
+  gate.Open();
+  ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPerception).completed >= 3; }));
+  ex.Stop();
+  const TaskStats s = ex.stats(TaskId::kPerception);
+  EXPECT_GE(s.late, 1) << "the overrunning job finished after its deadline";
+  const std::int64_t pending = s.released - s.completed - s.skipped;
+  EXPECT_GE(pending, 0);
+  EXPECT_LE(pending, 1) << "every release ran or was skipped; at most one job waited when the executor stopped";
+  EXPECT_EQ(s.misses(), s.late + s.skipped);
+}
+
+TEST(RealtimeExecutorTest, TriggerDuringAJobRunsOnceMoreAfterIt) {
+  RealtimeExecutorOptions o;
+  o.threads = 1;
+  RealtimeExecutor ex(o);
+  Gate gate;
+  std::atomic<int> runs{0};
+  ex.Register(TaskId::kPlanning, [&] {
+    if (runs.fetch_add(1) == 0) gate.Wait();
+    return JobOutput{};
+  });
+  ex.Start(std::chrono::steady_clock::now());
+  ex.Trigger(TaskId::kPlanning, 0.5);
+  ASSERT_TRUE(Eventually([&] { return runs.load() == 1; }));
+  ex.Trigger(TaskId::kPlanning, 0.5);  // coalesced: kept, not queued twice
+  ex.Trigger(TaskId::kPlanning, 0.5);
+  gate.Open();
+  ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPlanning).completed == 2; }));
+  ex.Stop();
+  EXPECT_EQ(runs.load(), 2);
+  EXPECT_EQ(ex.stats(TaskId::kPlanning).skipped, 0);
+}
+
+TEST(RealtimeExecutorTest, CommitsRunUnderTheExclusiveLockWhileNoJobRuns) {
+  RealtimeExecutorOptions o;
+  o.threads = 2;
+  std::atomic<int> inside{0};
+  std::atomic<int> overlaps{0}, commits{0}, try_lock_succeeded{0};
+  RealtimeExecutor* self = nullptr;
+  o.after_commit = [&](TaskId) {
+    if (self->job_lock().try_lock()) ++try_lock_succeeded;  // we hold it: must fail
+  };
+  RealtimeExecutor ex(o);
+  self = &ex;
+  // Perception: job code that takes a while; collision: a short job with a commit.
+  ex.Register(TaskId::kPerception, [&] {
+    ++inside;
+    const double t0 = ThreadCpuSeconds();
+    while (ThreadCpuSeconds() - t0 < 0.0005) {
+    }
+    --inside;
+    return JobOutput{};
+  });
+  ex.Register(TaskId::kCollision, [&] {
+    ++inside;
+    --inside;
+    JobOutput out;
+    out.commit = [&] {
+      if (inside.load() != 0) ++overlaps;
+      ++commits;
+    };
+    return out;
+  });
+  ex.SetRate(TaskId::kPerception, 300.0);
+  ex.SetRate(TaskId::kCollision, 300.0);
+  ex.Start(std::chrono::steady_clock::now());
+  ASSERT_TRUE(Eventually([&] { return commits.load() >= 30; }));
+  ex.Stop();
+  EXPECT_EQ(overlaps.load(), 0) << "a commit ran while job code was inside the shared section";
+  EXPECT_EQ(try_lock_succeeded.load(), 0) << "after_commit must run with the exclusive lock still held";
+  EXPECT_GE(ex.lock_stats().commits, 30);
+}
+
+TEST(RealtimeExecutorTest, WriterWaitsForARunningJob) {
+  RealtimeExecutorOptions o;
+  RealtimeExecutor ex(o);
+  Gate gate;
+  std::atomic<bool> running{false};
+  ex.Register(TaskId::kPlanning, [&] {
+    running = true;
+    gate.Wait();
+    return JobOutput{};
+  });
+  ex.Start(std::chrono::steady_clock::now());
+  ex.Trigger(TaskId::kPlanning, 1.0);
+  ASSERT_TRUE(Eventually([&] { return running.load(); }));
+  EXPECT_FALSE(ex.job_lock().try_lock()) << "frames and odometry must not be written under a running job";
+  gate.Open();
+  ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPlanning).completed == 1; }));
+  EXPECT_TRUE(ex.job_lock().try_lock());
+  ex.job_lock().unlock();
+}
+
+TEST(RealtimeExecutorTest, BoardTimeIsThreadCpuTimesHostToBoard) {
+  RealtimeExecutorOptions o;
+  o.host_to_board = 2.5;
+  RealtimeExecutor ex(o);
+  ex.Register(TaskId::kPerception, [] {
+    const double t0 = ThreadCpuSeconds();
+    while (ThreadCpuSeconds() - t0 < 0.002) {
+    }
+    return JobOutput{};
+  });
+  ex.Start(std::chrono::steady_clock::now());
+  for (int i = 0; i < 3; ++i) {
+    ex.Trigger(TaskId::kPerception, 1.0);
+    ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPerception).completed == i + 1; }));
+  }
+  ex.Stop();
+  const TaskStats s = ex.stats(TaskId::kPerception);
+  EXPECT_GE(s.host_cpu_s, 3 * 0.002);
+  EXPECT_NEAR(s.busy_s, 2.5 * s.host_cpu_s, 1e-12);
+  EXPECT_NEAR(s.cost_sum_s, s.busy_s, 1e-12);
+  EXPECT_GE(s.cost_max_s, 2.5 * 0.002);
+}
+
+TEST(RealtimeExecutorTest, SimTimeIsWallTimeOverDilationAndStartsAtTheEpoch) {
+  RealtimeExecutorOptions o;
+  o.dilation = 4.0;
+  RealtimeExecutor ex(o);
+  EXPECT_EQ(ex.now(), 0.0) << "before Start()";
+  const auto epoch = std::chrono::steady_clock::now() - std::chrono::seconds(8);
+  ex.Start(epoch);
+  const double t = ex.now();
+  EXPECT_GE(t, 2.0) << "8 wall seconds at k = 4 are at least 2 sim seconds";
+  EXPECT_LT(t, 3.0);
+}
+
+TEST(RealtimeExecutorTest, AThrowingJobStopsDispatchAndIsReported) {
+  RealtimeExecutorOptions o;
+  RealtimeExecutor ex(o);
+  std::atomic<int> other_runs{0};
+  ex.Register(TaskId::kPlanning, []() -> JobOutput { throw std::runtime_error("planner exploded"); });
+  ex.Register(TaskId::kCollision, [&] {
+    ++other_runs;
+    return JobOutput{};
+  });
+  ex.Start(std::chrono::steady_clock::now());
+  ex.Trigger(TaskId::kPlanning, 1.0);
+  ASSERT_TRUE(Eventually([&] { return !ex.error().empty(); }));
+  EXPECT_NE(ex.error().find("planner exploded"), std::string::npos) << ex.error();
+  ex.Trigger(TaskId::kCollision, 1.0);
+  std::this_thread::sleep_for(20ms);
+  ex.Stop();
+  EXPECT_EQ(other_runs.load(), 0) << "after a failure no job may start";
+}
+
+TEST(RealtimeExecutorTest, StopAppliesTheCommitOfTheRunningJob) {
+  RealtimeExecutorOptions o;
+  RealtimeExecutor ex(o);
+  Gate gate;
+  std::atomic<bool> running{false}, committed{false};
+  ex.Register(TaskId::kPlanning, [&] {
+    running = true;
+    gate.Wait();
+    JobOutput out;
+    out.commit = [&] { committed = true; };
+    return out;
+  });
+  ex.Start(std::chrono::steady_clock::now());
+  ex.Trigger(TaskId::kPlanning, 1.0);
+  ASSERT_TRUE(Eventually([&] { return running.load(); }));
+  std::thread opener([&] {
+    std::this_thread::sleep_for(5ms);
+    gate.Open();
+  });
+  ex.Stop();
+  opener.join();
+  EXPECT_TRUE(committed.load());
+}
+
+TEST(RealtimeExecutorTest, RejectsBadOptions) {
+  RealtimeExecutorOptions o;
+  o.threads = 0;
+  EXPECT_THROW(RealtimeExecutor{o}, std::invalid_argument);
+  o.threads = 1;
+  o.dilation = 0;
+  EXPECT_THROW(RealtimeExecutor{o}, std::invalid_argument);
+  o.dilation = 1;
+  o.host_to_board = -1;
+  EXPECT_THROW(RealtimeExecutor{o}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace enavi::navstack

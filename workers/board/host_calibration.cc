@@ -1,0 +1,222 @@
+#include "workers/board/host_calibration.h"
+
+#include <sys/utsname.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "workers/board/board_quota.h"
+
+namespace enavi::board {
+namespace {
+
+constexpr const char* kFormat = "enavi-host-calibration";
+
+std::string Env(const char* name) {
+  const char* v = std::getenv(name);
+  return v != nullptr ? std::string(v) : std::string();
+}
+
+template <typename T>
+T Field(const nlohmann::json& j, const std::string& key, const std::string& path) {
+  if (!j.contains(key)) throw std::invalid_argument(path + ": field '" + key + "' is missing");
+  try {
+    return j.at(key).get<T>();
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument(path + ": field '" + key + "' has the wrong type: " + e.what());
+  }
+}
+
+}  // namespace
+
+std::string CalibrationPath(const std::string& flag) {
+  if (!flag.empty()) return flag;
+  if (const std::string env = Env("ENAVI_CALIBRATION"); !env.empty()) return env;
+  if (const std::string xdg = Env("XDG_STATE_HOME"); !xdg.empty()) return xdg + "/enavi/calibration.json";
+  const std::string home = Env("HOME");
+  if (home.empty())
+    throw std::invalid_argument(
+        "host calibration: no file given and neither ENAVI_CALIBRATION, XDG_STATE_HOME nor HOME is set");
+  return home + "/.local/state/enavi/calibration.json";
+}
+
+void SaveHostCalibration(const HostCalibration& c, const std::string& path) {
+  nlohmann::json j;
+  j["format"] = kFormat;
+  j["version"] = HostCalibration::kFormatVersion;
+  j["relative_speed"] = c.relative_speed;
+  j["cpu_model"] = c.cpu_model;
+  j["kernel"] = c.kernel;
+  j["date"] = c.date;
+  j["reference_calibration_id"] = c.reference_calibration_id;
+  j["samples"] = c.samples;
+  j["r2"] = c.r2;
+  j["fitted"]["ns_per_job"] = c.fitted.ns_per_job;
+  for (std::size_t u = 0; u < navstack::kWorkUnitNames.size(); ++u)
+    j["fitted"]["ns_per_unit"][std::string(navstack::kWorkUnitNames[u])] = c.fitted.ns_per_unit[u];
+  for (const auto& [task, t] : c.tasks)
+    j["tasks"][task] = {{"jobs", t.jobs}, {"mean_s", t.mean_s}, {"p99_s", t.p99_s}, {"max_s", t.max_s}};
+  const std::filesystem::path p(path);
+  std::error_code ec;
+  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path(), ec);
+  // Write then rename: a reader never sees half a file.
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << j.dump(2) << "\n";
+    if (!out) throw std::runtime_error("host calibration: cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, p, ec);
+  if (ec) throw std::runtime_error("host calibration: cannot write " + path + ": " + ec.message());
+}
+
+HostCalibration LoadHostCalibration(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::invalid_argument(path + ": cannot read the host calibration file");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument(path + ": not JSON: " + e.what());
+  }
+  if (!j.is_object() || j.value("format", "") != kFormat)
+    throw std::invalid_argument(path + ": field 'format' is not '" + kFormat + "'");
+  const int version = Field<int>(j, "version", path);
+  if (version != HostCalibration::kFormatVersion)
+    throw std::invalid_argument(path + ": field 'version' is " + std::to_string(version) + ", this build reads " +
+                                std::to_string(HostCalibration::kFormatVersion));
+  HostCalibration c;
+  c.relative_speed = Field<double>(j, "relative_speed", path);
+  if (!(c.relative_speed > 0.01 && c.relative_speed < 100))
+    throw std::invalid_argument(path + ": field 'relative_speed' is " + std::to_string(c.relative_speed) +
+                                ", outside (0.01, 100)");
+  c.cpu_model = Field<std::string>(j, "cpu_model", path);
+  c.kernel = Field<std::string>(j, "kernel", path);
+  c.date = Field<std::string>(j, "date", path);
+  c.reference_calibration_id = Field<std::string>(j, "reference_calibration_id", path);
+  c.samples = Field<int>(j, "samples", path);
+  c.r2 = Field<double>(j, "r2", path);
+  const nlohmann::json fitted = Field<nlohmann::json>(j, "fitted", path);
+  c.fitted.ns_per_job = Field<double>(fitted, "ns_per_job", path + ": fitted");
+  const nlohmann::json units = Field<nlohmann::json>(fitted, "ns_per_unit", path + ": fitted");
+  for (std::size_t u = 0; u < navstack::kWorkUnitNames.size(); ++u) {
+    const std::string name(navstack::kWorkUnitNames[u]);
+    c.fitted.ns_per_unit[u] = Field<double>(units, name, path + ": fitted.ns_per_unit");
+    if (!(c.fitted.ns_per_unit[u] >= 0))
+      throw std::invalid_argument(path + ": fitted.ns_per_unit." + name + " is negative");
+  }
+  if (j.contains("tasks")) {
+    for (const auto& [task, t] : j.at("tasks").items()) {
+      const std::string where = path + ": tasks." + task;
+      TaskTiming timing;
+      timing.jobs = Field<int>(t, "jobs", where);
+      timing.mean_s = Field<double>(t, "mean_s", where);
+      timing.p99_s = Field<double>(t, "p99_s", where);
+      timing.max_s = Field<double>(t, "max_s", where);
+      c.tasks[task] = timing;
+    }
+  }
+  return c;
+}
+
+std::string HostCpuModel() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      return colon == std::string::npos ? std::string() : line.substr(std::min(line.size(), colon + 2));
+    }
+  return "unknown";
+}
+
+std::string HostKernel() {
+  utsname uts{};
+  if (uname(&uts) != 0) return "unknown";
+  return uts.release;
+}
+
+CalibrationCheck CheckHostCalibration(const std::string& path, const std::string& cpu_model,
+                                      const std::string& reference_calibration_id) {
+  CalibrationCheck check;
+  check.path = path;
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    check.status = CalibrationCheck::Status::kMissing;
+    check.message = "no host calibration at " + path + "; run `enavi calibrate` on this machine first";
+    return check;
+  }
+  try {
+    check.calibration = LoadHostCalibration(path);
+  } catch (const std::invalid_argument& e) {
+    check.status = CalibrationCheck::Status::kInvalid;
+    check.message = std::string("unusable host calibration: ") + e.what() + "; run `enavi calibrate` to rewrite it";
+    return check;
+  }
+  const HostCalibration& c = *check.calibration;
+  std::string why;
+  if (c.cpu_model != cpu_model) why = "it was measured on '" + c.cpu_model + "', this machine is '" + cpu_model + "'";
+  if (c.reference_calibration_id != reference_calibration_id) {
+    why += (why.empty() ? "" : ", and ") + std::string("it was measured against reference costs '") +
+           c.reference_calibration_id + "', this build embeds '" + reference_calibration_id + "'";
+  }
+  if (!why.empty()) {
+    check.status = CalibrationCheck::Status::kStale;
+    check.message = "stale host calibration " + path + " (" + c.date + "): " + why + "; run `enavi calibrate` again";
+    return check;
+  }
+  check.status = CalibrationCheck::Status::kValid;
+  return check;
+}
+
+CalibrationCheck CheckHostCalibration(const std::string& path) {
+  return CheckHostCalibration(path, HostCpuModel(), LoadReferenceCosts().calibration_id);
+}
+
+double SpeedVsHost(const BoardProfile& board, const HostCalibration& host) {
+  if (board.is_host) return 1.0;
+  return board.per_core_speed / host.relative_speed;
+}
+
+BoardEmulation DescribeBoardEmulation(const BoardProfile& board, const HostCalibration& host,
+                                      double host_cpus_free) {
+  BoardEmulation e;
+  e.board = board.id;
+  e.cores = board.cores;
+  e.speed_vs_host = SpeedVsHost(board, host);
+  e.emulable = e.speed_vs_host <= 1.0 + kFasterBoardTolerance;
+  e.quota_cpus_k1 = board.cores * e.speed_vs_host;
+  e.min_dilation = e.emulable && host_cpus_free > 0
+                       ? MinimumDilation({board.cores, std::min(1.0, e.speed_vs_host)}, host_cpus_free)
+                       : 0.0;
+  // A job that took x host seconds takes x / speed on the board.
+  for (const auto& [task, t] : host.tasks)
+    if (t.jobs > 0) {
+      e.wcet_s[task] = t.max_s / e.speed_vs_host;
+      e.p99_s[task] = t.p99_s / e.speed_vs_host;
+    }
+  return e;
+}
+
+TaskTiming SummariseTimes(std::vector<double> seconds) {
+  TaskTiming t;
+  if (seconds.empty()) return t;
+  std::sort(seconds.begin(), seconds.end());
+  t.jobs = static_cast<int>(seconds.size());
+  double sum = 0;
+  for (double s : seconds) sum += s;
+  t.mean_s = sum / static_cast<double>(seconds.size());
+  const std::size_t i99 = std::min(seconds.size() - 1,
+                                   static_cast<std::size_t>(std::ceil(0.99 * static_cast<double>(seconds.size()))) - 1);
+  t.p99_s = seconds[i99];
+  t.max_s = seconds.back();
+  return t;
+}
+
+}  // namespace enavi::board

@@ -1,0 +1,105 @@
+#pragma once
+// The host calibration file (DESIGN.md section 4, `enavi calibrate`): how fast THIS machine's
+// cores are relative to the reference core the board profiles are expressed against, the
+// cost-model coefficients fitted here, and the worst job times seen in the calibration flights.
+// The emulated clock needs it to size a board's quota (speed = board speed / host speed);
+// a file written on another CPU or against another reference fit is stale and refused.
+//
+// Location: --calibration FILE, else $ENAVI_CALIBRATION, else
+// $XDG_STATE_HOME/enavi/calibration.json, else ~/.local/state/enavi/calibration.json.
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "workers/board/board_profile.h"
+
+namespace enavi::board {
+
+/// Worst and typical host CPU time of one task's jobs in the calibration flights, seconds.
+struct TaskTiming {
+  int jobs = 0;
+  double mean_s = 0;
+  double p99_s = 0;
+  double max_s = 0;
+};
+
+struct HostCalibration {
+  static constexpr int kFormatVersion = 1;
+  /// This host's single-core speed relative to the reference core (> 1: faster).
+  double relative_speed = 1.0;
+  /// The cost model fitted on this host (ns per unit on THIS host's cores).
+  navstack::WorkCountCostModel::Coefficients fitted;
+  int samples = 0;
+  double r2 = 0;
+  std::string cpu_model;  ///< /proc/cpuinfo "model name"
+  std::string kernel;     ///< uname -r
+  std::string date;       ///< UTC, ISO 8601
+  /// calibration_id of the reference costs the speed was measured against.
+  std::string reference_calibration_id;
+  std::map<std::string, TaskTiming> tasks;  ///< by task name (navstack::TaskName)
+};
+
+/// Where the calibration lives: `flag` if not empty, else $ENAVI_CALIBRATION, else
+/// $XDG_STATE_HOME/enavi/calibration.json, else $HOME/.local/state/enavi/calibration.json.
+/// Throws std::invalid_argument if none of these can be formed (no HOME).
+std::string CalibrationPath(const std::string& flag = {});
+
+/// Writes the file (creating its directory). Throws std::runtime_error if it cannot.
+void SaveHostCalibration(const HostCalibration& calibration, const std::string& path);
+/// Reads the file. Throws std::invalid_argument naming the file and field if it is missing,
+/// not JSON, or a field is absent or out of range.
+HostCalibration LoadHostCalibration(const std::string& path);
+
+/// The machine the process runs on, as the calibration records it.
+std::string HostCpuModel();
+std::string HostKernel();
+
+/// Whether a calibration file can be used on this host.
+struct CalibrationCheck {
+  enum class Status { kValid, kMissing, kStale, kInvalid };
+  Status status = Status::kMissing;
+  std::string path;
+  std::string message;  ///< for anything but kValid: what is wrong and that `enavi calibrate` fixes it
+  std::optional<HostCalibration> calibration;  ///< set when the file could be read (also if stale)
+  bool ok() const { return status == Status::kValid; }
+};
+/// Loads `path` and checks it against this machine (`cpu_model`) and the embedded reference
+/// costs (`reference_calibration_id`). Never throws for a bad file: the status says why.
+CalibrationCheck CheckHostCalibration(const std::string& path, const std::string& cpu_model,
+                                      const std::string& reference_calibration_id);
+/// The same for this machine and the embedded reference costs.
+CalibrationCheck CheckHostCalibration(const std::string& path);
+
+/// A board whose cores are at most this much faster than the host's (relative) is emulated at
+/// full host speed: the host's relative speed is measured to a few per cent only (a busy
+/// machine, turbo), and refusing x86 at 1.02 x would be noise, not physics. Beyond it the board
+/// cannot be emulated by throttling.
+inline constexpr double kFasterBoardTolerance = 0.05;
+
+/// How a board is emulated on this host (the `enavi calibrate` table).
+struct BoardEmulation {
+  std::string board;
+  int cores = 1;
+  double speed_vs_host = 1.0;  ///< board per-core speed / host per-core speed
+  bool emulable = true;        ///< false if the board's cores are faster than the host's (beyond the tolerance)
+  double quota_cpus_k1 = 0;    ///< cores x speed: host CPUs the board takes at dilation 1
+  double min_dilation = 1.0;   ///< smallest k that fits `host_cpus_free`
+  /// Board WCET per task (max job time of the calibration flights on this board), seconds.
+  std::map<std::string, double> wcet_s;
+  /// The same for the 99th percentile (the max is often one map rebuild).
+  std::map<std::string, double> p99_s;
+};
+/// `host_cpus_free`: host CPUs an emulation may use (e.g. HostCpus - 0.25 for the simulator).
+BoardEmulation DescribeBoardEmulation(const BoardProfile& board, const HostCalibration& host,
+                                      double host_cpus_free);
+
+/// Per-core speed of `board` relative to this host: 1 for the host itself, else
+/// board.per_core_speed / host.relative_speed.
+double SpeedVsHost(const BoardProfile& board, const HostCalibration& host);
+
+/// Timing summary of a task's job times (seconds); empty input gives jobs = 0.
+TaskTiming SummariseTimes(std::vector<double> seconds);
+
+}  // namespace enavi::board
