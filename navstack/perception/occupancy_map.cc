@@ -334,6 +334,37 @@ std::shared_ptr<OccupancyMap> OccupancyMap::Rebuilt(double resolution, WorkCount
   MapOptions options = options_;
   options.resolution = resolution;
   auto map = std::make_shared<OccupancyMap>(options);
+  // Obstacles seen before the kept frames (e.g. a door jamb now beside the camera) must survive
+  // the switch, or the planner would route through them. Carry the occupied leaves within the
+  // local update box of the newest frame over as occupied cells covering each leaf (conservative
+  // when refining); the replayed frames below then clear what they see free.
+  if (!history_.empty()) {
+    const Eigen::Vector3d centre = history_.back()->origin_W;
+    const Eigen::Vector3d half = options_.local_half_extent;
+    const octomap::point3d lo(centre.x() - half.x(), centre.y() - half.y(), centre.z() - half.z());
+    const octomap::point3d hi(centre.x() + half.x(), centre.y() + half.y(), centre.z() + half.z());
+    const float hit_log_odds = map->tree_->getProbHitLog();
+    std::int64_t carried = 0;
+    for (auto it = tree_->begin_leafs_bbx(lo, hi), end = tree_->end_leafs_bbx(); it != end; ++it) {
+      if (!tree_->isNodeOccupied(*it)) continue;
+      const double h = 0.5 * it.getSize() - 1e-6;
+      const octomap::point3d c = it.getCoordinate();
+      const octomap::OcTreeKey kmin = map->tree_->coordToKey(c.x() - h, c.y() - h, c.z() - h);
+      const octomap::OcTreeKey kmax = map->tree_->coordToKey(c.x() + h, c.y() + h, c.z() + h);
+      octomap::OcTreeKey k;
+      for (k[0] = kmin[0]; k[0] <= kmax[0]; ++k[0]) {
+        for (k[1] = kmin[1]; k[1] <= kmax[1]; ++k[1]) {
+          for (k[2] = kmin[2]; k[2] <= kmax[2]; ++k[2]) {
+            // One hit's worth, however many old leaves share the cell, so frames clear it as fast
+            // as a freshly seen one.
+            map->tree_->setNodeValue(k, hit_log_odds);
+            ++carried;
+          }
+        }
+      }
+    }
+    if (work != nullptr) work->Add(WorkUnit::kVoxelUpdate, carried);
+  }
   // Replay the kept frames, oldest first, exactly as they were inserted.
   for (const auto& scan : history_) map->Apply(map->ComputeUpdate(scan, work), work);
   return map;

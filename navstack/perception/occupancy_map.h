@@ -102,9 +102,10 @@ class OccupancyMap {
   void Insert(const DepthFrame& frame, const CameraIntrinsics& intrinsics,
               const PerceptionOptions& perception, WorkCounts* work = nullptr);
 
-  /// Rebuilds the map at `resolution` from the last MapOptions::rebuild_frames frames (older
-  /// content is dropped, as the paper's resolution switch does). No-op if unchanged. Counts the
-  /// rebuild's kRayStep and kVoxelUpdate. Throws std::invalid_argument if out of range.
+  /// Rebuilds the map at `resolution`: occupied leaves within the local update box of the newest
+  /// kept frame carry over (as one hit on every new cell they overlap), then the last
+  /// MapOptions::rebuild_frames frames are replayed; older free space is dropped. No-op if
+  /// unchanged. Counts the rebuild's kRayStep and kVoxelUpdate. Throws std::invalid_argument if out of range.
   void SetResolution(double resolution, WorkCounts* work = nullptr);
   /// The same rebuild into a new map, leaving this one untouched: the perception job builds it
   /// when it starts and swaps it in when it finishes.

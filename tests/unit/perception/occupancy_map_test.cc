@@ -164,18 +164,42 @@ TEST(OccupancyMapTest, RebuiltLeavesTheOriginalUntouched) {
   EXPECT_EQ(map.num_leaves(), coarse->num_leaves()) << "SetResolution is the same rebuild in place";
 }
 
-TEST(OccupancyMapTest, RebuildUsesOnlyTheKeptFrames) {
+TEST(OccupancyMapTest, RebuildKeepsObstaclesOutOfViewAndDropsOldFreeSpace) {
   MapOptions o;
   o.rebuild_frames = 1;
   OccupancyMap map(o);
   map.Insert(WallFrame(), kCam, {});
-  // The last frame sees nothing (the camera turned around): after a rebuild the wall is gone.
+  // The last frame sees nothing (the camera turned around). The wall, now behind the camera, must
+  // survive the rebuild (the planner would fly into it otherwise); the free space in front of it
+  // came only from the dropped frame.
   map.Insert(RenderFrame(Wall(), kCam, CameraPose({0, 0, 0}, M_PI)), kCam, {});
   EXPECT_EQ(map.history_size(), 1);
   EXPECT_EQ(Name(map.Query({3.05, 0, 0})), "occupied");
+  EXPECT_EQ(Name(map.Query({1.5, 0, 0})), "free");
+  WorkCounts work;
+  map.SetResolution(0.2, &work);
+  EXPECT_EQ(Name(map.Query({3.05, 0, 0})), "occupied");
+  EXPECT_EQ(Name(map.Query({3.05, 1.0, 0.5})), "occupied");
+  EXPECT_EQ(Name(map.Query({1.5, 0, 0})), "unknown");
+  EXPECT_EQ(Name(map.Query({-3.1, 0, 0})), "free");
+  EXPECT_GT(work.Get(WorkUnit::kVoxelUpdate), 0) << "carrying cells over is billed";
+
+  // Back to the finer grid: every fine cell inside a carried coarse cell is occupied (conservative).
+  map.SetResolution(0.1);
+  EXPECT_EQ(Name(map.Query({3.05, 0, 0})), "occupied");
+  EXPECT_EQ(Name(map.Query({3.15, 0, 0})), "occupied");
+}
+
+TEST(OccupancyMapTest, RebuildDropsObstaclesOutsideTheLocalBox) {
+  MapOptions o;
+  o.rebuild_frames = 1;
+  o.local_half_extent = {8.0, 8.0, 4.0};
+  OccupancyMap map(o);
+  map.Insert(WallFrame(), kCam, {});
+  // The newest frame is 20 m away, looking away from the wall: the wall is out of the local box.
+  map.Insert(RenderFrame(Wall(), kCam, CameraPose({-20, 0, 0}, M_PI)), kCam, {});
   map.SetResolution(0.2);
   EXPECT_EQ(Name(map.Query({3.05, 0, 0})), "unknown");
-  EXPECT_EQ(Name(map.Query({-3.1, 0, 0})), "free");
 }
 
 TEST(OccupancyMapTest, ExtractGridMatchesQueryCellByCell) {
