@@ -152,9 +152,10 @@ TriangleMesh ParseObj(std::string_view text, const std::string& file_name) {
   return mesh;
 }
 
-TriangleMesh LoadObjFile(const std::filesystem::path& path) {
+std::string ReadInputFile(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw WorldError(name, 0, "file", "not found or not a regular file");
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) throw WorldError(name, 0, "file", "cannot read: " + ec.message());
   if (size > kMaxFileBytes) {
@@ -165,7 +166,11 @@ TriangleMesh LoadObjFile(const std::filesystem::path& path) {
   std::string text(size, '\0');
   in.read(text.data(), static_cast<std::streamsize>(size));
   text.resize(static_cast<std::size_t>(in.gcount()));
-  return ParseObj(text, name);
+  return text;
+}
+
+TriangleMesh LoadObjFile(const std::filesystem::path& path) {
+  return ParseObj(ReadInputFile(path), path.string());
 }
 
 World WorldFromObj(const std::filesystem::path& path, const Eigen::Vector3d& start, const Eigen::Vector3d& goal,

@@ -21,6 +21,10 @@ inline constexpr std::size_t kMaxTriangles = 5'000'000;        ///< in one world
 inline constexpr double kMaxExtent = 2000.0;                   ///< m, per axis of the bounds
 inline constexpr double kMaxCoordinate = 1e5;                  ///< m, any coordinate ("absurd")
 
+/// Reads a world or OBJ file whole, after checking that it is a regular file within
+/// kMaxFileBytes; errors are WorldError(path, 0, "file", reason).
+std::string ReadInputFile(const std::filesystem::path& path);
+
 /// Parses OBJ text. Reads `v x y z [w]` (also `v x y z r g b`) and `f` with `v`, `v/vt`,
 /// `v//vn` or `v/vt/vn` corners, negative (relative) indices; polygons are fan-triangulated.
 /// Ignores vt, vn, vp, usemtl, mtllib, o, g, s, l, p and comments. `file_name` is used in errors:

@@ -410,20 +410,7 @@ World ParseWorld(std::string_view yaml, const std::string& file_name, const std:
 }
 
 World LoadWorldFile(const std::filesystem::path& path, const WorldFileOptions& options) {
-  const std::string name = path.string();
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw WorldError(name, 0, "file", "not found or not a regular file");
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec) throw WorldError(name, 0, "file", "cannot read: " + ec.message());
-  if (size > kMaxFileBytes) {
-    throw WorldError(name, 0, "file", "too large (" + std::to_string(size) + " bytes; limit 256 MiB)");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw WorldError(name, 0, "file", "cannot open for reading");
-  std::string text(size, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(size));
-  text.resize(static_cast<std::size_t>(in.gcount()));
-  return ParseWorld(text, name, path.parent_path(), options);
+  return ParseWorld(ReadInputFile(path), path.string(), path.parent_path(), options);
 }
 
 std::string WorldToYaml(const World& world) {

@@ -130,7 +130,7 @@ TEST(ObjImportTest, RandomBytesNeverCrashOnlyThrowWorldError) {
 TEST(ObjImportTest, LoadObjFileNamesAMissingFile) {
   testing::TempDir dir;
   const auto path = dir.path() / "missing.obj";
-  EXPECT_EQ(ErrorOf([&] { LoadObjFile(path); }).rfind(path.string() + ": file: cannot read", 0), 0u);
+  EXPECT_EQ(ErrorOf([&] { LoadObjFile(path); }).rfind(path.string() + ": file: not found or not a regular file", 0), 0u);
 }
 
 TEST(ObjImportTest, ObjWorldBoundsContainMeshStartAndGoalWithPadding) {
