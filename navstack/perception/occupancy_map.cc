@@ -351,13 +351,13 @@ std::shared_ptr<OccupancyMap> OccupancyMap::Rebuilt(double resolution, WorkCount
       const octomap::point3d c = it.getCoordinate();
       const octomap::OcTreeKey kmin = map->tree_->coordToKey(c.x() - h, c.y() - h, c.z() - h);
       const octomap::OcTreeKey kmax = map->tree_->coordToKey(c.x() + h, c.y() + h, c.z() + h);
-      octomap::OcTreeKey k;
-      for (k[0] = kmin[0]; k[0] <= kmax[0]; ++k[0]) {
-        for (k[1] = kmin[1]; k[1] <= kmax[1]; ++k[1]) {
-          for (k[2] = kmin[2]; k[2] <= kmax[2]; ++k[2]) {
+      // int counters: a key of 65535 must not wrap the loop.
+      for (int x = kmin[0]; x <= kmax[0]; ++x) {
+        for (int y = kmin[1]; y <= kmax[1]; ++y) {
+          for (int z = kmin[2]; z <= kmax[2]; ++z) {
             // One hit's worth, however many old leaves share the cell, so frames clear it as fast
             // as a freshly seen one.
-            map->tree_->setNodeValue(k, hit_log_odds);
+            map->tree_->setNodeValue(octomap::OcTreeKey(x, y, z), hit_log_odds);
             ++carried;
           }
         }
