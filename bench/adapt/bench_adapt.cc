@@ -12,29 +12,13 @@
 #include "navstack/rl/policy_io.h"
 #include "navstack/rl/ppo.h"
 
+#include "tests/unit/rl/adapter_inputs.h"
+
 namespace enavi::navstack::rl {
 namespace {
 
-ConstraintInputs Board() {
-  ConstraintInputs c;
-  c.f_sen = 30;
-  c.trajectory_duration = 4.0;
-  c.wcet = {0.03, 0.2, 0.01, 0.004};
-  c.num_cores = 4;
-  c.u_cur = 2.0;
-  c.current = {10, 5, 5};
-  return c;
-}
-
-FlightContext Flight() {
-  FlightContext f;
-  f.eci = 0.5;
-  f.d_eci = 0.02;
-  f.resolution = 0.2;
-  f.v_WB = {1, 0, 0};
-  f.p_goal_W = {20, 0, 1};
-  return f;
-}
+using testing::ExampleBoard;
+using testing::ExampleFlight;
 
 void SetCounters(benchmark::State& state, const ActorCritic& net, bool with_value,
                  std::int64_t extra_macs) {
@@ -49,7 +33,7 @@ void SetCounters(benchmark::State& state, const ActorCritic& net, bool with_valu
 void BM_PolicyGreedyForward(benchmark::State& state) {
   const PolicyFile p = MakeFrequencyPolicy(ActionGrid(), 1);
   ActorCritic::Workspace ws = p.net.MakeWorkspace();
-  const FeasibleSet fs = ComputeFeasibleSet(*p.action_grid, Board());
+  const FeasibleSet fs = ComputeFeasibleSet(*p.action_grid, ExampleBoard());
   const Eigen::VectorXd obs = Eigen::VectorXd::Constant(kPolicyStateDim, 0.3);
   for (auto _ : state) {
     const PolicyOutput out = p.net.Act(obs, fs.mask, ActMode::kGreedy, nullptr, &ws, false, false);
@@ -63,8 +47,8 @@ BENCHMARK(BM_PolicyGreedyForward);
 // masked argmax. This is the figure to compare with the 20 us goal.
 void BM_FrequencyAdapterDecideGreedy(benchmark::State& state) {
   FrequencyAdapter fa(MakeFrequencyPolicy(ActionGrid(), 1));
-  const ConstraintInputs c = Board();
-  const FlightContext f = Flight();
+  const ConstraintInputs c = ExampleBoard();
+  const FlightContext f = ExampleFlight();
   for (auto _ : state) {
     const FrequencyDecision d = fa.Decide(c, f, ActMode::kGreedy);
     benchmark::DoNotOptimize(d.action);
@@ -77,8 +61,8 @@ BENCHMARK(BM_FrequencyAdapterDecideGreedy);
 // A training-rollout decision: sampling, log-prob and the critic's value, recorded.
 void BM_FrequencyAdapterDecideSampleRecord(benchmark::State& state) {
   FrequencyAdapter fa(MakeFrequencyPolicy(ActionGrid(), 1));
-  const ConstraintInputs c = Board();
-  const FlightContext f = Flight();
+  const ConstraintInputs c = ExampleBoard();
+  const FlightContext f = ExampleFlight();
   Rng rng(1);
   RolloutStep step;
   for (auto _ : state) {
@@ -92,7 +76,7 @@ BENCHMARK(BM_FrequencyAdapterDecideSampleRecord);
 
 void BM_FeasibleSet(benchmark::State& state) {
   const ActionGrid grid;
-  const ConstraintInputs c = Board();
+  const ConstraintInputs c = ExampleBoard();
   for (auto _ : state) {
     const FeasibleSet fs = ComputeFeasibleSet(grid, c);
     benchmark::DoNotOptimize(fs.num_feasible);

@@ -6,38 +6,22 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/unit/rl/adapter_inputs.h"
+
 namespace enavi::navstack::rl {
 namespace {
 
-// Two busy cores of four, a 4 s trajectory, running (10, 5, 5).
-ConstraintInputs Board() {
-  ConstraintInputs c;
-  c.f_sen = 30;
-  c.trajectory_duration = 4.0;
-  c.wcet = {0.03, 0.2, 0.01, 0.004};
-  c.num_cores = 4;
-  c.u_cur = 2.0;
-  c.current = {10, 5, 5};
-  return c;
-}
-
-FlightContext Flight() {
-  FlightContext f;
-  f.eci = 0.5;
-  f.d_eci = 0.02;
-  f.resolution = 0.2;
-  f.v_WB = {1, 0, 0};
-  f.p_goal_W = {20, 0, 1};
-  return f;
-}
+using testing::ExampleBoard;
+using testing::ExampleFlight;
 
 TEST(FrequencyAdapterTest, GreedyDecisionIsAFeasibleGridTripleAndCountsItsWork) {
   FrequencyAdapter fa(MakeFrequencyPolicy(ActionGrid(), 1));
   WorkCounts work;
-  const FrequencyDecision d = fa.Decide(Board(), Flight(), ActMode::kGreedy, nullptr, &work);
+  const FrequencyDecision d =
+      fa.Decide(ExampleBoard(), ExampleFlight(), ActMode::kGreedy, nullptr, &work);
   ASSERT_GE(d.action, 0);
   EXPECT_EQ(fa.grid().At(d.action), d.f);
-  EXPECT_TRUE(CheckConstraints(Board(), d.f).AllHold());
+  EXPECT_TRUE(CheckConstraints(ExampleBoard(), d.f).AllHold());
   EXPECT_FALSE(d.fallback_used);
   EXPECT_TRUE(d.current_status.AllHold());
   EXPECT_EQ(d.macs, 16 * 150 + 150 * 150 + 150 * 98 + FrequencyAdapter::kMaskMacsPerAction * 98);
@@ -46,22 +30,22 @@ TEST(FrequencyAdapterTest, GreedyDecisionIsAFeasibleGridTripleAndCountsItsWork) 
 
 TEST(FrequencyAdapterTest, SampledDecisionsStayFeasibleUnderATightBudget) {
   // 3.9 of 4 cores busy: only reconfigurations that do not add load are allowed.
-  ConstraintInputs c = Board();
+  ConstraintInputs c = ExampleBoard();
   c.u_cur = 3.9;
   FrequencyAdapter fa(MakeFrequencyPolicy(ActionGrid(), 2));
   Rng rng(3);
   for (int k = 0; k < 300; ++k) {
-    const FrequencyDecision d = fa.Decide(c, Flight(), ActMode::kSample, &rng);
+    const FrequencyDecision d = fa.Decide(c, ExampleFlight(), ActMode::kSample, &rng);
     ASSERT_TRUE(CheckConstraints(c, d.f).AllHold()) << "draw " << k;
   }
 }
 
 TEST(FrequencyAdapterTest, FallbackIsTakenAndFlaggedWhenNothingIsFeasible) {
-  ConstraintInputs c = Board();
+  ConstraintInputs c = ExampleBoard();
   c.num_cores = 1;
   c.u_cur = 3.0;
   FrequencyAdapter fa(MakeFrequencyPolicy(ActionGrid(), 2));
-  const FrequencyDecision d = fa.Decide(c, Flight(), ActMode::kGreedy);
+  const FrequencyDecision d = fa.Decide(c, ExampleFlight(), ActMode::kGreedy);
   EXPECT_TRUE(d.fallback_used);
   EXPECT_EQ(d.f, (TaskFrequencies{5, 2, 0}));
   EXPECT_FALSE(d.current_status.holds[3]) << "the running configuration breaks C4";
@@ -71,7 +55,8 @@ TEST(FrequencyAdapterTest, RecordingFillsARolloutStep) {
   FrequencyAdapter fa(MakeFrequencyPolicy(ActionGrid(), 4));
   Rng rng(5);
   RolloutStep step;
-  const FrequencyDecision d = fa.Decide(Board(), Flight(), ActMode::kSample, &rng, nullptr, &step);
+  const FrequencyDecision d =
+      fa.Decide(ExampleBoard(), ExampleFlight(), ActMode::kSample, &rng, nullptr, &step);
   EXPECT_EQ(step.action, d.action);
   EXPECT_EQ(step.obs.size(), kPolicyStateDim);
   EXPECT_EQ(step.mask.size(), 98u);
@@ -79,7 +64,8 @@ TEST(FrequencyAdapterTest, RecordingFillsARolloutStep) {
   EXPECT_LT(step.log_prob, 0.0);
   EXPECT_EQ(step.log_prob, d.log_prob);
   EXPECT_EQ(step.value, d.value);
-  EXPECT_EQ(d.macs, fa.policy().net.MacsPerDecision(true) + FrequencyAdapter::kMaskMacsPerAction * 98);
+  EXPECT_EQ(d.macs,
+            fa.policy().net.MacsPerDecision(true) + FrequencyAdapter::kMaskMacsPerAction * 98);
 }
 
 TEST(FrequencyAdapterTest, RefusesPoliciesWithoutGridOrWithOtherFeatures) {
