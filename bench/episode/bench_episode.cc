@@ -1,10 +1,14 @@
 // bench_episode: whole-episode throughput and where an episode's host CPU goes.
 //
-//   bench_episode [--world ID]... [--board ID]... [--param k=v]... [--seed N] [--no-replay]
-//   (default: --world s1 --world s2 --board host --board tx2 --seed 1)
+//   bench_episode [--world ID]... [--board ID]... [--method ID] [--param k=v]... [--set k=v]...
+//                 [--seed N] [--no-replay]
+//   (default: --world s1 --world s2 --board host --board tx2 --method baseline --seed 1)
 //
-// For each world x board it flies one baseline episode (virtual clock, cost model) and prints one
-// JSON object with:
+// --param sets world parameters, --set the episode's tunables (as `enavi fly --set`, e.g.
+// camera.decimation=1 for the full 640x480 frame).
+//
+// For each world x board it flies one episode (virtual clock, cost model) and prints one JSON
+// object with:
 //   - sim seconds per wall second (and per host-CPU second of the episode's thread);
 //   - the episode's host CPU split: navstack jobs (the four navigation tasks' code and commits,
 //     as the executor measures them: TaskStats.host_cpu_s, seen through the job observer) vs
@@ -24,6 +28,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <string>
@@ -142,12 +147,15 @@ Replay ReplayWithoutNavstack(const api::EpisodeSpec& spec, const sim::PreparedWo
 }
 
 nlohmann::json Bench(const std::string& world_id, const std::map<std::string, std::string>& params,
-                     const std::string& board, std::uint64_t seed, const sim::PreparedWorld& world, bool replay) {
+                     const std::map<std::string, double>& overrides, const std::string& board,
+                     const std::string& method, std::uint64_t seed, const sim::PreparedWorld& world, bool replay) {
   api::EpisodeSpec spec;
   spec.world = world_id;
   spec.world_params = params;
+  spec.overrides = overrides;
   spec.seed = seed;
   spec.board = board;
+  spec.method = method;
 
   std::array<TaskCpu, navstack::kTaskCount> tasks{};
   sim::EpisodeOptions options;
@@ -174,6 +182,8 @@ nlohmann::json Bench(const std::string& world_id, const std::map<std::string, st
   j["world"] = world_id;
   j["params"] = params;
   j["board"] = board;
+  j["method"] = method;
+  j["overrides"] = overrides;
   j["seed"] = seed;
   j["end_reason"] = result.end_reason;
   j["sim_s"] = result.sim_time_s;
@@ -197,7 +207,7 @@ nlohmann::json Bench(const std::string& world_id, const std::map<std::string, st
   j["tasks"] = per_task;
   j["per_frame_ms"] = {
       {"eci", ms_per_job(eci.cpu_s, eci.jobs)},
-      {"map_update_0.1m", ms_per_job(tasks[0].cpu_with_work_s, tasks[0].jobs_with_work)},
+      {method == "baseline" ? "map_update_0.1m" : "map_update", ms_per_job(tasks[0].cpu_with_work_s, tasks[0].jobs_with_work)},
       {"replan", ms_per_job(tasks[1].cpu_with_work_s, tasks[1].jobs_with_work)},
       {"collision_check", ms_per_job(tasks[2].cpu_with_work_s, tasks[2].jobs_with_work)}};
   if (replay) {
@@ -230,6 +240,8 @@ int main(int argc, char** argv) {
   using namespace enavi;
   std::vector<std::string> world_ids, boards;
   std::map<std::string, std::string> params;
+  std::map<std::string, double> overrides;
+  std::string method = "baseline";
   std::uint64_t seed = 1;
   bool replay = true;
   for (int i = 1; i < argc; ++i) {
@@ -249,11 +261,24 @@ int main(int argc, char** argv) {
         return 2;
       }
       params[kv.substr(0, eq)] = kv.substr(eq + 1);
+    } else if (a == "--method" && has_value) {
+      method = argv[++i];
+    } else if (a == "--set" && has_value) {
+      const std::string kv = argv[++i];
+      const auto eq = kv.find('=');
+      char* end = nullptr;
+      const double v = eq == std::string::npos ? 0.0 : std::strtod(kv.c_str() + eq + 1, &end);
+      if (eq == std::string::npos || end == kv.c_str() + eq + 1 || *end != '\0') {
+        std::fprintf(stderr, "--set: expected name=number, got '%s'\n", kv.c_str());
+        return 2;
+      }
+      overrides[kv.substr(0, eq)] = v;
     } else if (a == "--no-replay") {
       replay = false;
     } else {
       std::fprintf(stderr,
-                   "usage: bench_episode [--world ID]... [--board ID]... [--param k=v]... [--seed N] [--no-replay]\n");
+                   "usage: bench_episode [--world ID]... [--board ID]... [--method ID] [--param k=v]... [--set k=v]...\n"
+                   "                     [--seed N] [--no-replay]\n");
       return a == "--help" ? 0 : 2;
     }
   }
@@ -271,7 +296,7 @@ int main(int argc, char** argv) {
       const auto world = sim::PrepareWorld(worlds::ResolveWorld(request));
       const double prepare_s = navstack::ThreadCpuSeconds() - c0;
       for (const std::string& board : boards) {
-        nlohmann::json run = Bench(id, params, board, seed, *world, replay);
+        nlohmann::json run = Bench(id, params, overrides, board, method, seed, *world, replay);
         run["prepare_world_cpu_s"] = prepare_s;  // once per world, not part of the episode
         std::fprintf(stderr, "%s on %s: %.1f sim s in %.1f wall s, %.1f %% of the episode's CPU outside the navstack\n",
                      id.c_str(), board.c_str(), run["sim_s"].get<double>(), run["wall_s"].get<double>(),
@@ -283,6 +308,6 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
   }
-  std::printf("%s\n", nlohmann::json{{"bench", "episode"}, {"method", "baseline"}, {"runs", runs}}.dump(2).c_str());
+  std::printf("%s\n", nlohmann::json{{"bench", "episode"}, {"method", method}, {"runs", runs}}.dump(2).c_str());
   return 0;
 }

@@ -21,8 +21,16 @@ struct CameraIntrinsics {
   /// Intrinsics from image size and full horizontal/vertical field of view in degrees.
   static CameraIntrinsics FromFov(int width, int height, double hfov_deg, double vfov_deg,
                                   double min_range, double max_range);
-  /// Default sensor of the farm: 640x480, 87 x 58 deg, 0.2 - 10 m (RealSense D435-like).
+  /// The farm's depth sensor at full resolution: 640x480, 87 x 58 deg, 0.2 - 10 m (RealSense
+  /// D435-like).
   static CameraIntrinsics Default() { return FromFov(640, 480, 87.0, 58.0, 0.2, 10.0); }
+  /// The stream the navigation stack reads by default: Default() decimated 2 x 2 (320x240).
+  static CameraIntrinsics DefaultStream() { return Default().Decimated(2); }
+
+  /// The same field of view through an n x n decimation (RealSense's decimation filter):
+  /// floor(width / n) x floor(height / n) pixels, each one ray through the centre of an n x n
+  /// block of this camera's pixels. Throws std::invalid_argument unless 1 <= n <= min(width, height).
+  CameraIntrinsics Decimated(int n) const;
 
   /// Unit-depth ray direction of pixel centre (u, v) in frame C: (x, y, 1).
   Eigen::Vector3d PixelRay(double u, double v) const {

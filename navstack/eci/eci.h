@@ -21,8 +21,9 @@ struct EciOptions {
   /// (Lay <= floor((d_per - d_min) / (2 d_min)) + 1 = 10 at 10 m) and makes anything nearer than
   /// d_min fall in layer 0, "demanding immediate evasive action". (0, d_per]
   double d_min = 0.5;
-  /// Occ(a,k) = 1 when at least this many valid pixels fall in zone a of layer k. [1, 1e9]
-  int min_pixels = 50;
+  /// Occ(a,k) = 1 when at least this many valid pixels fall in zone a of layer k. 12 on the
+  /// default 320x240 stream covers the solid angle of 50 pixels of the full 640x480 frame. [1, 1e9]
+  int min_pixels = 12;
   /// Also count a zone of layer k occupied when at least occluded_fraction of the zone's pixels
   /// return from a nearer layer: the camera cannot see into it and the vehicle cannot fly
   /// through it. Without this, a depth image (one return per pixel) can only fill one layer

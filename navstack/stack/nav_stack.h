@@ -35,7 +35,8 @@ struct TaskRates {
 };
 
 struct NavStackOptions {
-  CameraIntrinsics camera = CameraIntrinsics::Default();
+  /// The depth stream the stack reads (and the simulator renders): 320x240 by default.
+  CameraIntrinsics camera = CameraIntrinsics::DefaultStream();
   MapOptions map;
   PerceptionOptions perception;
   PlannerOptions planner;

@@ -71,6 +71,20 @@ TEST(BaselineOnHostTest, ReachesTheGoalThroughAShortForestWithoutCollision) {
   EXPECT_GT(r.eci.max, 0.0) << "trees in view must raise eci: " << Describe(r);
 }
 
+TEST(BaselineOnHostTest, FliesOnTheFullFrameToo) {
+  // camera.decimation=1: the stack reads the sensor's 640x480 frame instead of the 320x240 stream.
+  api::EpisodeSpec spec = Spec("forest", 2, {{"length", "12"}});
+  spec.overrides = {{"camera.decimation", 1}, {"perception.stride", 4}};
+  const api::EpisodeResult full = sim::RunEpisode(spec);
+  ExpectReachedGoal(full);
+  EXPECT_EQ(full.notes.at("depth_stream"), "640x480");
+  spec.overrides.clear();
+  const api::EpisodeResult stream = sim::RunEpisode(spec);
+  EXPECT_EQ(stream.notes.at("depth_stream"), "320x240");
+  EXPECT_NEAR(full.eci.mean, stream.eci.mean, 0.05) << Describe(full) << "\n" << Describe(stream);
+  EXPECT_NE(nlohmann::json(full).dump(), nlohmann::json(stream).dump()) << "the override had no effect";
+}
+
 TEST(BaselineOnHostTest, FliesTheCityS1AtMostOneAndAHalfTimesTheStraightLine) {
   const api::EpisodeResult r = sim::RunEpisode(Spec("s1", 1));
   ExpectReachedGoal(r);

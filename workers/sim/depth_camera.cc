@@ -88,36 +88,51 @@ void RenderPackets(const RenderSetup& s, IntersectN intersect) {
   RTCIntersectContext context = CoherentContext();
   alignas(64) RayHitN rh;
   alignas(64) int valid[N];
-  const float ox = s.frame.origin.x(), oy = s.frame.origin.y(), oz = s.frame.origin.z();
+  // Embree writes only tfar and the hit fields: the rest is set once per frame.
+  for (int j = 0; j < N; ++j) {
+    rh.ray.org_x[j] = s.frame.origin.x();
+    rh.ray.org_y[j] = s.frame.origin.y();
+    rh.ray.org_z[j] = s.frame.origin.z();
+    rh.ray.tnear[j] = 0.0f;
+    rh.ray.time[j] = 0.0f;
+    rh.ray.mask[j] = 0xFFFFFFFFu;
+    rh.ray.id[j] = 0;
+    rh.ray.flags[j] = 0;
+  }
+  // Ray tables padded to whole tiles, so a tile row is TW straight loads the compiler vectorises;
+  // padded lanes are masked off and never traced.
+  std::vector<float> xs(s.rays.x_of_u), ys(s.rays.y_of_v);
+  xs.resize((s.width + TW - 1) / TW * TW, 0.0f);
+  ys.resize((s.height + TH - 1) / TH * TH, 0.0f);
+  const Eigen::Vector3f& ex = s.frame.ex;
+  const Eigen::Vector3f& ey = s.frame.ey;
+  const Eigen::Vector3f& ez = s.frame.ez;
   for (int v0 = 0; v0 < s.height; v0 += TH) {
     for (int u0 = 0; u0 < s.width; u0 += TW) {
-      for (int j = 0; j < N; ++j) {
-        const int u = u0 + j % TW, v = v0 + j / TW;
-        const bool inside = u < s.width && v < s.height;
-        valid[j] = inside ? -1 : 0;
-        const Eigen::Vector3f d =
-            inside ? s.frame.Direction(s.rays.x_of_u[u], s.rays.y_of_v[v]) : s.frame.ez;
-        rh.ray.org_x[j] = ox;
-        rh.ray.org_y[j] = oy;
-        rh.ray.org_z[j] = oz;
-        rh.ray.dir_x[j] = d.x();
-        rh.ray.dir_y[j] = d.y();
-        rh.ray.dir_z[j] = d.z();
-        rh.ray.tnear[j] = 0.0f;
-        rh.ray.tfar[j] = s.max_range;
-        rh.ray.time[j] = 0.0f;
-        rh.ray.mask[j] = 0xFFFFFFFFu;
-        rh.ray.id[j] = 0;
-        rh.ray.flags[j] = 0;
-        rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+      for (int dv = 0; dv < TH; ++dv) {
+        const float y = ys[v0 + dv];
+        const bool row_inside = v0 + dv < s.height;
+        for (int du = 0; du < TW; ++du) {
+          const int j = dv * TW + du;
+          const float x = xs[u0 + du];
+          valid[j] = row_inside && u0 + du < s.width ? -1 : 0;
+          // CameraRayFrame::Direction, written out per component in the same operation order.
+          rh.ray.dir_x[j] = (ex.x() * x + ey.x() * y) + ez.x();
+          rh.ray.dir_y[j] = (ex.y() * x + ey.y() * y) + ez.y();
+          rh.ray.dir_z[j] = (ex.z() * x + ey.z() * y) + ez.z();
+          rh.ray.tfar[j] = s.max_range;
+          rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+          rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+        }
       }
       intersect(valid, s.scene, &context, &rh);
-      for (int j = 0; j < N; ++j) {
-        if (!valid[j]) continue;
-        const int u = u0 + j % TW, v = v0 + j / TW;
-        s.depth[v * s.width + u] = DepthOrNoReturn(rh.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID,
-                                                   rh.ray.tfar[j], s.min_range, s.max_range);
+      for (int dv = 0; dv < TH && v0 + dv < s.height; ++dv) {
+        float* row = s.depth + static_cast<std::size_t>(v0 + dv) * s.width + u0;
+        for (int du = 0; du < TW && u0 + du < s.width; ++du) {
+          const int j = dv * TW + du;
+          row[du] = DepthOrNoReturn(rh.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID, rh.ray.tfar[j],
+                                    s.min_range, s.max_range);
+        }
       }
     }
   }

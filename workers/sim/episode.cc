@@ -100,6 +100,7 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
       " on " + std::to_string(config.scheduler.threads > 0 ? std::min(config.scheduler.threads, board.cores) : board.cores) +
       " thread(s)";
   result.notes["triangles"] = std::to_string(prepared.triangles);
+  result.notes["depth_stream"] = std::to_string(config.nav.camera.width) + "x" + std::to_string(config.nav.camera.height);
 
   // Vehicle: hovering at the start, facing the goal.
   const navstack::VehicleParams vehicle;

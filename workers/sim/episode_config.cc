@@ -47,6 +47,10 @@ const std::vector<Setter>& Setters() {
          c.nav.rates.resolution = v;
          c.nav.map.resolution = v;
        }},
+      {{"camera.decimation", 1, 8, true, "depth stream: the 640x480 sensor decimated n x n (2: 320x240); perception.stride counts its pixels"},
+       [](EpisodeConfig& c, double v) {
+         c.nav.camera = navstack::CameraIntrinsics::Default().Decimated(static_cast<int>(v));
+       }},
       {{"camera.noise_k", 0.0, 0.05, false, "depth noise sigma = k d^2, 1/m"},
        [](EpisodeConfig& c, double v) { c.noise.k = v; }},
       {{"strategy.explore", 0, 1, true, "E-Navi: 1 samples the policy's actions (training), 0 greedy"},

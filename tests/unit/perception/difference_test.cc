@@ -12,7 +12,7 @@ using testing::CameraPose;
 using testing::RenderFrame;
 using testing::Scene;
 
-const CameraIntrinsics kCam = CameraIntrinsics::Default();
+const CameraIntrinsics kCam = CameraIntrinsics::DefaultStream();  // what the stack reads
 
 // Ground, a wall on the left, pillars ahead: depth edges and a grazing ground plane, where a
 // careless warp would report change.

@@ -14,7 +14,7 @@ using testing::CameraPose;
 using testing::RenderFrame;
 using testing::Scene;
 
-const CameraIntrinsics kCam = CameraIntrinsics::Default();
+const CameraIntrinsics kCam = CameraIntrinsics::DefaultStream();  // what the stack reads
 
 // A 4 x 3 m wall, face at x = d, seen from a camera at height 1 m looking along +x:
 //   cam (0,0,1) ---- d ----> |wall|
@@ -24,7 +24,7 @@ TEST(BackProjectTest, WallPointsLieOnTheWallInWorld) {
   const Eigen::Isometry3d X_WC = CameraPose({0, 0, 1});
   WorkCounts work;
   const ScanPoints scan = BackProject(RenderFrame(WallAt(3.05), kCam, X_WC), kCam, {}, &work);
-  EXPECT_EQ(work.Get(WorkUnit::kBackProjection), 160 * 120) << "stride 4 on 640 x 480";
+  EXPECT_EQ(work.Get(WorkUnit::kBackProjection), 160 * 120) << "stride 2 on 320 x 240";
   EXPECT_TRUE(scan.origin_W.isApprox(Eigen::Vector3d(0, 0, 1)));
   ASSERT_GT(scan.hits_W.size(), 1000u);
   for (const Eigen::Vector3f& p : scan.hits_W) {
@@ -74,7 +74,7 @@ TEST(BackProjectTest, StrideSetsTheSampleCount) {
     o.stride = stride;
     WorkCounts work;
     BackProject(frame, kCam, o, &work);
-    EXPECT_EQ(work.Get(WorkUnit::kBackProjection), ((640 + stride - 1) / stride) * ((480 + stride - 1) / stride));
+    EXPECT_EQ(work.Get(WorkUnit::kBackProjection), ((kCam.width + stride - 1) / stride) * ((kCam.height + stride - 1) / stride));
   }
 }
 
@@ -92,7 +92,7 @@ TEST(BackProjectTest, RejectsBadOptions) {
   o.min_range = 6.0;  // above max_range
   EXPECT_THROW(BackProject(frame, kCam, o), std::invalid_argument);
   CameraIntrinsics wrong = kCam;
-  wrong.width = 320;
+  wrong.width = kCam.width / 2;
   EXPECT_THROW(BackProject(frame, wrong), std::logic_error);
 }
 

@@ -79,6 +79,37 @@ TEST(DepthCameraTest, ObliqueWallMatchesRayPlaneGeometry) {
   EXPECT_GT(std::abs(image.at(40, 420) - image.at(520, 60)), 0.5) << "depth should vary";
 }
 
+// On a plane, 1/depth is affine in pixel coordinates, so a decimated pixel (one ray through the
+// centre of its 2 x 2 block) sees the harmonic mean of the block's four full-resolution depths.
+TEST(DepthCameraTest, DecimatedStreamSamplesTheCentreOfEachBlock) {
+  Eigen::Isometry3d X_WBox = Eigen::Isometry3d::Identity();
+  X_WBox.linear() = Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ()).matrix();
+  X_WBox.translation() = Eigen::Vector3d(5.0, 0.5, 1.0);
+  worlds::TriangleMesh mesh;
+  AddBox(&mesh, {0.5, 12.0, 8.0}, X_WBox);
+  const EmbreeScene scene(mesh);
+  const CameraIntrinsics full = CameraIntrinsics::Default();
+  const CameraIntrinsics stream = CameraIntrinsics::DefaultStream();
+  ASSERT_EQ(stream.width, 320);
+  ASSERT_EQ(stream.height, 240);
+  DepthImage big, small;
+  DepthCamera(full).Render(scene, CameraLookingAlongX(), &big);
+  DepthCamera(stream).Render(scene, CameraLookingAlongX(), &small);
+  ASSERT_EQ(small.width, 320);
+  for (auto [u, v] : {std::pair{160, 120}, std::pair{20, 210}, std::pair{260, 30}, std::pair{0, 0}}) {
+    double inv = 0;
+    for (int du = 0; du < 2; ++du) {
+      for (int dv = 0; dv < 2; ++dv) {
+        ASSERT_TRUE(DepthImage::Valid(big.at(2 * u + du, 2 * v + dv)));
+        inv += 0.25 / big.at(2 * u + du, 2 * v + dv);
+      }
+    }
+    EXPECT_NEAR(small.at(u, v), 1.0 / inv, 1e-3) << "pixel (" << u << ", " << v << ")";
+  }
+  EXPECT_THROW(full.Decimated(0), std::invalid_argument);
+  EXPECT_THROW(full.Decimated(481), std::invalid_argument);
+}
+
 TEST(DepthCameraTest, NothingWithinRangeIsNoReturn) {
   worlds::TriangleMesh mesh;
   AddAlignedBox(&mesh, {4, -1, 0}, {5, 1, 1.5});  // low, narrow block straight ahead
