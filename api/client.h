@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/http_schema.h"
+#include "api/rollout_records.h"
 
 namespace enavi::api {
 
@@ -35,12 +36,18 @@ class FarmClient {
   JobProgress Cancel(const std::string& job_id);
   nlohmann::json Workers();
   nlohmann::json Health();
+  /// Stores an E-Navi policy (JSON text) on the server; returns "sha256:HEX" for job specs.
+  std::string UploadPolicy(const std::string& policy_json);
+  /// A collection job's stored rollouts, one per done episode, in episode order.
+  std::vector<StoredRollout> Rollouts(const std::string& job_id);
 
   const std::string& url() const { return url_; }
 
  private:
   nlohmann::json Request(const std::string& method, const std::string& path,
                          const std::string& body = "", const std::string& file_name = "");
+  std::string RequestRaw(const std::string& method, const std::string& path, const std::string& body,
+                         const std::string& file_name, const std::string& content_type);
   std::string url_;
   std::string token_;
 };

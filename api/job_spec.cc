@@ -154,6 +154,16 @@ std::string ResolveFile(const Context& ctx, const YAML::Node& n, const std::stri
   return resolved.string();
 }
 
+// A policy by content hash, or a file under the allowed roots.
+std::string Policy(const Context& ctx, const YAML::Node& n, const std::string& field) {
+  const std::string value = Scalar(ctx, n, field);
+  if (value.rfind(kPolicyHashPrefix, 0) == 0) {
+    if (!IsPolicyHashRef(value)) ctx.Fail(n, field, "expected sha256: and 64 lower-case hex digits");
+    return value;
+  }
+  return ResolveFile(ctx, n, field, value, {".json", ".bin", ".pt"});
+}
+
 Vec3 Point(const Context& ctx, const YAML::Node& n, const std::string& field) {
   if (!n.IsSequence() || n.size() != 3) ctx.Fail(n, field, "expected [x, y, z]");
   Vec3 p;
@@ -276,12 +286,29 @@ EpisodeOverride Override(const Context& ctx, const YAML::Node& n) {
   if (n["timeout_s"]) o.timeout_s = Number(ctx, n["timeout_s"], f + ".timeout_s", 0, kMaxTimeoutS);
   if (n["dilation"]) o.dilation = Number(ctx, n["dilation"], f + ".dilation", 0.01, kMaxDilation);
   if (n["policy"]) {
-    o.policy = ResolveFile(ctx, n["policy"], f + ".policy",
-                           Scalar(ctx, n["policy"], f + ".policy"), {".json", ".bin", ".pt"});
+    o.policy = Policy(ctx, n["policy"], f + ".policy");
   }
   if (n["overrides"]) o.overrides = Tunables(ctx, n["overrides"], f + ".overrides");
   if (n["world_params"]) o.world_params = StringMap(ctx, n["world_params"], f + ".world_params");
   return o;
+}
+
+EpisodePick Pick(const Context& ctx, const YAML::Node& n) {
+  const std::string f = "episodes";
+  if (!n.IsMap()) ctx.Fail(n, f, "expected {board: B, scenario: S, seed: N}");
+  CheckKeys(ctx, n, f, {"board", "scenario", "seed"});
+  for (const char* required : {"board", "scenario", "seed"}) {
+    if (!n[required]) ctx.Fail(n, f + "." + required, "missing (required)");
+  }
+  EpisodePick p;
+  p.board = Choices(ctx, n["board"], f + ".board", kBoards, "board").front();
+  p.scenario = Scenario(ctx, n["scenario"]);
+  const std::int64_t seed = Integer(ctx, n["seed"], f + ".seed");
+  if (seed < 0 || seed > (std::int64_t{1} << 53)) {
+    ctx.Fail(n["seed"], f + ".seed", "seed " + std::to_string(seed) + " outside [0, 2^53]");
+  }
+  p.seed = static_cast<std::uint64_t>(seed);
+  return p;
 }
 
 bool Matches(const EpisodeOverride& o, const EpisodeSpec& e) {
@@ -308,9 +335,18 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   if (!root.IsMap()) ctx.Fail(root, "job", "expected a YAML map of name, boards, scenarios, ...");
   CheckKeys(ctx, root, "",
             {"name", "boards", "scenarios", "methods", "seeds", "clock", "cost", "dilation",
-             "timeout_s", "policy", "world_params", "overrides", "episode_overrides"});
-  for (const char* required : {"boards", "scenarios", "methods", "seeds"}) {
-    if (!root[required]) ctx.Fail(root, required, "missing (required)");
+             "timeout_s", "policy", "world_params", "overrides", "episode_overrides", "episodes",
+             "collect", "sample"});
+  // Either the matrix or an explicit episode list.
+  if (root["episodes"]) {
+    for (const char* matrix : {"boards", "scenarios", "seeds"}) {
+      if (root[matrix]) ctx.Fail(root[matrix], matrix, "not with episodes: (give one or the other)");
+    }
+    if (!root["methods"]) ctx.Fail(root, "methods", "missing (required)");
+  } else {
+    for (const char* required : {"boards", "scenarios", "methods", "seeds"}) {
+      if (!root[required]) ctx.Fail(root, required, "missing (required)");
+    }
   }
 
   JobSpec job;
@@ -320,24 +356,53 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   } else {
     job.name = fs::path(file_name).stem().string();
   }
-  job.boards = Choices(ctx, root["boards"], "boards", kBoards, "board");
   job.methods = Choices(ctx, root["methods"], "methods", kMethods, "method");
-  for (const auto& item : Items(ctx, root["scenarios"], "scenarios")) {
-    ScenarioEntry entry = Scenario(ctx, item);
-    for (const auto& other : job.scenarios) {
-      if (other.world == entry.world) ctx.Fail(item, "scenarios", "'" + entry.world + "' listed twice");
+  if (const YAML::Node list = root["episodes"]) {
+    if (!list.IsSequence() || list.size() == 0) ctx.Fail(list, "episodes", "expected a non-empty list");
+    if (list.size() > options.max_episodes) {
+      ctx.Fail(list, "episodes",
+               std::to_string(list.size()) + " episodes, above the limit " +
+                   std::to_string(options.max_episodes));
     }
-    job.scenarios.push_back(std::move(entry));
+    for (const auto& item : list) job.episodes.push_back(Pick(ctx, item));
+  } else {
+    job.boards = Choices(ctx, root["boards"], "boards", kBoards, "board");
+    for (const auto& item : Items(ctx, root["scenarios"], "scenarios")) {
+      ScenarioEntry entry = Scenario(ctx, item);
+      for (const auto& other : job.scenarios) {
+        if (other.world == entry.world) ctx.Fail(item, "scenarios", "'" + entry.world + "' listed twice");
+      }
+      job.scenarios.push_back(std::move(entry));
+    }
+    if (job.scenarios.empty()) ctx.Fail(root["scenarios"], "scenarios", "empty list");
+    job.seeds = Seeds(ctx, root["seeds"]);
   }
-  if (job.scenarios.empty()) ctx.Fail(root["scenarios"], "scenarios", "empty list");
-  job.seeds = Seeds(ctx, root["seeds"]);
   if (root["clock"]) job.clock = Choices(ctx, root["clock"], "clock", kClocks, "clock").front();
   if (root["cost"]) job.cost = Choices(ctx, root["cost"], "cost", kCostModes, "cost mode").front();
   if (root["dilation"]) job.dilation = Number(ctx, root["dilation"], "dilation", 0.01, kMaxDilation);
   if (root["timeout_s"]) job.timeout_s = Number(ctx, root["timeout_s"], "timeout_s", 0, kMaxTimeoutS);
   if (root["policy"]) {
-    job.policy = ResolveFile(ctx, root["policy"], "policy", Scalar(ctx, root["policy"], "policy"),
-                             {".json", ".bin", ".pt"});
+    job.policy = Policy(ctx, root["policy"], "policy");
+  }
+  if (root["collect"]) {
+    if (Scalar(ctx, root["collect"], "collect") != "rollouts") {
+      ctx.Fail(root["collect"], "collect", "the only collection is 'rollouts'");
+    }
+    job.collect = CollectSpec{};
+    if (job.methods != std::vector<std::string>{"enavi"}) {
+      ctx.Fail(root["methods"], "methods", "a collection job flies [enavi] only (rollouts are E-Navi's)");
+    }
+    if (job.clock != "virtual") {
+      ctx.Fail(root["clock"], "clock", "rollouts are recorded on the virtual clock only");
+    }
+    if (job.policy.empty()) ctx.Fail(root, "policy", "a collection job names its policy");
+    if (root["sample"]) {
+      const std::string v = Scalar(ctx, root["sample"], "sample");
+      if (v != "true" && v != "false") ctx.Fail(root["sample"], "sample", "expected true or false");
+      job.collect->sample = v == "true";
+    }
+  } else if (root["sample"]) {
+    ctx.Fail(root["sample"], "sample", "only with collect: rollouts");
   }
   if (root["world_params"]) job.world_params = StringMap(ctx, root["world_params"], "world_params");
   if (root["overrides"]) job.overrides = Tunables(ctx, root["overrides"], "overrides");
@@ -348,7 +413,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
 
   // Each factor is bounded above, so the product cannot overflow before this check.
   const std::size_t size = job.MatrixSize();
-  if (size > options.max_episodes) {
+  if (job.episodes.empty() && size > options.max_episodes) {
     ctx.Fail(root["seeds"], "matrix",
              std::to_string(job.boards.size()) + " boards x " +
                  std::to_string(job.scenarios.size()) + " scenarios x " +
@@ -367,13 +432,31 @@ JobSpec LoadJobSpec(const std::filesystem::path& path, const JobSpecOptions& opt
   return ParseJobSpec(text.str(), path.string(), options);
 }
 
+bool IsPolicyHashRef(const std::string& policy) {
+  const std::string prefix = kPolicyHashPrefix;
+  if (policy.size() != prefix.size() + 64 || policy.rfind(prefix, 0) != 0) return false;
+  return std::all_of(policy.begin() + static_cast<std::ptrdiff_t>(prefix.size()), policy.end(),
+                     [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
+}
+
 std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
   std::vector<EpisodeSpec> episodes;
   episodes.reserve(job.MatrixSize());
-  for (const auto& board : job.boards) {
-    for (const auto& scenario : job.scenarios) {
+  // The matrix as a list of (board, scenario, seed), or the explicit list.
+  std::vector<EpisodePick> picks = job.episodes;
+  if (picks.empty()) {
+    for (const auto& board : job.boards) {
+      for (const auto& scenario : job.scenarios) picks.push_back({board, scenario, 0});
+    }
+  }
+  for (const auto& pick : picks) {
+    const std::string& board = pick.board;
+    const ScenarioEntry& scenario = pick.scenario;
+    {
       for (const auto& method : job.methods) {
-        for (const std::uint64_t seed : job.seeds) {
+        const std::vector<std::uint64_t> seeds =
+            job.episodes.empty() ? job.seeds : std::vector<std::uint64_t>{pick.seed};
+        for (const std::uint64_t seed : seeds) {
           EpisodeSpec e;
           e.world = scenario.world;
           e.seed = seed;
@@ -397,6 +480,8 @@ std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
             for (const auto& [k, v] : o.overrides) e.overrides[k] = v;
             for (const auto& [k, v] : o.world_params) e.world_params[k] = v;
           }
+          // Collection: the strategy controller samples its actions (a named tunable).
+          if (job.collect) e.overrides["strategy.explore"] = job.collect->sample ? 1.0 : 0.0;
           episodes.push_back(std::move(e));
         }
       }

@@ -21,6 +21,13 @@
 //     - match: {board: tx2, method: [enavi], scenario: s1, seed: 2}
 //       timeout_s: 120
 //       overrides: {f_per_max: 15}
+//   collect: rollouts             # RL collection job: each episode's rollout is stored too
+//   sample: true                  # collection: sample the policy's actions (false: greedy)
+//
+// Instead of the boards x scenarios x seeds matrix, `episodes:` may list the episodes one by one
+// (each is flown with every method): [{board: tx2, scenario: s1, seed: 104}, ...].
+// A collection job needs methods [enavi], the virtual clock and a policy: a file, or
+// `sha256:HEX` for a policy uploaded to the server (POST /api/policies).
 
 #include <array>
 #include <cstddef>
@@ -77,6 +84,23 @@ struct EpisodeOverride {
   std::map<std::string, std::string> world_params;
 };
 
+/// One episode of an explicit `episodes:` list.
+struct EpisodePick {
+  std::string board;
+  ScenarioEntry scenario;
+  std::uint64_t seed = 1;
+};
+
+/// What a collection job (`collect: rollouts`) asks for.
+struct CollectSpec {
+  bool sample = false;  ///< sample the policy's actions (training); false: greedy
+};
+
+/// Prefix of a policy named by content hash instead of a file: "sha256:" + 64 hex digits.
+inline constexpr const char* kPolicyHashPrefix = "sha256:";
+/// True for "sha256:" followed by 64 lower-case hex digits.
+bool IsPolicyHashRef(const std::string& policy);
+
 struct JobSpec {
   std::string name;
   std::vector<std::string> boards;
@@ -91,8 +115,11 @@ struct JobSpec {
   std::map<std::string, std::string> world_params;
   std::map<std::string, double> overrides;
   std::vector<EpisodeOverride> episode_overrides;
+  std::vector<EpisodePick> episodes;  ///< explicit list instead of the matrix (when non-empty)
+  std::optional<CollectSpec> collect;
 
   std::size_t MatrixSize() const {
+    if (!episodes.empty()) return episodes.size() * methods.size();
     return boards.size() * scenarios.size() * methods.size() * seeds.size();
   }
 };

@@ -27,5 +27,7 @@ void RegisterServeCommand(CLI::App& app);
 void RegisterWorkerCommand(CLI::App& app);
 void RegisterClientCommands(CLI::App& app);  // submit, status, results, cancel
 void RegisterEvalCommand(CLI::App& app);
+/// `enavi dataset export` (server/cli/dataset_cmd.cc).
+void RegisterDatasetCommands(CLI::App& app);
 
 }  // namespace enavi::cli

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   RegisterWorkerCommand(app);
   RegisterClientCommands(app);
   RegisterEvalCommand(app);
+  RegisterDatasetCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -2,6 +2,7 @@
 
 #include <arpa/inet.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 #include <httplib.h>
@@ -10,6 +11,7 @@
 
 #include "api/farm_messages.h"
 #include "api/http_schema.h"
+#include "server/scheduler/collection.h"
 
 namespace enavi::server {
 namespace {
@@ -62,7 +64,7 @@ HttpApi::HttpApi(FarmServer* farm, HttpOptions options)
     throw std::invalid_argument("--token: required when --http binds a non-loopback address ('" +
                                 options_.host + "')");
   }
-  server_->set_payload_max_length(options_.max_body_bytes);
+  server_->set_payload_max_length(std::max(options_.max_body_bytes, options_.max_policy_bytes));
   Routes();
 }
 
@@ -134,10 +136,34 @@ void HttpApi::Routes() {
     const std::string file = req.has_header("X-Enavi-File") ? req.get_header_value("X-Enavi-File")
                                                             : std::string("job.yaml");
     // Validation failures are bad input: 400 with the FILE:LINE: field: reason message.
+    if (req.body.size() > options_.max_body_bytes) {
+      return Error(res, 413, "job spec of " + std::to_string(req.body.size()) + " bytes, above " +
+                                 std::to_string(options_.max_body_bytes));
+    }
     const api::JobSpec job = api::ParseJobSpec(req.body, file, options_.job_spec);
-    const auto episodes = api::ExpandJob(job);
-    const std::string id = farm_->Submit(job.name, req.body, episodes);
+    auto episodes = api::ExpandJob(job);
+    const auto collect = PrepareCollection(&farm_->store(), job, &episodes);
+    const std::string id = farm_->Submit(job.name, req.body, episodes, collect);
     Reply(res, 201, {{"job_id", id}, {"name", job.name}, {"episodes", episodes.size()}});
+  });
+
+  // A policy for collection jobs, by content hash: {"hash": "sha256:HEX"}.
+  s.Post("/api/policies", [&store](const httplib::Request& req, httplib::Response& res) {
+    const std::string hash = StorePolicy(&store, req.body, "uploaded policy");
+    Reply(res, 201, {{"hash", api::kPolicyHashPrefix + hash}});
+  });
+
+  // A collection job's rollouts, exactly one per done episode (api/rollout_records.h stream).
+  s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/rollouts)", [&store](const httplib::Request& req,
+                                                           httplib::Response& res) {
+    if (!store.Progress(req.matches[1], NowMs())) {
+      return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
+    }
+    if (!store.Collection(req.matches[1])) {
+      return Error(res, 400, "job '" + std::string(req.matches[1]) + "' is not a collection job (collect: rollouts)");
+    }
+    res.status = 200;
+    res.set_content(api::EncodeRolloutStream(store.Rollouts(req.matches[1])), "application/octet-stream");
   });
 
   s.Get("/api/jobs", [&store](const httplib::Request&, httplib::Response& res) {

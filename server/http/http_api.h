@@ -22,7 +22,8 @@ struct HttpOptions {
   /// Required on state-changing requests when non-empty ("Authorization: Bearer TOKEN").
   std::string token;
   api::JobSpecOptions job_spec;  ///< allowed roots and limits for submitted jobs
-  std::size_t max_body_bytes = 1 << 20;
+  std::size_t max_body_bytes = 1 << 20;     ///< job specs
+  std::size_t max_policy_bytes = 32 << 20;  ///< POST /api/policies (a policy file is ~2 MB)
 };
 
 /// True for 127.0.0.0/8, ::1 and "localhost".

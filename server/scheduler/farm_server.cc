@@ -4,6 +4,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include "navstack/rl/rollout.h"
+
 namespace enavi::server {
 
 std::int64_t NowMs() {
@@ -23,6 +25,8 @@ void FarmServer::Start() {
   // Leases that ran out while no server was watching go back to pending now; leases still
   // running are kept for their workers' heartbeats to renew.
   HandleReleased(store_->ExpireLeases(NowMs()), NowMs());
+  // Workers need the policies of every running collection job.
+  for (const auto& [hash, json] : store_->ActivePolicies()) bus_->Publish(api::PolicyBlob{hash, json});
   stop_ = false;
   thread_ = std::thread([this] { Loop(); });
 }
@@ -34,9 +38,11 @@ void FarmServer::Stop() {
 }
 
 std::string FarmServer::Submit(const std::string& name, const std::string& spec_yaml,
-                               const std::vector<api::EpisodeSpec>& episodes) {
+                               const std::vector<api::EpisodeSpec>& episodes,
+                               const std::optional<CollectionInfo>& collect) {
   const std::int64_t now = NowMs();
-  std::string job_id = store_->CreateJob(name, spec_yaml, episodes, now);
+  if (collect) PublishPolicy(collect->policy_hash);
+  std::string job_id = store_->CreateJob(name, spec_yaml, episodes, now, collect);
   spdlog::info("job {} '{}': {} episodes", job_id, name, episodes.size());
   PublishEvents({{job_id, "submitted", "", name}}, now);
   bus_->Wake();
@@ -179,8 +185,36 @@ void FarmServer::HandleReleased(const std::vector<ReleasedLease>& released, std:
   }
 }
 
-void FarmServer::HandleResults(const std::vector<api::ResultMessage>& results,
+void FarmServer::PublishPolicy(const std::string& hash) {
+  const auto json = store_->Policy(hash);
+  if (!json) throw std::invalid_argument("policy sha256:" + hash + ": not stored on this server");
+  bus_->Publish(api::PolicyBlob{hash, *json});
+}
+
+std::string FarmServer::CollectionHash(const std::string& job_id) {
+  {
+    std::lock_guard lock(mutex_);
+    if (auto it = collect_hash_.find(job_id); it != collect_hash_.end()) return it->second;
+  }
+  const auto c = store_->Collection(job_id);
+  std::lock_guard lock(mutex_);
+  return collect_hash_[job_id] = c ? c->policy_hash : std::string();
+}
+
+void FarmServer::HandleResults(const std::vector<api::ResultMessage>& input,
                                std::int64_t now_ms) {
+  // A rollout that does not decode is the episode's error, not data.
+  std::vector<api::ResultMessage> results = input;
+  for (api::ResultMessage& m : results) {
+    if (m.rollout.empty()) continue;
+    try {
+      navstack::rl::DecodeRollout(m.rollout, "rollout of " + m.episode_id);
+    } catch (const std::exception& e) {
+      m.status = api::ResultStatus::kError;
+      m.error = e.what();
+      m.rollout.clear();
+    }
+  }
   // One transaction for the whole batch, then the acks: a result is acknowledged only once it
   // is durable.
   const std::vector<IngestOutcome> outcomes = store_->Ingest(results, now_ms);
@@ -242,7 +276,7 @@ void FarmServer::Assign(std::int64_t now_ms) {
         store_->LeaseEpisodes(id, free, {status.boards, status.clocks}, deadline, now_ms);
     for (const Lease& l : leases) {
       bus_->Publish(api::Assignment{id, l.episode_id, l.attempt, l.job_id, l.deadline_ms,
-                                    options_.lease.count(), l.spec});
+                                    options_.lease.count(), l.spec, CollectionHash(l.job_id)});
     }
     if (!leases.empty()) {
       std::lock_guard lock(mutex_);

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <thread>
@@ -60,8 +61,10 @@ class FarmServer {
   void Stop();
 
   /// Stores a job and starts scheduling it; returns the job id.
+  /// A collection job's policy must be in the store (Store::PutPolicy) first.
   std::string Submit(const std::string& name, const std::string& spec_yaml,
-                     const std::vector<api::EpisodeSpec>& episodes);
+                     const std::vector<api::EpisodeSpec>& episodes,
+                     const std::optional<CollectionInfo>& collect = std::nullopt);
   /// Cancels a job and tells workers to stop its episodes. False: no such job.
   bool Cancel(const std::string& job_id);
 
@@ -82,6 +85,8 @@ class FarmServer {
   };
   void PublishEvents(const std::vector<PendingEvent>& events, std::int64_t now_ms);
   void RetireAssignment(const std::string& worker_id, const std::string& episode_id, int attempt);
+  std::string CollectionHash(const std::string& job_id);
+  void PublishPolicy(const std::string& hash);
 
   struct Worker {
     api::WorkerStatus status;
@@ -98,6 +103,7 @@ class FarmServer {
   std::map<std::string, Worker> workers_;
   FarmServerStats stats_;
   std::set<std::string> finished_announced_;
+  std::map<std::string, std::string> collect_hash_;  // job -> policy hash ("" : not collecting)
   std::atomic<bool> stop_{false};
   std::thread thread_;
   std::chrono::steady_clock::time_point last_periodic_;

@@ -76,6 +76,31 @@ CREATE TABLE IF NOT EXISTS results (
 CREATE INDEX IF NOT EXISTS results_by_job ON results(job_id, board, scenario, method, seed);
 )sql";
 
+// Collection jobs (RL rollouts): added tables only, so an existing database gains them on open.
+// A rollout row is written in the transaction that stores its episode's result, keyed by episode:
+// exactly one per done episode.
+constexpr const char* kCollectSchema = R"sql(
+CREATE TABLE IF NOT EXISTS policies (
+  hash       TEXT PRIMARY KEY,
+  json       TEXT NOT NULL,
+  created_ms INTEGER NOT NULL
+);
+CREATE TABLE IF NOT EXISTS collect_jobs (
+  job_id      TEXT PRIMARY KEY REFERENCES jobs(id),
+  policy_hash TEXT NOT NULL REFERENCES policies(hash),
+  sample      INTEGER NOT NULL
+);
+CREATE TABLE IF NOT EXISTS rollouts (
+  episode_id  TEXT PRIMARY KEY REFERENCES episodes(id),
+  job_id      TEXT NOT NULL,
+  attempt     INTEGER NOT NULL,
+  policy_hash TEXT NOT NULL,
+  steps       INTEGER NOT NULL,
+  data        BLOB NOT NULL
+);
+CREATE INDEX IF NOT EXISTS rollouts_by_job ON rollouts(job_id);
+)sql";
+
 std::string NewJobId() {
   std::random_device rd;  // ids only: never affects a result
   std::ostringstream os;
@@ -88,6 +113,13 @@ std::string EpisodeId(const std::string& job_id, std::size_t index) {
   std::ostringstream os;
   os << job_id << "-" << std::setfill('0') << std::setw(5) << index;
   return os.str();
+}
+
+// Step count from a rollout blob's header ("ENR1", obs_dim, num_actions, steps: u32 each).
+std::uint32_t RolloutSteps(const std::string& blob) {
+  std::uint32_t steps = 0;
+  if (blob.size() >= 16) std::memcpy(&steps, blob.data() + 12, sizeof steps);
+  return steps;
 }
 
 bool Accepts(const std::vector<std::string>& list, const std::string& value) {
@@ -179,6 +211,7 @@ Store::Store(const std::filesystem::path& path, StoreOptions options)
   }
   Transaction tx(*db_);
   db_->Exec(kSchema);
+  db_->Exec(kCollectSchema);
   db_->Exec("PRAGMA user_version = " + std::to_string(kStoreSchemaVersion));
   tx.Commit();
   db_->Exec("PRAGMA wal_autocheckpoint = 0");
@@ -221,7 +254,8 @@ void Store::CheckpointLoop(std::filesystem::path path) {
 // ---------------------------------------------------------------- jobs
 
 std::string Store::CreateJob(const std::string& name, const std::string& spec_yaml,
-                             const std::vector<api::EpisodeSpec>& episodes, std::int64_t now_ms) {
+                             const std::vector<api::EpisodeSpec>& episodes, std::int64_t now_ms,
+                             const std::optional<CollectionInfo>& collect) {
   if (episodes.empty()) throw std::invalid_argument("job '" + name + "': no episodes");
   std::lock_guard lock(mutex_);
   Transaction tx(*db_);
@@ -239,6 +273,10 @@ std::string Store::CreateJob(const std::string& name, const std::string& spec_ya
         .Bind(1, EpisodeId(job_id, i)).Bind(2, job_id).Bind(3, static_cast<std::int64_t>(i))
         .Bind(4, nlohmann::json(e).dump()).Bind(5, e.board).Bind(6, e.world).Bind(7, e.method)
         .Bind(8, static_cast<std::int64_t>(e.seed)).Bind(9, e.clock).Bind(10, now_ms).Run();
+  }
+  if (collect) {
+    db_->Prepare("INSERT INTO collect_jobs (job_id, policy_hash, sample) VALUES (?, ?, ?)")
+        .Bind(1, job_id).Bind(2, collect->policy_hash).Bind(3, collect->sample ? 1 : 0).Run();
   }
   tx.Commit();
   return job_id;
@@ -510,8 +548,12 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
   std::lock_guard lock(mutex_);
   Transaction tx(*db_);
   Statement& lookup = db_->Prepare(
-      "SELECT e.state, e.attempts, e.lease_owner, e.job_id, j.state FROM episodes e "
-      "JOIN jobs j ON j.id = e.job_id WHERE e.id = ?");
+      "SELECT e.state, e.attempts, e.lease_owner, e.job_id, j.state, c.policy_hash FROM episodes e "
+      "JOIN jobs j ON j.id = e.job_id LEFT JOIN collect_jobs c ON c.job_id = e.job_id "
+      "WHERE e.id = ?");
+  Statement& insert_rollout = db_->Prepare(
+      "INSERT OR REPLACE INTO rollouts (episode_id, job_id, attempt, policy_hash, steps, data) "
+      "VALUES (?, ?, ?, ?, ?, ?)");
   Statement& insert = db_->Prepare(
       "INSERT OR IGNORE INTO results (episode_id, job_id, worker, attempt, board, scenario, world, "
       "method, seed, clock, success, collided, timed_out, end_reason, flight_time_s, "
@@ -537,10 +579,25 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
     const std::string owner = lookup.Text(2);
     out.job_id = lookup.Text(3);
     const std::string job_state = lookup.Text(4);
+    const std::string collect_hash = lookup.IsNull(5) ? std::string() : lookup.Text(5);
     lookup.Reset();
+    // A collection episode's result counts only with a rollout of the job's policy: a rollout of
+    // another (stale) policy is refused by its hash, and the episode runs again.
+    api::ResultMessage refused;
+    const api::ResultMessage* msg = &m;
+    if (!collect_hash.empty() && m.status == api::ResultStatus::kOk &&
+        (m.rollout.empty() || m.policy_hash != collect_hash)) {
+      refused = m;
+      refused.status = api::ResultStatus::kError;
+      refused.error = m.rollout.empty() ? "collection episode without a rollout"
+                                        : "rollout of policy " + m.policy_hash.substr(0, 12) +
+                                              ", not the job's " + collect_hash.substr(0, 12) +
+                                              " (stale policy)";
+      msg = &refused;
+    }
     const bool current_lease = state == "leased" && attempts == m.attempt && owner == m.worker_id;
 
-    if (m.status == api::ResultStatus::kOk) {
+    if (msg->status == api::ResultStatus::kOk) {
       if (state == "done") {
         out.ack = api::AckStatus::kDuplicate;
         out.detail = "episode already has a result";
@@ -569,19 +626,24 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
             .Bind(19, r.nav_cpu_util_pct).Bind(20, r.deadline_miss_ratio)
             .Bind(21, r.replans).Bind(22, m.wall_time_s).Bind(23, now_ms).Bind(24, summary)
             .BindBlob(25, PackSeries(r.series)).Run();
+        if (!m.rollout.empty()) {
+          insert_rollout.Reset().Bind(1, m.episode_id).Bind(2, out.job_id).Bind(3, m.attempt)
+              .Bind(4, m.policy_hash).Bind(5, static_cast<std::int64_t>(RolloutSteps(m.rollout)))
+              .BindBlob(6, std::vector<std::uint8_t>(m.rollout.begin(), m.rollout.end())).Run();
+        }
         set_state.Reset().Bind(1, "done").Bind(2, std::max(attempts, m.attempt)).BindNull(3)
             .Bind(4, now_ms).Bind(5, m.episode_id).Run();
         out.ack = api::AckStatus::kStored;
         out.event = "episode_done";
         touched_jobs.push_back(out.job_id);
       }
-    } else if (m.status == api::ResultStatus::kError) {
+    } else if (msg->status == api::ResultStatus::kError) {
       if (!current_lease) {
         out.ack = state == "done" ? api::AckStatus::kDuplicate : api::AckStatus::kDiscarded;
         out.detail = "not the current lease of this episode (" + state + ")";
       } else {
         const bool failed = attempts >= options_.max_attempts;
-        std::string reason = m.error;
+        std::string reason = msg->error;
         if (failed) reason += " (gave up after " + std::to_string(attempts) + " attempts)";
         set_state.Reset().Bind(1, failed ? "failed" : "pending").Bind(2, attempts)
             .Bind(3, reason).Bind(4, now_ms).Bind(5, m.episode_id).Run();

@@ -29,6 +29,7 @@
 #include "api/episode.h"
 #include "api/farm_messages.h"
 #include "api/http_schema.h"
+#include "api/rollout_records.h"
 
 namespace enavi::server {
 
@@ -79,6 +80,12 @@ struct EpisodeInfo {
   api::EpisodeSpec spec;
 };
 
+/// A collection job: its episodes fly the policy `policy_hash` and store their rollouts.
+struct CollectionInfo {
+  std::string policy_hash;  ///< SHA-256 hex of the policy's canonical bytes (policies table)
+  bool sample = false;
+};
+
 /// Filters a worker announces: empty lists accept anything.
 struct WorkerCapabilities {
   std::vector<std::string> boards;
@@ -96,7 +103,8 @@ class Store {
   // ---- jobs ----
   /// Stores a job and its episodes (all pending); returns the new job id.
   std::string CreateJob(const std::string& name, const std::string& spec_yaml,
-                        const std::vector<api::EpisodeSpec>& episodes, std::int64_t now_ms);
+                        const std::vector<api::EpisodeSpec>& episodes, std::int64_t now_ms,
+                        const std::optional<CollectionInfo>& collect = std::nullopt);
   std::optional<api::JobProgress> Progress(const std::string& job_id, std::int64_t now_ms);
   std::vector<api::JobProgress> ListJobs(std::int64_t now_ms);
   /// Cancels a running job. Returns the leases it revoked (their workers should stop), or
@@ -135,6 +143,16 @@ class Store {
   nlohmann::json Results(const std::string& job_id);
   /// The full result (series and events included) of a done episode.
   std::optional<api::EpisodeResult> FullResult(const std::string& episode_id);
+
+  // ---- collection jobs (server/store/collect_store.cc) ----
+  /// Keeps a policy by content hash (idempotent). @pre hash == Sha256Hex(json).
+  void PutPolicy(const std::string& hash, const std::string& json, std::int64_t now_ms);
+  std::optional<std::string> Policy(const std::string& hash);
+  std::optional<CollectionInfo> Collection(const std::string& job_id);
+  /// Policies of running collection jobs, hash -> JSON (published to workers).
+  std::map<std::string, std::string> ActivePolicies();
+  /// The job's stored rollouts in episode order (one per done episode, exactly once).
+  std::vector<api::StoredRollout> Rollouts(const std::string& job_id);
 
   int max_attempts() const { return options_.max_attempts; }
 
