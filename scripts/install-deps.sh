@@ -13,6 +13,7 @@ packages=(
   libcpp-httplib-dev libpng-dev libcairo2-dev fonts-dejavu-core
   libgtest-dev libgmock-dev libbenchmark-dev
   libssl-dev
+  python3-dev pybind11-dev python3-numpy python3-torch
   iproute2 procps util-linux
 )
 
