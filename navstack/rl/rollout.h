@@ -63,8 +63,8 @@ Rollout DeserializeRollout(const std::string& text, const std::string& source);
 /// Binary form (little-endian): "ENR1", u32 obs_dim, u32 num_actions, u32 steps, f64
 /// bootstrap_value, i64 policy_iteration, u32 + id bytes, u32 info count + (u32 + key, f64) each;
 /// then per step obs (obs_dim f64), i32 action, mask (ceil(num_actions / 8) bytes, bit i of byte
-/// i / 8 = action i), f64 log_prob, value, reward, u8 done. Doubles are exact; about 190 bytes a
-/// step for E-Navi (16 features, 98 actions) against ~2.5 kB of JSON.
+/// i / 8 = action i), f64 log_prob, value, reward, u8 done. Doubles are exact; 170 bytes a step
+/// for E-Navi (16 features, 98 actions) against ~450 bytes of JSON.
 std::string EncodeRollout(const Rollout& rollout);
 /// @throws std::invalid_argument naming `source` on a truncated, oversized or inconsistent blob
 ///   (the same checks as RolloutFromJson).
