@@ -17,17 +17,22 @@ from ._enavi import EnvCore as _EnvCore
 __all__ = ["Env", "VectorEnv", "make", "make_vec"]
 
 
+# With Gymnasium installed (it is not part of Debian 12) Env is a gymnasium.Env with its spaces,
+# so every Gymnasium wrapper and gymnasium.register(..., entry_point="enavi:Env") take it as is.
+try:
+    import gymnasium as _gym
+except ImportError:
+    _gym = None
+
+
 def _spaces(obs_size, action_size):
-    """Gymnasium spaces when Gymnasium is installed (it is not part of Debian 12), else None."""
-    try:
-        from gymnasium import spaces
-    except ImportError:
+    if _gym is None:
         return None, None
-    return (spaces.Box(-_np.inf, _np.inf, shape=(obs_size,), dtype=_np.float64),
-            spaces.Discrete(action_size))
+    return (_gym.spaces.Box(-_np.inf, _np.inf, shape=(obs_size,), dtype=_np.float64),
+            _gym.spaces.Discrete(action_size))
 
 
-class Env:
+class Env(_gym.Env if _gym is not None else object):
     """One environment. Episodes are deterministic: the same seed gives the same observations
     for the same actions."""
 
