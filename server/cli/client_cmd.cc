@@ -48,9 +48,13 @@ void RunSubmit(const SubmitFlags& f) {
     api::JobSpecOptions options;
     for (const auto& r : f.world_roots) options.allowed_roots.emplace_back(r);
     const api::JobSpec job = api::ParseJobSpec(ReadFile(f.file), f.file, options);
-    std::cout << f.file << ": valid; " << job.MatrixSize() << " episodes (" << job.boards.size()
-              << " boards x " << job.scenarios.size() << " scenarios x " << job.methods.size()
-              << " methods x " << job.seeds.size() << " seeds)\n";
+    std::cout << f.file << ": valid; " << job.MatrixSize() << " episodes (";
+    if (job.episodes.empty()) {
+      std::cout << job.boards.size() << " boards x " << job.scenarios.size() << " scenarios x "
+                << job.methods.size() << " methods x " << job.seeds.size() << " seeds)\n";
+    } else {
+      std::cout << job.episodes.size() << " listed x " << job.methods.size() << " methods)\n";
+    }
     return;
   }
   api::FarmClient client(f.client.server, f.client.token);

@@ -55,6 +55,7 @@ bool FarmServer::Cancel(const std::string& job_id) {
   if (!revoked) return false;
   for (const auto& r : *revoked) RetireAssignment(r.worker, r.episode_id, r.attempt);
   spdlog::info("job {} cancelled ({} running episodes revoked)", job_id, revoked->size());
+  RetirePolicyOf(job_id);
   // Workers stop the job's running episodes when they see this.
   PublishEvents({{job_id, "cancelled", "", "job cancelled"}}, now);
   return true;
@@ -191,6 +192,18 @@ void FarmServer::PublishPolicy(const std::string& hash) {
   bus_->Publish(api::PolicyBlob{hash, *json});
 }
 
+// A finished collection job's policy leaves the durable history unless a running job flies it,
+// so late-joining workers are not sent every policy a long training ever used.
+void FarmServer::RetirePolicyOf(const std::string& job_id) {
+  const std::string hash = CollectionHash(job_id);
+  if (hash.empty() || store_->ActivePolicies().count(hash)) return;
+  try {
+    bus_->Retire(api::PolicyBlob{hash, ""});
+  } catch (const std::exception&) {
+    // Not in this server's history (published before a restart).
+  }
+}
+
 std::string FarmServer::CollectionHash(const std::string& job_id) {
   {
     std::lock_guard lock(mutex_);
@@ -306,6 +319,7 @@ void FarmServer::PublishEvents(const std::vector<PendingEvent>& events, std::int
     }
     spdlog::info("job {} finished: {} done, {} failed of {}", job_id, p.done, p.failed, p.total);
     bus_->Publish(api::JobEvent{job_id, "finished", "", p.done, p.failed, p.total, "", now_ms});
+    RetirePolicyOf(job_id);
   }
 }
 

@@ -87,6 +87,7 @@ class FarmServer {
   void RetireAssignment(const std::string& worker_id, const std::string& episode_id, int attempt);
   std::string CollectionHash(const std::string& job_id);
   void PublishPolicy(const std::string& hash);
+  void RetirePolicyOf(const std::string& job_id);
 
   struct Worker {
     api::WorkerStatus status;
