@@ -6,12 +6,17 @@
 // only) with the server in a fifth, as separate hosts would be.
 //
 // Reported against the 1-worker figure of the same run: scaling = rate(N) / (N x rate(1)).
-// Goal: >= 0.9 from 1 to 2 workers (needs 2 idle cores: every worker is CPU-bound).
+// Goal: >= 0.9 from 1 to 2 workers (needs 2 idle cores: every worker is CPU-bound). Because wall
+// rates only mean something on an idle machine, transitions_per_cpu_s also reports transitions
+// per CPU second of all the farm's processes (server, workers, episodes; start-up and warm-up
+// included): if it stays flat from 1 to N workers, the farm adds no per-worker overhead and the
+// wall rate scales with the cores given to it.
 //
 //   bench_rl_collect [--benchmark_filter=...]
 #include <fcntl.h>
 #include <sched.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -34,6 +39,13 @@ using namespace std::chrono_literals;
 
 constexpr int kEpisodesPerWorker = 8;
 double one_worker_rate = 0;  // transitions/s with one worker, this run
+
+// CPU seconds of this process's waited-for descendants so far.
+double ChildrenCpuSeconds() {
+  rusage ru{};
+  getrusage(RUSAGE_CHILDREN, &ru);
+  return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+}
 
 std::string ReadText(const fs::path& p) {
   std::ifstream in(p);
@@ -187,8 +199,9 @@ void BM_Collect(benchmark::State& state, bool netns) {
     for (int i = 0; i < workers; ++i) nodes.push_back("w" + std::to_string(i + 1));
     ns = std::make_unique<Namespaces>(nodes);
   }
-  std::size_t steps = 0;
+  std::size_t steps = 0, all_steps = 0;
   double seconds = 0;
+  const double cpu0 = ChildrenCpuSeconds();
   try {
     StartFarm(&farm, workers, ns.get());
     auto work = [&] {
@@ -198,10 +211,11 @@ void BM_Collect(benchmark::State& state, bool netns) {
       }
       const std::string policy = client.UploadPolicy(
           ReadText(fs::path(ENAVI_SOURCE_DIR) / "navstack/rl/policies/enavi_default.json"));
-      Collect(client, policy, workers, 1000);  // warm-up: every worker caches the policy
+      all_steps += Collect(client, policy, workers, 1000);  // warm-up: every worker caches the policy
       for (auto _ : state) {
         const auto t0 = std::chrono::steady_clock::now();
         steps = Collect(client, policy, kEpisodesPerWorker * workers, 1);
+        all_steps += steps;
         seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         state.SetIterationTime(seconds);
       }
@@ -229,7 +243,9 @@ void BM_Collect(benchmark::State& state, bool netns) {
     state.SkipWithError(e.what());
   }
   for (auto& p : farm.processes) p.Signal(SIGKILL);
+  for (auto& p : farm.processes) p.Wait(10s);  // reaped: their CPU time is counted
   farm.processes.clear();
+  const double cpu = ChildrenCpuSeconds() - cpu0;
   ns.reset();
   fs::remove_all(farm.dir);
   if (seconds <= 0) return;
@@ -238,6 +254,7 @@ void BM_Collect(benchmark::State& state, bool netns) {
   state.counters["transitions_per_s"] = rate;
   state.counters["episodes_per_s"] = kEpisodesPerWorker * workers / seconds;
   state.counters["transitions"] = static_cast<double>(steps);
+  if (cpu > 0) state.counters["transitions_per_cpu_s"] = static_cast<double>(all_steps) / cpu;
   if (one_worker_rate > 0) state.counters["scaling"] = rate / (workers * one_worker_rate);
 }
 
