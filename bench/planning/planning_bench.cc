@@ -49,21 +49,28 @@ void BM_DistanceTransform(benchmark::State& state) {
 }
 BENCHMARK(BM_DistanceTransform)->Arg(100)->Arg(200)->Arg(500)->Unit(benchmark::kMillisecond);
 
-// A full replan from a given grid: EDT, search, B-spline optimisation, time allocation.
+// A full replan from a given grid. esdf: EDT, search, B-spline optimisation on the field, time
+// allocation; rebound: straight line, A*-guided rebound optimisation, time allocation.
 void BM_Replan(benchmark::State& state) {
   const testing::AsciiWorld w = Park(state);
   RouteOmplLog(nullptr);
+  PlannerOptions options;
+  options.optimizer = static_cast<PlannerOptimizer>(state.range(1));
+  state.SetLabel(ToString(options.optimizer));
   std::uint32_t seed = 0;
   WorkCounts work;
   for (auto _ : state) {
-    const PlanResult r = Plan(ParkRequest(w, seed++ % 8));
+    const PlanResult r = Plan(ParkRequest(w, seed++ % 8), options);
     if (!r.ok()) state.SkipWithError(r.message.c_str());
     work += r.work;
   }
   for (auto& n : work.n) n /= static_cast<std::int64_t>(state.iterations());
   SetWorkCounters(state, work);
 }
-BENCHMARK(BM_Replan)->Arg(100)->Arg(200)->Arg(500)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Replan)
+    ->ArgNames({"mm", "optimizer"})
+    ->ArgsProduct({{100, 200, 500}, {0, 1}})
+    ->Unit(benchmark::kMillisecond);
 
 // Collision check of a whole planned trajectory (~15 m) against the grid.
 void BM_CheckTrajectory(benchmark::State& state) {
