@@ -1,7 +1,9 @@
 #include "navstack/planning/inflated_occupancy.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <stdexcept>
 
@@ -23,6 +25,16 @@ void DilateRow(const std::uint64_t* in, int words, int k, std::uint64_t* out) {
   }
 }
 
+// Bit i set iff byte i of v (8 grid cells, little end first) is kOccupied: exact zero-byte test
+// of v ^ kOccupied.., then the eight high bits gathered into one byte by a multiply.
+static_assert(std::endian::native == std::endian::little, "OccupiedBits8 reads cells little end first");
+std::uint64_t OccupiedBits8(std::uint64_t v) {
+  constexpr std::uint64_t kOnes = 0x0101010101010101ULL, kLow7 = 0x7F7F7F7F7F7F7F7FULL;
+  const std::uint64_t x = v ^ (kOnes * static_cast<std::uint8_t>(CellState::kOccupied));
+  const std::uint64_t zero_high = ~(((x & kLow7) + kLow7) | x | kLow7);
+  return ((zero_high >> 7) * 0x0102040810204080ULL) >> 56;
+}
+
 }  // namespace
 
 OccupancyBits::OccupancyBits(const VoxelGrid& grid, WorkCounts* work)
@@ -32,12 +44,20 @@ OccupancyBits::OccupancyBits(const VoxelGrid& grid, WorkCounts* work)
     throw std::invalid_argument("OccupancyBits: the grid is malformed (dims, resolution or cells)");
   }
   bits_.assign(static_cast<std::size_t>(grid.dims.y()) * grid.dims.z() * words_, 0);
+  // Eight cells at a time: the bytes equal to kOccupied, as one bit each.
   const CellState* cell = grid.cells.data();
+  const int nx = grid.dims.x();
   for (int z = 0; z < grid.dims.z(); ++z) {
-    for (int y = 0; y < grid.dims.y(); ++y) {
+    for (int y = 0; y < grid.dims.y(); ++y, cell += nx) {
       std::uint64_t* row = &bits_[RowIndex(y, z)];
-      for (int x = 0; x < grid.dims.x(); ++x, ++cell) {
-        if (*cell == CellState::kOccupied) row[x >> 6] |= std::uint64_t{1} << (x & 63);
+      int x = 0;
+      for (; x + 8 <= nx; x += 8) {
+        std::uint64_t v;
+        std::memcpy(&v, cell + x, 8);
+        row[x >> 6] |= OccupiedBits8(v) << (x & 63);
+      }
+      for (; x < nx; ++x) {
+        if (cell[x] == CellState::kOccupied) row[x >> 6] |= std::uint64_t{1} << (x & 63);
       }
     }
   }
