@@ -8,6 +8,7 @@
 
 #include "server/cli/commands.h"
 #include "server/train/trainer.h"
+#include "workers/sim/episode_config.h"
 
 namespace enavi::cli {
 
@@ -42,6 +43,7 @@ void RegisterTrainCommand(CLI::App& app) {
     o->out = *out;
     o->work_dir = *work;
     o->progress = true;
+    o->catalog = sim::MethodCatalog();
     const auto log = train::Train(*o);
     const auto& last = log.back();
     std::printf("trained %lld iterations: policy %s (mean return %.2f, success %.0f%%, nav cpu %.1f%%)\n",

@@ -90,7 +90,9 @@ LocalFarm::LocalFarm(const LocalFarmOptions& options) {
   impl_->farm = std::make_unique<FarmServer>(impl_->store.get(), server_options);
   impl_->farm->Start();
   if (options.http) {
-    impl_->http = std::make_unique<HttpApi>(impl_->farm.get(), HttpOptions{});
+    HttpOptions http;
+    http.job_spec = options.job_spec;
+    impl_->http = std::make_unique<HttpApi>(impl_->farm.get(), http);
     impl_->http->Start();
   }
 

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "api/job_spec.h"
+
 namespace enavi::server {
 
 class Store;
@@ -28,6 +30,7 @@ struct LocalFarmOptions {
   std::optional<std::uint32_t> domain;  ///< empty: derived from the process id
   std::string name = "eval";     ///< temp dir, partition and worker id prefix
   bool http = false;             ///< also serve the HTTP API on 127.0.0.1 (any port)
+  api::JobSpecOptions job_spec;  ///< the HTTP API's job validation (method catalog, roots)
 };
 
 class LocalFarm {

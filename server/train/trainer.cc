@@ -187,6 +187,7 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
     farm.workers = options.workers;
     farm.name = "train";
     farm.http = true;
+    farm.job_spec.catalog = options.catalog;
     local = std::make_unique<server::LocalFarm>(farm);
     url = local->url();
   }

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "api/episode.h"
 #include "navstack/rl/ppo.h"
 
 namespace enavi::train {
@@ -23,6 +24,7 @@ struct TrainOptions {
   std::string server;              ///< farm URL; empty: a private local farm
   std::string token;               ///< the farm's token (state-changing requests)
   int workers = 2;                 ///< private farm: local worker processes (one slot each)
+  api::MethodCatalog catalog;      ///< private farm: the methods its job validation knows
   std::uint64_t seed = 1;
   /// Training worlds use seeds from here on, so evaluation seeds (1, 2, 3 ...) stay unseen.
   std::uint64_t world_seed_base = 100;

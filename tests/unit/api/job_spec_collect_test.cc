@@ -8,9 +8,18 @@ namespace {
 
 const std::string kHashRef = "sha256:" + std::string(64, 'c');
 
+// A catalog of the registry's shape: E-Navi with its sampling switch.
+JobSpecOptions Options() {
+  JobSpecOptions o;
+  o.catalog.methods = {{"baseline", "", {}}, {"enavi", "", {{"strategy.explore", 0, 1, true}}}};
+  return o;
+}
+
+JobSpec Parse(const std::string& yaml) { return ParseJobSpec(yaml, "job.yaml", Options()); }
+
 std::string Error(const std::string& yaml) {
   try {
-    ParseJobSpec(yaml, "job.yaml");
+    Parse(yaml);
   } catch (const JobSpecError& e) {
     return e.what();
   }
@@ -19,9 +28,8 @@ std::string Error(const std::string& yaml) {
 }
 
 TEST(JobSpecCollectTest, CollectionJobSamplesWithThePolicyByHash) {
-  const JobSpec job = ParseJobSpec("boards: [tx2]\nscenarios: [empty]\nmethods: [enavi]\nseeds: 3\n"
-                                   "collect: rollouts\nsample: true\npolicy: \"" + kHashRef + "\"\n",
-                                   "job.yaml");
+  const JobSpec job = Parse("boards: [tx2]\nscenarios: [empty]\nmethods: [enavi]\nseeds: 3\n"
+                            "collect: rollouts\nsample: true\npolicy: \"" + kHashRef + "\"\n");
   ASSERT_TRUE(job.collect.has_value());
   EXPECT_TRUE(job.collect->sample);
   const auto episodes = ExpandJob(job);
@@ -33,10 +41,9 @@ TEST(JobSpecCollectTest, CollectionJobSamplesWithThePolicyByHash) {
 }
 
 TEST(JobSpecCollectTest, ExplicitEpisodeListExpandsInOrder) {
-  const JobSpec job = ParseJobSpec(
+  const JobSpec job = Parse(
       "methods: [enavi]\ncollect: rollouts\npolicy: \"" + kHashRef + "\"\nepisodes:\n"
-      "  - {board: tx2, scenario: s2, seed: 104}\n  - {board: pi4b, scenario: empty, seed: 7}\n",
-      "job.yaml");
+      "  - {board: tx2, scenario: s2, seed: 104}\n  - {board: pi4b, scenario: empty, seed: 7}\n");
   EXPECT_FALSE(job.collect->sample) << "greedy unless asked";
   const auto episodes = ExpandJob(job);
   ASSERT_EQ(episodes.size(), 2u);
