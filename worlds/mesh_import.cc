@@ -2,10 +2,13 @@
 
 #include <cmath>
 #include <map>
+#include <mutex>
 #include <string_view>
 #include <tuple>
 
+#include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
+#include <assimp/LogStream.hpp>
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -79,6 +82,84 @@ void ReadFbxSettings(const std::string& name, const aiScene& scene, ImportedMesh
   }
 }
 
+// Assimp reports geometry it dropped (faces with out-of-range indices, bad accessors) only as log
+// messages; they are collected during one import and refuse the file, since silently losing an
+// obstacle is worse than no world. One import at a time: Assimp's logger is process-wide.
+class AssimpMessages : public Assimp::LogStream {
+ public:
+  void write(const char* message) override {
+    const std::string m = message;
+    const bool loss = m.find("rror") != std::string::npos || m.find("out-of-range") != std::string::npos ||
+                      m.find("out of range") != std::string::npos || m.find("dropped") != std::string::npos ||
+                      m.find("nvalid") != std::string::npos;
+    // "Warn,  T0: text\n" -> "text".
+    const auto colon = m.find(": ");
+    std::string text = colon == std::string::npos ? m : m.substr(colon + 2);
+    while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
+    if (loss && first_.empty()) first_ = text.substr(0, 200);
+  }
+  const std::string& first() const { return first_; }
+
+ private:
+  std::string first_;
+};
+
+class ScopedAssimpLog {
+ public:
+  explicit ScopedAssimpLog(AssimpMessages* sink) : lock_(Mutex()) {
+    Assimp::DefaultLogger::create(nullptr, Assimp::Logger::NORMAL, 0);
+    Assimp::DefaultLogger::get()->attachStream(sink, Assimp::Logger::Warn | Assimp::Logger::Err);
+    sink_ = sink;
+  }
+  ~ScopedAssimpLog() {
+    Assimp::DefaultLogger::get()->detachStream(sink_, Assimp::Logger::Warn | Assimp::Logger::Err);
+    Assimp::DefaultLogger::kill();
+  }
+  ScopedAssimpLog(const ScopedAssimpLog&) = delete;
+  ScopedAssimpLog& operator=(const ScopedAssimpLog&) = delete;
+
+ private:
+  static std::mutex& Mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  AssimpMessages* sink_ = nullptr;
+};
+
+// PLY header check before Assimp sees the file: Assimp 5.2 loops forever on a header without
+// end_header and reads past a short ASCII body without complaint.
+void CheckPly(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  const std::string text = ReadInputFile(path);
+  const auto end = text.find("end_header");
+  if (text.rfind("ply", 0) != 0 || end == std::string::npos) {
+    throw WorldError(name, 0, "header", "not a complete PLY header (expected 'ply' ... 'end_header')");
+  }
+  if (text.find("format ascii") == std::string::npos || text.find("format ascii") > end) return;
+  // ASCII: one line per element instance, so the body needs as many non-empty lines.
+  std::int64_t instances = 0;
+  for (std::size_t at = text.find("element "); at != std::string::npos && at < end; at = text.find("element ", at + 8)) {
+    const std::size_t eol = text.find('\n', at);
+    const std::string line = text.substr(at + 8, eol - at - 8);
+    std::int64_t count = 0;
+    const auto space = line.find(' ');
+    if (space == std::string::npos || !ParseInt64(line.substr(space + 1, line.find_last_not_of(" \r") - space), &count) ||
+        count < 0) {
+      throw WorldError(name, 0, "header", "bad element line 'element " + line.substr(0, 40) + "'");
+    }
+    instances += count;
+  }
+  std::int64_t lines = 0;
+  for (std::size_t at = text.find('\n', end); at != std::string::npos && at + 1 < text.size(); at = text.find('\n', at + 1)) {
+    if (text[at + 1] != '\n' && text[at + 1] != '\r') ++lines;
+  }
+  if (lines < instances) {
+    throw WorldError(name, 0, "body", "truncated: the header declares " + std::to_string(instances) +
+                                          " vertices and faces, the file has " + std::to_string(lines) + " lines of them");
+  }
+}
+
 struct Walker {
   const std::string& name;
   const aiScene& scene;
@@ -143,10 +224,15 @@ ImportedMesh LoadWithAssimp(const std::filesystem::path& path, const std::string
   if (extension == ".dae") ReadColladaAsset(name, &mesh);
   if (extension == ".gltf" || extension == ".glb") mesh.file_up = UpAxis::kY;  // glTF 2.0 spec: metres, +y up
 
+  if (extension == ".ply") CheckPly(path);
+
+  AssimpMessages messages;
+  const ScopedAssimpLog log(&messages);
   Assimp::Importer importer;
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
   const aiScene* scene = importer.ReadFile(name, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
   if (scene == nullptr) throw WorldError(name, 0, "file", std::string("cannot read: ") + importer.GetErrorString());
+  if (!messages.first().empty()) throw WorldError(name, 0, "file", "refused: " + messages.first());
   if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0 || scene->mRootNode == nullptr) {
     throw WorldError(name, 0, "file", "incomplete scene (no geometry could be read)");
   }

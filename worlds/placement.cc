@@ -98,10 +98,12 @@ void CheckPlacedRange(const MeshObject& mesh, const std::string& file, int line,
   const Eigen::AlignedBox3d placed = ObjectBounds(mesh);
   const double reach = std::max(placed.min().cwiseAbs().maxCoeff(), placed.max().cwiseAbs().maxCoeff());
   if (reach <= kMaxCoordinate) return;
-  // Which option helps: a span beyond the world limit hints at the unit, an offset at recentring.
+  // Which options would help: a unit when none was given, recentring when it is off.
   const double span = placed.sizes().maxCoeff();
   std::string hint;
-  if (span > kMaxExtent) hint = "if the file is not in metres, give its unit (--units " + UnitNames() + ") or --scale";
+  if (mesh.units.empty() && mesh.scale == 1.0) {
+    hint = "if the file is not in metres, give its unit (--units " + UnitNames() + ") or --scale";
+  }
   if (!mesh.recenter) hint += std::string(hint.empty() ? "" : "; ") + "--recenter moves it to the origin";
   throw WorldError(file, line, field,
                    "placed, the mesh reaches " + FormatFixed(reach, 1) + " m from the origin (limit +-100000 m; it spans " +

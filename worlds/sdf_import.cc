@@ -13,6 +13,7 @@
 
 #include <sdf/Box.hh>
 #include <sdf/Collision.hh>
+#include <sdf/Console.hh>
 #include <sdf/Cylinder.hh>
 #include <sdf/Ellipsoid.hh>
 #include <sdf/Geometry.hh>
@@ -350,6 +351,8 @@ World LoadSdfWorld(const std::filesystem::path& path, const Eigen::Vector3d& sta
   std::vector<std::filesystem::path> search = dirs;
   search.push_back(builtin.dir());
 
+  // libsdformat prints its errors to the console; they come back as the exception below.
+  sdf::Console::Instance()->SetQuiet(true);
   sdf::ParserConfig config;
   for (const auto& d : search) config.AddURIPath("model://", d.string());
   std::set<std::string> missing;
