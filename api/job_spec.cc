@@ -198,7 +198,7 @@ std::map<std::string, double> Tunables(const Context& ctx, const YAML::Node& n,
 }
 
 // World files a scenario may name: the farm's own, the mesh formats of worlds::kMeshFormats
-// and Gazebo SDF (tests/unit/worlds/import_test.cc checks that the two lists agree).
+// and Gazebo SDF (tests/unit/worlds/import_test.cc checks that every mesh format and unit is accepted).
 constexpr std::initializer_list<const char*> kWorldFileExtensions = {
     ".yaml", ".yml", ".obj", ".gltf", ".glb", ".dae", ".stl", ".ply", ".fbx", ".sdf", ".world"};
 // Mesh placement units (worlds::kLengthUnits) and up axes.

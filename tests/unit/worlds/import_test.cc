@@ -312,6 +312,10 @@ TEST(JobSpecWorldsTest, ScenarioEntriesCarryPlacementAndEveryMeshFormatIsAccepte
   EXPECT_NE(error("{world: m.stl, units: furlong, start: [0, 0, 1], goal: [4, 0, 1]}").find("unknown unit 'furlong'"),
             std::string::npos);
   EXPECT_NE(error("m.glb").find("is a mesh or SDF world: give start and goal"), std::string::npos);
+  for (const auto& u : kLengthUnits) {
+    EXPECT_EQ(error(std::string("{world: m.stl, units: ") + u.name + ", start: [0, 0, 1], goal: [4, 0, 1]}"), "")
+        << u.name;
+  }
 }
 
 }  // namespace
