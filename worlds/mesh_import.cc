@@ -1,6 +1,8 @@
 #include "worlds/mesh_import.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <mutex>
 #include <string_view>
@@ -15,6 +17,7 @@
 
 #include "worlds/number_text.h"
 #include "worlds/obj_import.h"
+#include "worlds/ply_import.h"
 
 namespace enavi::worlds {
 namespace {
@@ -39,10 +42,40 @@ std::string_view AssetElementText(std::string_view text, std::string_view open) 
   return rest;
 }
 
+// Assimp 5.2 loops forever on a COLLADA number list with a stray character: the lists are
+// checked before it reads them (<p>, <vcount>, <int_array>: integers; <float_array>: numbers).
+void CheckColladaLists(const std::string& name, const std::string& text) {
+  struct List {
+    const char* open;
+    const char* allowed;
+  };
+  static constexpr List kLists[] = {{"<p>", "0123456789-"},
+                                    {"<vcount>", "0123456789"},
+                                    {"<int_array", "0123456789-"},
+                                    {"<float_array", "0123456789.eE+-"}};
+  for (const auto& list : kLists) {
+    const std::string_view open = list.open;
+    for (std::size_t at = text.find(open); at != std::string::npos; at = text.find(open, at + 1)) {
+      std::size_t i = text.find('>', at);
+      if (i == std::string::npos) throw WorldError(name, 0, "xml", "truncated element " + std::string(open) + ">");
+      const std::size_t end = text.find('<', i);
+      if (end == std::string::npos) throw WorldError(name, 0, "xml", "truncated " + std::string(open) + "> list");
+      for (++i; i < end; ++i) {
+        const char c = text[i];
+        if (c == ' ' || c == '\t' || c == '\n' || c == '\r' || std::strchr(list.allowed, c) != nullptr) continue;
+        const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(i), '\n'));
+        throw WorldError(name, line, std::string(open.substr(1)),
+                         std::string("not a number list (unexpected '") + (c >= 32 && c < 127 ? std::string(1, c) : "?") + "')");
+      }
+    }
+  }
+}
+
 // COLLADA declares its unit and up axis in <asset> (COLLADA 1.4.1 spec, "asset"): <unit meter="0.001"/>,
 // <up_axis>Z_UP</up_axis>; the defaults are 1 m and Y_UP.
 void ReadColladaAsset(const std::string& name, ImportedMesh* mesh) {
   const std::string text = ReadInputFile(name);
+  CheckColladaLists(name, text);
   mesh->file_up = UpAxis::kY;
   const std::string_view up = AssetElementText(text, "<up_axis>");
   if (up == "Z_UP") mesh->file_up = UpAxis::kZ;
@@ -127,39 +160,6 @@ class ScopedAssimpLog {
   AssimpMessages* sink_ = nullptr;
 };
 
-// PLY header check before Assimp sees the file: Assimp 5.2 loops forever on a header without
-// end_header and reads past a short ASCII body without complaint.
-void CheckPly(const std::filesystem::path& path) {
-  const std::string name = path.string();
-  const std::string text = ReadInputFile(path);
-  const auto end = text.find("end_header");
-  if (text.rfind("ply", 0) != 0 || end == std::string::npos) {
-    throw WorldError(name, 0, "header", "not a complete PLY header (expected 'ply' ... 'end_header')");
-  }
-  if (text.find("format ascii") == std::string::npos || text.find("format ascii") > end) return;
-  // ASCII: one line per element instance, so the body needs as many non-empty lines.
-  std::int64_t instances = 0;
-  for (std::size_t at = text.find("element "); at != std::string::npos && at < end; at = text.find("element ", at + 8)) {
-    const std::size_t eol = text.find('\n', at);
-    const std::string line = text.substr(at + 8, eol - at - 8);
-    std::int64_t count = 0;
-    const auto space = line.find(' ');
-    if (space == std::string::npos || !ParseInt64(line.substr(space + 1, line.find_last_not_of(" \r") - space), &count) ||
-        count < 0) {
-      throw WorldError(name, 0, "header", "bad element line 'element " + line.substr(0, 40) + "'");
-    }
-    instances += count;
-  }
-  std::int64_t lines = 0;
-  for (std::size_t at = text.find('\n', end); at != std::string::npos && at + 1 < text.size(); at = text.find('\n', at + 1)) {
-    if (text[at + 1] != '\n' && text[at + 1] != '\r') ++lines;
-  }
-  if (lines < instances) {
-    throw WorldError(name, 0, "body", "truncated: the header declares " + std::to_string(instances) +
-                                          " vertices and faces, the file has " + std::to_string(lines) + " lines of them");
-  }
-}
-
 struct Walker {
   const std::string& name;
   const aiScene& scene;
@@ -224,8 +224,6 @@ ImportedMesh LoadWithAssimp(const std::filesystem::path& path, const std::string
   if (extension == ".dae") ReadColladaAsset(name, &mesh);
   if (extension == ".gltf" || extension == ".glb") mesh.file_up = UpAxis::kY;  // glTF 2.0 spec: metres, +y up
 
-  if (extension == ".ply") CheckPly(path);
-
   AssimpMessages messages;
   const ScopedAssimpLog log(&messages);
   Assimp::Importer importer;
@@ -262,6 +260,7 @@ std::string MeshExtensions() {
 ImportedMesh LoadMeshFile(const std::filesystem::path& path) {
   const std::string ext = Lower(path.extension().string());
   if (ext == ".obj") return LoadObjFile(path);
+  if (ext == ".ply") return LoadPlyFile(path);
   if (!IsMeshFile(path)) {
     throw WorldError(path.string(), 0, "file", "not a mesh format the farm reads (" + MeshExtensions() + ")");
   }

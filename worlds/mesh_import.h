@@ -1,6 +1,6 @@
 #pragma once
-// Mesh files of every format the farm reads: OBJ by its own reader (FILE:LINE errors), glTF/GLB,
-// COLLADA (DAE), STL, PLY and FBX through Assimp. Part of enavi::world_import, not of the core
+// Mesh files of every format the farm reads: OBJ and PLY by our own readers (FILE:LINE errors),
+// glTF/GLB, COLLADA (DAE), STL and FBX through Assimp. Part of enavi::world_import, not of the core
 // worlds library, so nothing below the workers links Assimp.
 
 #include <array>

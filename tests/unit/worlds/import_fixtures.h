@@ -192,6 +192,26 @@ inline std::string PlyAscii(const TriangleMesh& m) {
   return s;
 }
 
+/// Binary little-endian PLY (metres, z up), with an extra per-vertex property to skip.
+inline std::string PlyBinary(const TriangleMesh& m) {
+  std::string s = "ply\nformat binary_little_endian 1.0\ncomment fixture\nelement vertex " +
+                  std::to_string(m.vertices.size()) +
+                  "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nelement face " +
+                  std::to_string(m.triangles.size()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
+  for (const auto& v : m.vertices) {
+    s.append(reinterpret_cast<const char*>(v.data()), 12);
+    s.push_back('\x7f');
+  }
+  for (const auto& t : m.triangles) {
+    s.push_back('\x03');
+    for (int k = 0; k < 3; ++k) {
+      const auto i = static_cast<std::uint32_t>(t[k]);
+      s.append(reinterpret_cast<const char*>(&i), 4);
+    }
+  }
+  return s;
+}
+
 /// A Gazebo model `pillar` (model.config, model.sdf): its collision is the mesh
 /// model://pillar/meshes/pillar.stl scaled 1 x 1 x 2; its visual, a 9 m box, must be ignored.
 inline std::string PillarModelConfig() {

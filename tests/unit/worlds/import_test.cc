@@ -3,6 +3,7 @@
 #include "worlds/mesh_import.h"
 
 #include <cmath>
+#include <random>
 #include <string>
 #include <variant>
 
@@ -63,7 +64,8 @@ TEST(MeshImportTest, EveryFormatGivesTheSourceTrianglesAndBounds) {
   const std::pair<const char*, std::string> files[] = {
       {"box.gltf", testing::Gltf(box)},      {"box.glb", testing::Glb(box)},
       {"box.dae", testing::DaeMmZUp(box)},   {"box.stl", testing::StlAscii(box)},
-      {"binary.stl", testing::StlBinary(box)}, {"box.ply", testing::PlyAscii(box)}};
+      {"binary.stl", testing::StlBinary(box)}, {"box.ply", testing::PlyAscii(box)},
+      {"binary.ply", testing::PlyBinary(box)}};
   for (const auto& [name, content] : files) {
     const World w = MeshWorld(dir.Write(name, content));
     EXPECT_EQ(BuildWorldMesh(w).triangle_count(), 12u) << name;
@@ -153,10 +155,42 @@ TEST(MeshImportTest, MalformedFilesOfEachFormatAreRefusedNamingTheFile) {
   for (const auto& [name, content] : bad) {
     const auto path = dir.Write(name, content);
     const std::string e = ErrorOf([&] { LoadMeshFile(path); });
-    EXPECT_EQ(e.rfind(path.string() + ": ", 0), 0u) << name << ": " << e;
+    EXPECT_EQ(e.rfind(path.string() + ":", 0), 0u) << name << ": " << e;
   }
   EXPECT_EQ(ErrorOf([&] { LoadMeshFile(dir.path() / "absent.glb"); }),
             (dir.path() / "absent.glb").string() + ": file: not found or not a regular file");
+}
+
+TEST(MeshImportTest, MutatedFilesAreReadOrRefusedButNeverCrash) {
+  TempDir dir;
+  const TriangleMesh box = testing::FixtureBox();
+  const std::pair<const char*, std::string> files[] = {
+      {"m.gltf", testing::Gltf(box)},     {"m.glb", testing::Glb(box)},           {"m.dae", testing::DaeMmZUp(box)},
+      {"m.stl", testing::StlBinary(box)}, {"a.stl", testing::StlAscii(box)},      {"m.ply", testing::PlyAscii(box)},
+      {"b.ply", testing::PlyBinary(box)}, {"m.obj", testing::ObjMm(box, {0, 0, 0})}};
+  std::mt19937 rng(14);
+  for (const auto& [name, content] : files) {
+    for (int i = 0; i < 100; ++i) {
+      // Flipped bytes, a cut, or a hole: what a broken download or a bad exporter leaves.
+      std::string s = content;
+      switch (rng() % 3) {
+        case 0:
+          for (int k = 0; k < 4; ++k) s[rng() % s.size()] = static_cast<char>(rng());
+          break;
+        case 1:
+          s.resize(rng() % s.size());
+          break;
+        default:
+          s.erase(rng() % s.size(), rng() % 20);
+      }
+      const auto path = dir.Write(name, s);
+      try {
+        LoadMeshFile(path);
+      } catch (const WorldError& e) {
+        EXPECT_EQ(std::string(e.what()).rfind(path.string() + ":", 0), 0u) << name << " #" << i << ": " << e.what();
+      }
+    }
+  }
 }
 
 // The Gazebo world of import_fixtures.h with its pillar model in `models/`.
