@@ -163,9 +163,9 @@ ImportedMesh ParsePly(std::string_view bytes, const std::string& file_name) {
     } else if (t[0] == "property") {
       if (elements.empty()) fail(line_no, "property", "a property before any element");
       Property p;
-      const bool ok = t.size() == 3 ? ParseType(t[1], &p.type)
-                                    : t.size() == 5 && t[1] == "list" && ParseType(t[2], &p.count_type) &&
-                                          ParseType(t[3], &p.type) && (p.list = true);
+      p.list = t.size() == 5 && t[1] == "list";
+      const bool ok = p.list ? ParseType(t[2], &p.count_type) && ParseType(t[3], &p.type)
+                             : t.size() == 3 && ParseType(t[1], &p.type);
       if (!ok) fail(line_no, "property", "expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
       p.name = std::string(t.back());
       elements.back().properties.push_back(p);

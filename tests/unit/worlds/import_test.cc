@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "api/job_spec.h"
-#include "tests/integration/loop_test_util.h"
+#include "tests/unit/worlds/test_util.h"
 #include "tests/unit/worlds/import_fixtures.h"
 #include "worlds/mesh.h"
 #include "worlds/primitives.h"
