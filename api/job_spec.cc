@@ -144,11 +144,13 @@ std::vector<std::string> Choices(const Context& ctx, const YAML::Node& n, const 
 }
 
 // Resolves a file named in the spec against the allowed roots; returns its canonical path.
+// With `directory`, names a directory instead (any extension).
 std::string ResolveFile(const Context& ctx, const YAML::Node& n, const std::string& field,
-                        const std::string& value, std::initializer_list<const char*> extensions) {
+                        const std::string& value, std::initializer_list<const char*> extensions,
+                        bool directory = false) {
   const fs::path given(value);
   const std::string ext = given.extension().string();
-  if (!Contains(extensions, ext)) {
+  if (!directory && !Contains(extensions, ext)) {
     ctx.Fail(n, field,
              "'" + value + "' has extension '" + ext + "', expected one of " +
                  Join(extensions));
@@ -164,7 +166,9 @@ std::string ResolveFile(const Context& ctx, const YAML::Node& n, const std::stri
     for (const auto& r : ctx.roots()) roots.push_back(r.string());
     ctx.Fail(n, field, "'" + value + "' is outside the allowed roots (" + Join(roots) + ")");
   }
-  if (!fs::is_regular_file(resolved)) ctx.Fail(n, field, "'" + value + "': no such file");
+  if (directory ? !fs::is_directory(resolved) : !fs::is_regular_file(resolved)) {
+    ctx.Fail(n, field, "'" + value + (directory ? "': no such directory" : "': no such file"));
+  }
   return resolved.string();
 }
 
@@ -241,14 +245,44 @@ std::map<std::string, double> Tunables(const Context& ctx, const YAML::Node& n,
   return out;
 }
 
+// World files a scenario may name: the farm's own, the mesh formats of worlds::kMeshFormats
+// and Gazebo SDF (tests/unit/worlds/import_test.cc checks that every mesh format and unit is accepted).
+constexpr std::initializer_list<const char*> kWorldFileExtensions = {
+    ".yaml", ".yml", ".obj", ".gltf", ".glb", ".dae", ".stl", ".ply", ".fbx", ".sdf", ".world"};
+// Mesh placement units (worlds::kLengthUnits) and up axes.
+constexpr std::array<const char*, 5> kUnits = {"m", "cm", "mm", "in", "ft"};
+constexpr std::array<const char*, 2> kUpAxes = {"y", "z"};
+
 ScenarioEntry Scenario(const Context& ctx, const YAML::Node& n) {
   ScenarioEntry entry;
   if (n.IsMap()) {
-    CheckKeys(ctx, n, "scenarios", {"world", "start", "goal", "params"});
+    CheckKeys(ctx, n, "scenarios",
+              {"world", "start", "goal", "params", "units", "scale", "up", "recenter", "model_path"});
     if (!n["world"]) ctx.Fail(n, "scenarios.world", "missing");
     if (n["start"]) entry.start = Point(ctx, n["start"], "scenarios.start");
     if (n["goal"]) entry.goal = Point(ctx, n["goal"], "scenarios.goal");
     if (n["params"]) entry.params = StringMap(ctx, n["params"], "scenarios.params");
+    if (n["units"]) {
+      entry.units = Scalar(ctx, n["units"], "scenarios.units");
+      if (!Contains(kUnits, entry.units))
+        ctx.Fail(n["units"], "scenarios.units", "unknown unit '" + entry.units + "' (known: " + Join(kUnits) + ")");
+    }
+    if (n["scale"]) entry.scale = Number(ctx, n["scale"], "scenarios.scale", 1e-6, 1000.0);
+    if (n["up"]) {
+      entry.up = Scalar(ctx, n["up"], "scenarios.up");
+      if (!Contains(kUpAxes, entry.up)) ctx.Fail(n["up"], "scenarios.up", "expected y or z (got '" + entry.up + "')");
+    }
+    if (n["recenter"]) {
+      const std::string v = Scalar(ctx, n["recenter"], "scenarios.recenter");
+      if (v != "true" && v != "false") ctx.Fail(n["recenter"], "scenarios.recenter", "expected true or false");
+      entry.recenter = v == "true";
+    }
+    if (n["model_path"]) {
+      for (const auto& item : Items(ctx, n["model_path"], "scenarios.model_path")) {
+        entry.model_path.push_back(
+            ResolveFile(ctx, item, "scenarios.model_path", Scalar(ctx, item, "scenarios.model_path"), {}, true));
+      }
+    }
   } else if (!n.IsScalar()) {
     ctx.Fail(n, "scenarios", "expected a scenario id, a world file or {world: ...}");
   }
@@ -258,14 +292,19 @@ ScenarioEntry Scenario(const Context& ctx, const YAML::Node& n) {
   if (Contains(kScenarios, world)) {
     entry.world = world;
   } else if (world.find('/') != std::string::npos || world.find('.') != std::string::npos) {
-    entry.world = ResolveFile(ctx, world_node, "scenarios", world, {".yaml", ".yml", ".obj"});
-    if (fs::path(world).extension() == ".obj" && (!entry.start || !entry.goal)) {
-      ctx.Fail(world_node, "scenarios", "'" + world + "' is an OBJ mesh: give start and goal");
+    entry.world = ResolveFile(ctx, world_node, "scenarios", world, kWorldFileExtensions);
+    const std::string ext = fs::path(world).extension().string();
+    const bool own = ext == ".yaml" || ext == ".yml";
+    if (!own && (!entry.start || !entry.goal)) {
+      ctx.Fail(world_node, "scenarios", "'" + world + "' is a mesh or SDF world: give start and goal");
+    }
+    if (own && (!entry.units.empty() || entry.scale != 1.0 || !entry.up.empty() || entry.recenter)) {
+      ctx.Fail(world_node, "scenarios", "units, scale, up and recenter apply to mesh files (a world file places its meshes)");
     }
   } else {
     ctx.Fail(world_node, "scenarios",
              "unknown scenario '" + world + "' (known: " + Join(kScenarios) +
-                 ", or a .yaml/.obj world file)");
+                 ", or a world file: " + Join(kWorldFileExtensions) + ")");
   }
   return entry;
 }
@@ -504,6 +543,11 @@ std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
           for (const auto& [k, v] : scenario.params) e.world_params[k] = v;
           e.start = scenario.start;
           e.goal = scenario.goal;
+          e.units = scenario.units;
+          e.scale = scenario.scale;
+          e.up = scenario.up;
+          e.recenter = scenario.recenter;
+          e.model_path = scenario.model_path;
           e.board = board;
           e.method = method;
           e.clock = job.clock;

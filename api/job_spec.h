@@ -8,6 +8,8 @@
 //     - s1
 //     - worlds/hall.yaml
 //     - {world: meshes/yard.obj, start: [0, 0, 1], goal: [30, 0, 1], params: {k: v}}
+//     - {world: meshes/block.glb, units: mm, up: z, recenter: true, start: [0, 0, 5], goal: [40, 0, 5]}
+//     - {world: gazebo/yard.world, model_path: [gazebo/models], start: [0, 0, 2], goal: [20, 0, 2]}
 //   methods: [baseline, fixed, enavi]  # the registered methods
 //   seeds: 3                      # a count (1..N) or a list [1, 7, 9]
 //   clock: virtual                # virtual | emulated
@@ -75,6 +77,10 @@ struct ScenarioEntry {
   std::string world;  ///< scenario id, or the canonical path of a world file
   std::optional<Vec3> start, goal;
   std::map<std::string, std::string> params;
+  std::string units, up;  ///< mesh files: placement (EpisodeSpec::units, up, scale, recenter)
+  double scale = 1.0;
+  bool recenter = false;
+  std::vector<std::string> model_path;  ///< SDF worlds: canonical model directories
 };
 
 /// Settings applied to the episodes a `match` selects (empty match lists: any).

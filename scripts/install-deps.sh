@@ -11,6 +11,7 @@ packages=(
   libboost-program-options-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libsqlite3-dev sqlite3
   libcpp-httplib-dev libpng-dev libcairo2-dev fonts-dejavu-core
+  libassimp-dev libsdformat-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libssl-dev
   python3-dev pybind11-dev python3-numpy python3-torch

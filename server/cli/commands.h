@@ -3,6 +3,9 @@
 // Handlers throw std::invalid_argument for bad input (exit 2) and anything else for failures
 // (exit 1); main() maps them.
 
+#include <string>
+#include <vector>
+
 #include <CLI/CLI.hpp>
 
 namespace enavi::cli {
@@ -12,7 +15,12 @@ inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitBadInput = 2;
 
-/// `enavi world gen|check|show` (server/cli/world_cmd.cc).
+/// --units, --scale, --up, --recenter (mesh worlds) and --model-path (SDF worlds), shared by
+/// `enavi fly` and `enavi world` (server/cli/world_cmd.cc).
+void AddPlacementOptions(CLI::App* app, std::string* units, double* scale, std::string* up, bool* recenter,
+                         std::vector<std::string>* model_path);
+
+/// `enavi world gen|check|show|convert` (server/cli/world_cmd.cc).
 void RegisterWorldCommands(CLI::App& app);
 /// `enavi fly` (server/cli/fly_cmd.cc).
 void RegisterFlyCommand(CLI::App& app);

@@ -200,7 +200,7 @@ TEST_F(JobSpecTest, PathsOutsideTheAllowedRootsAreRejected) {
 
 TEST_F(JobSpecTest, ObjWorldWithoutStartAndGoalIsRejected) {
   EXPECT_EQ(Error("boards: tx2\nmethods: enavi\nseeds: 1\nscenarios: [worlds/yard.obj]\n"),
-            "job.yaml:4: scenarios: 'worlds/yard.obj' is an OBJ mesh: give start and goal");
+            "job.yaml:4: scenarios: 'worlds/yard.obj' is a mesh or SDF world: give start and goal");
 }
 
 TEST_F(JobSpecTest, UnknownKeysAreRejectedWithTheirLine) {
