@@ -71,8 +71,15 @@ JobProgress FarmClient::Status(const std::string& job_id) {
   return Request("GET", "/api/jobs/" + job_id).get<JobProgress>();
 }
 
-std::vector<JobProgress> FarmClient::Jobs() {
-  return Request("GET", "/api/jobs").get<std::vector<JobProgress>>();
+std::vector<JobProgress> FarmClient::Jobs(const std::map<std::string, std::string>& labels) {
+  // Label characters are URL-safe (api::LabelError) except '+', which a query reads as a space.
+  std::string query;
+  for (const auto& [k, v] : labels) {
+    std::string value;
+    for (char c : v) value += c == '+' ? std::string("%2B") : std::string(1, c);
+    query += (query.empty() ? "?" : "&") + std::string("label=") + k + "=" + value;
+  }
+  return Request("GET", "/api/jobs" + query).get<std::vector<JobProgress>>();
 }
 
 nlohmann::json FarmClient::Results(const std::string& job_id) {

@@ -11,6 +11,13 @@ namespace enavi::cli {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitBadInput = 2;
+/// `enavi compare`: the candidate regressed (a CI job gates on this).
+inline constexpr int kExitRegression = 3;
+
+/// Thrown by a handler to end with a specific exit status after printing its output.
+struct ExitStatus {
+  int code = kExitOk;
+};
 
 /// `enavi world gen|check|show` (server/cli/world_cmd.cc).
 void RegisterWorldCommands(CLI::App& app);
@@ -27,5 +34,9 @@ void RegisterServeCommand(CLI::App& app);
 void RegisterWorkerCommand(CLI::App& app);
 void RegisterClientCommands(CLI::App& app);  // submit, status, results, cancel
 void RegisterEvalCommand(CLI::App& app);
+/// `enavi compare` (server/cli/compare_cmd.cc).
+void RegisterCompareCommand(CLI::App& app);
+/// `enavi dashboard` (server/cli/dashboard_cmd.cc).
+void RegisterDashboardCommand(CLI::App& app);
 
 }  // namespace enavi::cli

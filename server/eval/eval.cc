@@ -81,7 +81,6 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   // Validate the matrix exactly as a submitted job; errors name the line of the flag.
   const std::string yaml = EvalJobYaml(options);
   const api::JobSpec job = api::ParseJobSpec(yaml, "enavi eval flags", options.job_spec);
-  const auto episodes = api::ExpandJob(job);
 
   const fs::path enavi = options.enavi.empty() ? worker::SelfExecutable() : options.enavi;
 
@@ -106,6 +105,12 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   server_options.bus = bus;
   FarmServer farm(&store, server_options);
   farm.Start();
+  std::unique_ptr<HttpApi> http;
+  if (options.dashboard) {
+    http = std::make_unique<HttpApi>(&farm, *options.dashboard);
+    http->Start();
+    progress_out << "dashboard: " << http->url() << "/\n" << std::flush;
+  }
 
   // Workers: separate processes running `enavi worker`, as on a cluster.
   std::vector<worker::ChildProcess> workers;
@@ -130,7 +135,7 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   }
 
   EvalReport report;
-  report.job_id = farm.Submit(job.name, yaml, episodes);
+  report.job_id = farm.Submit(job, yaml);
   auto last_print = std::chrono::steady_clock::time_point{};
   while (true) {
     report.progress = *store.Progress(report.job_id, NowMs());
@@ -163,8 +168,10 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   for (auto& w : workers) {
     if (!w.Wait(std::chrono::seconds(15))) w.Terminate(std::chrono::seconds(1));
   }
-  farm.Stop();
   report.results = store.Results(report.job_id);
+  if (http && options.while_serving) options.while_serving(report);
+  if (http) http->Stop();
+  farm.Stop();
   return report;
 }
 

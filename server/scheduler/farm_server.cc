@@ -4,6 +4,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include "api/provenance.h"
+
 namespace enavi::server {
 
 std::int64_t NowMs() {
@@ -33,10 +35,24 @@ void FarmServer::Stop() {
   if (thread_.joinable()) thread_.join();
 }
 
+std::string FarmServer::Submit(const api::JobSpec& job, const std::string& spec_yaml) {
+  JobMeta meta;
+  meta.labels = job.labels;
+  meta.provenance["enavi_version"] = api::BuildVersion();
+  meta.provenance["git_commit"] = api::BuildCommit();
+  meta.provenance["clock"] = job.clock;
+  meta.provenance["cost"] = job.cost;
+  if (!job.policy.empty()) {
+    meta.provenance["policy"] = job.policy;
+    meta.provenance["policy_sha256"] = api::Sha256File(job.policy);
+  }
+  return Submit(job.name, spec_yaml, api::ExpandJob(job), meta);
+}
+
 std::string FarmServer::Submit(const std::string& name, const std::string& spec_yaml,
-                               const std::vector<api::EpisodeSpec>& episodes) {
+                               const std::vector<api::EpisodeSpec>& episodes, const JobMeta& meta) {
   const std::int64_t now = NowMs();
-  std::string job_id = store_->CreateJob(name, spec_yaml, episodes, now);
+  std::string job_id = store_->CreateJob(name, spec_yaml, episodes, now, meta);
   spdlog::info("job {} '{}': {} episodes", job_id, name, episodes.size());
   PublishEvents({{job_id, "submitted", "", name}}, now);
   bus_->Wake();
@@ -143,6 +159,7 @@ void FarmServer::HandleStatuses(const std::vector<api::WorkerStatus>& statuses,
       }
     }
     if (is_new) {
+      store_->RecordWorker(s, now_ms);
       spdlog::info("worker {} on {} (pid {}): {} slots", s.worker_id, s.host, s.pid, s.slots);
     }
   }
