@@ -92,7 +92,7 @@ function niceTicks(lo, hi, count) {
 function frame(title, width, height, xr, yr, ylabel) {
   const m = {l: 52, r: 12, t: 22, b: 28};
   const root = svg('svg', {class: 'chart', width, height, viewBox: `0 0 ${width} ${height}`});
-  root.appendChild(svg('text', {x: m.l, y: 14, 'font-weight': 'bold'}, title));
+  root.appendChild(svg('text', {x: m.l, y: 14, 'font-weight': 'bold'}, ylabel ? `${title} (${ylabel})` : title));
   const sx = x => m.l + (x - xr[0]) / (xr[1] - xr[0] || 1) * (width - m.l - m.r);
   const sy = y => height - m.b - (y - yr[0]) / (yr[1] - yr[0] || 1) * (height - m.t - m.b);
   for (const t of niceTicks(yr[0], yr[1], 4)) {
@@ -101,7 +101,6 @@ function frame(title, width, height, xr, yr, ylabel) {
   }
   root.appendChild(svg('line', {x1: m.l, x2: m.l, y1: m.t, y2: height - m.b, stroke: '#999'}));
   root.appendChild(svg('line', {x1: m.l, x2: width - m.r, y1: height - m.b, y2: height - m.b, stroke: '#999'}));
-  if (ylabel) root.appendChild(svg('text', {x: 4, y: m.t - 8, fill: '#777'}, ylabel));
   return {root, sx, sy, m, width, height};
 }
 
@@ -179,7 +178,7 @@ function pathsChart({title, paths, width = 420, height = 420}) {
   const span = Math.max(xr[1] - xr[0], yr[1] - yr[0]);  // equal scale on both axes
   xr = [(xr[0] + xr[1] - span) / 2, (xr[0] + xr[1] + span) / 2];
   yr = [(yr[0] + yr[1] - span) / 2, (yr[0] + yr[1] + span) / 2];
-  const f = frame(title, width, height, xr, yr, 'y (m)');
+  const f = frame(title, width, height, xr, yr);
   paths.forEach((p, i) => {
     const d = p.x.map((x, k) => (k ? 'L' : 'M') + f.sx(x) + ',' + f.sy(p.y[k])).join('');
     f.root.appendChild(svg('path', {class: 'mark', d, fill: 'none', stroke: p.color || COLORS[i], 'stroke-width': 2}));
@@ -240,10 +239,14 @@ async function jobsPage() {
   if (jobs.some(j => j.state === 'running')) timer = setTimeout(route, 2000);
 }
 
+// The paper table's metrics lead; any other judged metric (info.metric_rules) follows.
+const LEADING = ['success', 'flight_time_s', 'path_length_m', 'nav_cpu_util_pct', 'velocity_std_mps'];
+
 // Metrics in display order: those with a direction first (info.metric_rules), then the rest.
 function orderedMetrics(names) {
   const rules = info.metric_rules || {};
-  const ruled = Object.keys(rules).filter(n => names.has(n) && rules[n].direction !== 'none');
+  const judged = n => names.has(n) && rules[n] && rules[n].direction !== 'none';
+  const ruled = LEADING.filter(judged).concat(Object.keys(rules).filter(n => judged(n) && !LEADING.includes(n)));
   const rest = [...names].filter(n => !ruled.includes(n)).sort();
   return {ruled, rest};
 }
@@ -335,7 +338,7 @@ async function episodePage(id) {
   const charts = [
     lineChart({title: 'speed', ylabel: 'm/s', series: [{name: '|v|', x: s.t, y: speedOf(s)}], events}),
     lineChart({title: 'navigation CPU', ylabel: '% of a core', series: [{name: 'nav', x: s.t, y: s.utilisation}], events}),
-    lineChart({title: 'eci', ylabel: 'eci', series: [{name: 'eci', x: s.t, y: s.eci}], events}),
+    lineChart({title: 'eci', series: [{name: 'eci', x: s.t, y: s.eci}], events}),
     lineChart({title: 'task frequencies', ylabel: 'Hz', events, series: [
       {name: 'f_per', x: s.t, y: s.f_per, step: true}, {name: 'f_col', x: s.t, y: s.f_col, step: true},
       {name: 'f_dif', x: s.t, y: s.f_dif, step: true}]}),
@@ -480,6 +483,8 @@ async function trendPage() {
 
 async function route() {
   clearTimeout(timer);
+  const hash = location.hash;
+  delete document.body.dataset.ready;  // tests wait for ready === the hash they opened
   const path = location.hash.replace(/^#/, '').split('?')[0] || '/jobs';
   const parts = path.split('/').filter(Boolean);
   document.body.dataset.page = parts[0] || 'jobs';
@@ -489,7 +494,7 @@ async function route() {
     else if (parts[0] === 'compare') await comparePage();
     else if (parts[0] === 'trend') await trendPage();
     else await jobsPage();
-    document.body.dataset.ready = location.hash;
+    document.body.dataset.ready = hash;
   } catch (e) {
     showError(e);
     document.body.dataset.ready = 'error';

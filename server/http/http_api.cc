@@ -96,6 +96,25 @@ int ParseInt(const std::string& text, const std::string& field, std::int64_t lo,
   return static_cast<int>(v);
 }
 
+// Every value of query parameter `name`, split at the first '=' only (httplib's parser cuts
+// "label=k=v" at the second '='), URL-decoded.
+std::vector<std::string> QueryValues(const httplib::Request& req, const std::string& name) {
+  std::vector<std::string> out;
+  const auto q = req.target.find('?');
+  if (q == std::string::npos) return out;
+  const std::string query = req.target.substr(q + 1);
+  std::size_t at = 0;
+  while (at <= query.size()) {
+    const auto end = std::min(query.find('&', at), query.size());
+    const std::string item = query.substr(at, end - at);
+    if (item.rfind(name + "=", 0) == 0) {
+      out.push_back(httplib::detail::decode_url(item.substr(name.size() + 1), true));
+    }
+    at = end + 1;
+  }
+  return out;
+}
+
 Page PageOf(const httplib::Request& req) {
   Page p;
   if (req.has_param("offset")) p.offset = ParseInt(req.get_param_value("offset"), "offset", 0, 1 << 30);
@@ -107,6 +126,40 @@ Page PageOf(const httplib::Request& req) {
 
 // Generated from server/dashboard/* by cmake/EmbedFiles.cmake.
 const std::map<std::string, std::string>& DashboardAssets();
+
+AccessDecision CheckAccess(const HttpOptions& options, const AccessRequest& r) {
+  AccessDecision d;
+  const bool loopback = IsLoopbackHost(options.host);
+  // Bound to loopback, only loopback names may be in Host: a DNS-rebound name that resolves to
+  // 127.0.0.1 must not let another site's scripts read the farm.
+  if (loopback && !IsLoopbackHost(HostName(r.host))) {
+    d.status = 403;
+    d.message = "Host '" + r.host + "' is not a loopback name";
+    return d;
+  }
+  const bool write = r.method != "GET" && r.method != "HEAD";
+  // A page from another origin must not change state (CSRF): a cross-site form POST carries
+  // its Origin; the CLI sends none.
+  if (write && !r.origin.empty() && HostName(OriginHost(r.origin)) != HostName(r.host)) {
+    d.status = 403;
+    d.message = "cross-origin request refused";
+    return d;
+  }
+  if (options.token.empty() || (!write && loopback)) return d;
+  if (!r.token_param.empty() && SameToken(r.token_param, options.token)) {
+    d.set_cookie = true;
+    return d;
+  }
+  const std::string prefix = "Bearer ";
+  const bool header_ok = r.authorization.rfind(prefix, 0) == 0 &&
+                         SameToken(r.authorization.substr(prefix.size()), options.token);
+  if (!header_ok && !SameToken(CookieValue(r.cookie, kTokenCookie), options.token)) {
+    d.status = 401;
+    d.message = write ? "this farm server needs its token: pass --token (Authorization: Bearer)"
+                      : "this farm server needs its token: open /?token=TOKEN or send Authorization: Bearer";
+  }
+  return d;
+}
 
 bool IsLoopbackHost(const std::string& host) {
   if (host == "localhost" || host == "::1") return true;
@@ -164,24 +217,17 @@ void HttpApi::Routes() {
   using Handled = httplib::Server::HandlerResponse;
 
   // Access: see the header. Checked before any route, so no handler can forget it.
+  // Access rules (CheckAccess) before any route, so no handler can forget them.
   s.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-    const bool loopback = IsLoopbackHost(options_.host);
-    // Bound to loopback, only loopback names may be in Host: a DNS-rebound name that resolves
-    // to 127.0.0.1 must not let another site's scripts read the farm.
-    if (loopback && !IsLoopbackHost(HostName(req.get_header_value("Host")))) {
-      Error(res, 403, "Host '" + req.get_header_value("Host") + "' is not a loopback name");
-      return Handled::Handled;
-    }
-    const bool write = req.method != "GET" && req.method != "HEAD";
-    // A browser page from another origin must not change state (CSRF): a cross-site form POST
-    // carries its Origin; the CLI sends none.
-    if (write && req.has_header("Origin") &&
-        HostName(OriginHost(req.get_header_value("Origin"))) != HostName(req.get_header_value("Host"))) {
-      Error(res, 403, "cross-origin request refused");
-      return Handled::Handled;
-    }
-    if (options_.token.empty() || (!write && loopback)) return Handled::Unhandled;
-    if (req.has_param("token") && SameToken(req.get_param_value("token"), options_.token)) {
+    AccessRequest a;
+    a.method = req.method;
+    a.host = req.get_header_value("Host");
+    a.origin = req.get_header_value("Origin");
+    a.authorization = req.get_header_value("Authorization");
+    a.cookie = req.get_header_value("Cookie");
+    if (req.has_param("token")) a.token_param = req.get_param_value("token");
+    const AccessDecision d = CheckAccess(options_, a);
+    if (d.set_cookie) {
       // Opening /?token=T once keeps the token in a cookie for the dashboard's requests.
       res.set_header("Set-Cookie", std::string(kTokenCookie) + "=" + options_.token +
                                        "; Path=/; HttpOnly; SameSite=Strict");
@@ -189,14 +235,9 @@ void HttpApi::Routes() {
         res.set_redirect("/");
         return Handled::Handled;
       }
-      return Handled::Unhandled;
     }
-    const std::string auth = req.get_header_value("Authorization");
-    const std::string prefix = "Bearer ";
-    const bool header_ok = auth.rfind(prefix, 0) == 0 && SameToken(auth.substr(prefix.size()), options_.token);
-    if (!header_ok && !SameToken(CookieValue(req.get_header_value("Cookie"), kTokenCookie), options_.token)) {
-      Error(res, 401, write ? "this farm server needs its token: pass --token (Authorization: Bearer)"
-                            : "this farm server needs its token: open /?token=TOKEN or send Authorization: Bearer");
+    if (d.status != 0) {
+      Error(res, d.status, d.message);
       return Handled::Handled;
     }
     return Handled::Unhandled;
@@ -246,8 +287,8 @@ void HttpApi::Routes() {
 
   s.Get("/api/jobs", [&store](const httplib::Request& req, httplib::Response& res) {
     std::map<std::string, std::string> labels;
-    for (std::size_t i = 0; i < req.get_param_value_count("label"); ++i) {
-      auto [k, v] = api::ParseLabelFilter(req.get_param_value("label", i), "label");
+    for (const std::string& filter : QueryValues(req, "label")) {
+      auto [k, v] = api::ParseLabelFilter(filter, "label");
       if (labels.count(k) && labels[k] != v) return Reply(res, 200, nlohmann::json::array());
       labels[k] = v;
     }
@@ -338,7 +379,9 @@ void HttpApi::Routes() {
   });
 
   s.Get("/api/trend", [&store](const httplib::Request& req, httplib::Response& res) {
-    const auto [key, value] = api::ParseLabelFilter(req.get_param_value("label"), "label");
+    const auto labels = QueryValues(req, "label");
+    if (labels.size() != 1) return Error(res, 400, "label: give exactly one key=value");
+    const auto [key, value] = api::ParseLabelFilter(labels.front(), "label");
     const std::string metric = req.has_param("metric") ? req.get_param_value("metric") : "flight_time_s";
     Reply(res, 200, store.Trend(key, value, metric, PageOf(req)));
   });

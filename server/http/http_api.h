@@ -30,6 +30,24 @@ struct HttpOptions {
 /// Cookie that carries the token for the dashboard's pages (set by opening /?token=TOKEN).
 inline constexpr const char* kTokenCookie = "enavi_token";
 
+/// The headers access depends on.
+struct AccessRequest {
+  std::string method;  ///< GET, POST, ...
+  std::string host, origin, authorization, cookie;
+  std::string token_param;  ///< ?token=
+};
+
+struct AccessDecision {
+  int status = 0;  ///< 0: allowed; else the HTTP status to refuse with
+  std::string message;
+  bool set_cookie = false;  ///< the ?token= was right: keep it in the token cookie
+};
+
+/// The access rules: on a loopback address the Host must be a loopback name (DNS rebinding);
+/// a state-changing request with an Origin must come from the same host (CSRF); with a token,
+/// writes always need it and, off loopback, every request (Bearer header, cookie or ?token=).
+AccessDecision CheckAccess(const HttpOptions& options, const AccessRequest& request);
+
 /// True for 127.0.0.0/8, ::1 and "localhost".
 bool IsLoopbackHost(const std::string& host);
 
