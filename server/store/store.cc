@@ -90,6 +90,7 @@ CREATE TABLE IF NOT EXISTS job_labels (
   PRIMARY KEY (job_id, key)
 );
 CREATE INDEX IF NOT EXISTS job_labels_by_value ON job_labels(key, value, job_id);
+CREATE INDEX IF NOT EXISTS results_unsuccessful ON results(job_id) WHERE success = 0;
 CREATE TABLE IF NOT EXISTS workers (
   worker_id      TEXT PRIMARY KEY,
   host           TEXT NOT NULL,
@@ -100,6 +101,23 @@ CREATE TABLE IF NOT EXISTS workers (
   first_seen_ms  INTEGER NOT NULL,
   last_seen_ms   INTEGER NOT NULL
 );
+)sql";
+
+// Adds one result's metrics (?6, metrics_json) to its cell's running sums; ?5 = success.
+constexpr const char* kAddCellMetrics = R"sql(
+INSERT INTO cell_metrics (job_id, board, scenario, method, name, n, sum, sum_sq, min, max,
+                          n_ok, sum_ok, sum_sq_ok, min_ok, max_ok)
+SELECT ?1, ?2, ?3, ?4, m.key, 1, m.value, m.value * m.value, m.value, m.value,
+       ?5, ?5 * m.value, ?5 * m.value * m.value, CASE WHEN ?5 THEN m.value END,
+       CASE WHEN ?5 THEN m.value END
+FROM json_each(?6) m WHERE m.type IN ('integer', 'real', 'true', 'false')
+ON CONFLICT (job_id, board, scenario, method, name) DO UPDATE SET
+  n = n + 1, sum = sum + excluded.sum, sum_sq = sum_sq + excluded.sum_sq,
+  min = MIN(min, excluded.min), max = MAX(max, excluded.max),
+  n_ok = n_ok + excluded.n_ok, sum_ok = sum_ok + excluded.sum_ok,
+  sum_sq_ok = sum_sq_ok + excluded.sum_sq_ok,
+  min_ok = COALESCE(MIN(min_ok, excluded.min_ok), min_ok, excluded.min_ok),
+  max_ok = COALESCE(MAX(max_ok, excluded.max_ok), max_ok, excluded.max_ok)
 )sql";
 
 std::string NewJobId() {
@@ -249,6 +267,26 @@ void Store::Migrate() {
   old.Reset();
   Statement& fill = db_->Prepare("UPDATE results SET metrics_json = ? WHERE episode_id = ?");
   for (const auto& [id, metrics] : missing) fill.Reset().Bind(1, metrics).Bind(2, id).Run();
+  // Per cell and metric running sums, kept by every ingest (kAddCellMetrics), so a job page
+  // reads ~1 row per cell and metric instead of every result. Built from the results once.
+  if (!HasColumn("cell_metrics", "n")) {
+    db_->Exec(R"sql(
+CREATE TABLE cell_metrics (
+  job_id TEXT NOT NULL, board TEXT NOT NULL, scenario TEXT NOT NULL, method TEXT NOT NULL,
+  name TEXT NOT NULL,
+  n INTEGER NOT NULL, sum REAL NOT NULL, sum_sq REAL NOT NULL, min REAL NOT NULL, max REAL NOT NULL,
+  n_ok INTEGER NOT NULL, sum_ok REAL NOT NULL, sum_sq_ok REAL NOT NULL, min_ok REAL, max_ok REAL,
+  PRIMARY KEY (job_id, board, scenario, method, name)
+);
+INSERT INTO cell_metrics
+SELECT r.job_id, r.board, r.scenario, r.method, m.key, COUNT(*), SUM(m.value), SUM(m.value * m.value),
+       MIN(m.value), MAX(m.value), SUM(r.success), SUM(r.success * m.value),
+       SUM(r.success * m.value * m.value), MIN(CASE WHEN r.success THEN m.value END),
+       MAX(CASE WHEN r.success THEN m.value END)
+FROM results r, json_each(r.metrics_json) m WHERE m.type IN ('integer', 'real', 'true', 'false')
+GROUP BY r.job_id, r.board, r.scenario, r.method, m.key;
+)sql");
+  }
 }
 
 Store::~Store() {
@@ -621,6 +659,7 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
   Statement& set_state = db_->Prepare(
       "UPDATE episodes SET state = ?, attempts = ?, lease_owner = NULL, lease_deadline_ms = NULL, "
       "last_error = ?, updated_ms = ? WHERE id = ?");
+  Statement& add_cell = db_->Prepare(kAddCellMetrics);
   std::vector<std::string> touched_jobs;
 
   for (const api::ResultMessage& m : results) {
@@ -671,6 +710,10 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
             .Bind(19, r.nav_cpu_util_pct).Bind(20, r.deadline_miss_ratio)
             .Bind(21, r.replans).Bind(22, m.wall_time_s).Bind(23, now_ms).Bind(24, summary)
             .BindBlob(25, PackSeries(r.series)).Bind(26, metrics).Run();
+        add_cell.Reset()
+            .Bind(1, out.job_id).Bind(2, r.spec.board)
+            .Bind(3, r.scenario.empty() ? api::ScenarioOf(r.spec.world) : r.scenario)
+            .Bind(4, r.spec.method).Bind(5, r.success ? 1 : 0).Bind(6, metrics).Run();
         set_state.Reset().Bind(1, "done").Bind(2, std::max(attempts, m.attempt)).BindNull(3)
             .Bind(4, now_ms).Bind(5, m.episode_id).Run();
         out.ack = api::AckStatus::kStored;
@@ -714,10 +757,11 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
 
 std::string Store::ResultsQuery(bool paged) {
   const bool hosts = HasColumn("workers", "host");
+  // Driven by the episodes' (job_id, idx) index: a page reads only its rows, unsorted.
   return std::string("SELECT r.episode_id, r.worker, r.attempt, r.wall_time_s, r.result_json, ") +
-         (hosts ? "w.host" : "NULL") + " FROM results r JOIN episodes e ON e.id = r.episode_id " +
+         (hosts ? "w.host" : "NULL") + " FROM episodes e JOIN results r ON r.episode_id = e.id " +
          (hosts ? "LEFT JOIN workers w ON w.worker_id = r.worker " : "") +
-         "WHERE r.job_id = ? ORDER BY e.idx" + (paged ? " LIMIT ? OFFSET ?" : "");
+         "WHERE e.job_id = ? ORDER BY e.idx" + (paged ? " LIMIT ? OFFSET ?" : "");
 }
 
 nlohmann::json Store::ResultObject(const Statement& q) {
@@ -782,19 +826,28 @@ nlohmann::json Store::JobSummary(const std::string& job_id, const Page& page) {
   count.Step();
   out["total"] = count.Int(0);
   count.Reset();
-  // One pass over the page's results: per cell and metric, all episodes and successful ones.
-  Statement& q = db_->Prepare(
-      "WITH cells AS (SELECT board, scenario, method FROM results WHERE job_id = ?1 "
-      "  GROUP BY board, scenario, method ORDER BY board, scenario, method LIMIT ?2 OFFSET ?3) "
-      "SELECT r.board, r.scenario, r.method, m.key, "
-      "  COUNT(*), AVG(m.value), MIN(m.value), MAX(m.value), AVG(m.value * m.value), "
-      "  COUNT(*) FILTER (WHERE r.success = 1), AVG(m.value) FILTER (WHERE r.success = 1), "
-      "  MIN(m.value) FILTER (WHERE r.success = 1), MAX(m.value) FILTER (WHERE r.success = 1), "
-      "  AVG(m.value * m.value) FILTER (WHERE r.success = 1) "
-      "FROM results r JOIN cells c ON c.board = r.board AND c.scenario = r.scenario "
-      "  AND c.method = r.method, json_each(" + metrics + ") m "
-      "WHERE r.job_id = ?1 AND m.type IN ('integer', 'real', 'true', 'false') "
-      "GROUP BY r.board, r.scenario, r.method, m.key ORDER BY r.board, r.scenario, r.method");
+  // Per cell and metric, all episodes and successful ones: from the running sums when the
+  // database has them, else (a read-only database written before them) from every result.
+  const std::string sums =
+      HasColumn("cell_metrics", "n")
+          ? "SELECT board, scenario, method, name, n, sum / n, min, max, sum_sq / n, n_ok, "
+            "  sum_ok / NULLIF(n_ok, 0), min_ok, max_ok, sum_sq_ok / NULLIF(n_ok, 0) "
+            "FROM cell_metrics WHERE job_id = ?1 AND (board, scenario, method) IN ("
+            "  SELECT board, scenario, method FROM cell_metrics WHERE job_id = ?1 "
+            "  GROUP BY board, scenario, method ORDER BY board, scenario, method LIMIT ?2 OFFSET ?3) "
+            "ORDER BY board, scenario, method"
+          : "WITH cells AS (SELECT board, scenario, method FROM results WHERE job_id = ?1 "
+            "  GROUP BY board, scenario, method ORDER BY board, scenario, method LIMIT ?2 OFFSET ?3) "
+            "SELECT r.board, r.scenario, r.method, m.key, "
+            "  COUNT(*), AVG(m.value), MIN(m.value), MAX(m.value), AVG(m.value * m.value), "
+            "  COUNT(*) FILTER (WHERE r.success = 1), AVG(m.value) FILTER (WHERE r.success = 1), "
+            "  MIN(m.value) FILTER (WHERE r.success = 1), MAX(m.value) FILTER (WHERE r.success = 1), "
+            "  AVG(m.value * m.value) FILTER (WHERE r.success = 1) "
+            "FROM results r JOIN cells c ON c.board = r.board AND c.scenario = r.scenario "
+            "  AND c.method = r.method, json_each(" + metrics + ") m "
+            "WHERE r.job_id = ?1 AND m.type IN ('integer', 'real', 'true', 'false') "
+            "GROUP BY r.board, r.scenario, r.method, m.key ORDER BY r.board, r.scenario, r.method";
+  Statement& q = db_->Prepare(sums);
   q.Bind(1, job_id).Bind(2, page.limit).Bind(3, page.offset);
   nlohmann::json cells = nlohmann::json::array();
   while (q.Step()) {
@@ -849,17 +902,22 @@ nlohmann::json Store::ResultsPage(const std::string& job_id, const Page& page) {
 
 nlohmann::json Store::JobFailures(const std::string& job_id, const Page& page) {
   std::lock_guard lock(mutex_);
-  const std::string where =
-      "FROM episodes e LEFT JOIN results r ON r.episode_id = e.id "
-      "WHERE e.job_id = ? AND (e.state = 'failed' OR r.success = 0)";
-  Statement& count = db_->Prepare("SELECT COUNT(*) " + where);
+  // Failed episodes have no result (a late success makes them done), so the two sets are
+  // disjoint; each comes from its own index.
+  Statement& count = db_->Prepare(
+      "SELECT (SELECT COUNT(*) FROM episodes WHERE state = 'failed' AND job_id = ?1) + "
+      "(SELECT COUNT(*) FROM results WHERE job_id = ?1 AND success = 0)");
   count.Bind(1, job_id);
   count.Step();
   nlohmann::json out = PageJson(page, count.Int(0));
   count.Reset();
   Statement& q = db_->Prepare(
       "SELECT e.id, e.board, e.world, e.method, e.seed, e.state, e.attempts, "
-      "COALESCE(r.end_reason, e.last_error, '') " + where + " ORDER BY e.idx LIMIT ? OFFSET ?");
+      "COALESCE(r.end_reason, e.last_error, '') FROM episodes e "
+      "LEFT JOIN results r ON r.episode_id = e.id WHERE e.id IN ("
+      "  SELECT id FROM episodes WHERE state = 'failed' AND job_id = ?1 UNION ALL "
+      "  SELECT episode_id FROM results WHERE job_id = ?1 AND success = 0) "
+      "ORDER BY e.idx LIMIT ?2 OFFSET ?3");
   q.Bind(1, job_id).Bind(2, page.limit).Bind(3, page.offset);
   nlohmann::json list = nlohmann::json::array();
   while (q.Step()) {

@@ -157,8 +157,16 @@ TEST_F(StoreDashboardTest, ReadOnlyStoreReadsAndNeverWrites) {
 TEST_F(StoreDashboardTest, OlderDatabaseIsMigratedInPlace) {
   const std::string job = testing::SeedJob(*store_, kJob, 1000);
   store_.reset();
-  Sql("DROP TABLE job_labels; DROP TABLE workers; ALTER TABLE jobs DROP COLUMN provenance_json; "
-      "ALTER TABLE results DROP COLUMN metrics_json;");
+  Sql("DROP TABLE job_labels; DROP TABLE workers; DROP TABLE cell_metrics; "
+      "ALTER TABLE jobs DROP COLUMN provenance_json; ALTER TABLE results DROP COLUMN metrics_json;");
+  {
+    // Read-only, it is left as it is and the aggregates come from the results themselves.
+    StoreOptions ro;
+    ro.read_only = true;
+    Store reader(db(), ro);
+    EXPECT_EQ(reader.JobSummary(job, {})["cells"][0]["metrics"]["flight_time_s"]["n"], 7);
+    EXPECT_TRUE(reader.KnownWorkers().empty());
+  }
   store_ = std::make_unique<Store>(db());
   EXPECT_EQ(store_->Results(job).size(), 28u);
   EXPECT_EQ(store_->JobSummary(job, {})["cells"][0]["metrics"]["flight_time_s"]["n"], 7);
