@@ -13,7 +13,10 @@
 //   GET  /api/workers              -> [{"worker_id", "host", "slots", "free_slots", ...}]
 //   GET  /api/health               -> {"ok": true, "protocol": 1, "stats": {results_received,
 //                                      results_stored, duplicates, assignments, leases_lost}}
-// State-changing requests (POST) carry "Authorization: Bearer TOKEN" when the server has a token.
+//   GET  /api/jobs/{id}/summary | failures | results?offset=&limit=, /api/compare, /api/trend,
+//        /api/episodes/{id}/topdown.png, /api/info, /: the dashboard (docs/dashboard.md)
+// With a token, state-changing requests (POST) carry "Authorization: Bearer TOKEN"; off
+// loopback every request does (or the dashboard's cookie).
 
 #include <cstdint>
 #include <map>

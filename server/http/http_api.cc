@@ -256,6 +256,7 @@ void HttpApi::Routes() {
   });
 
   s.Get("/api/health", [this](const httplib::Request&, httplib::Response& res) {
+    if (!farm_) return Reply(res, 200, {{"ok", true}, {"protocol", api::kFarmProtocolVersion}, {"read_only", true}});
     const FarmServerStats st = farm_->stats();
     Reply(res, 200,
           {{"ok", true},

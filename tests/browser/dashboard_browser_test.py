@@ -185,6 +185,10 @@ class DashboardBrowserTest(unittest.TestCase):
         try:
             with urllib.request.urlopen(url + "/") as r:
                 self.assertIn("/static/app.js", r.read().decode())
+            with urllib.request.urlopen(url + "/api/health") as r:
+                self.assertTrue(json.load(r)["read_only"])
+            with urllib.request.urlopen(url + "/api/workers") as r:
+                self.assertEqual([w["alive"] for w in json.load(r)], [False])
             with self.assertRaises(urllib.error.HTTPError) as refused:
                 urllib.request.urlopen(urllib.request.Request(url + "/api/jobs", data=b"x", method="POST"))
             self.assertEqual(refused.exception.code, 405)
