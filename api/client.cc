@@ -75,9 +75,16 @@ std::vector<JobProgress> FarmClient::Jobs(const std::map<std::string, std::strin
   // Label characters are URL-safe (api::LabelError) except '+', which a query reads as a space.
   std::string query;
   for (const auto& [k, v] : labels) {
-    std::string value;
-    for (char c : v) value += c == '+' ? std::string("%2B") : std::string(1, c);
-    query += (query.empty() ? "?" : "&") + std::string("label=") + k + "=" + value;
+    query += query.empty() ? "?label=" : "&label=";
+    query += k;
+    query += '=';
+    for (char c : v) {
+      if (c == '+') {
+        query += "%2B";
+      } else {
+        query += c;
+      }
+    }
   }
   return Request("GET", "/api/jobs" + query).get<std::vector<JobProgress>>();
 }

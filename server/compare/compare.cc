@@ -304,10 +304,22 @@ std::string CompareTable(const CompareReport& r) {
       << (exact ? "exact deltas (virtual clock, cost model: any difference is real)"
                 : "paired t-test over seeds, 95% confidence intervals")
       << "\n";
+  // Worst first: regressions, improvements, then changes of judged and of unjudged metrics.
+  auto rank = [](const MetricChange& m) {
+    if (m.verdict == "regression") return 0;
+    if (m.verdict == "improvement") return 1;
+    return m.direction == Direction::kNone ? 3 : 2;
+  };
   for (const CellChange& c : r.cells) {
     bool header = false;
+    std::vector<const MetricChange*> shown;
     for (const MetricChange& m : c.metrics) {
-      if (m.verdict == "same") continue;
+      if (m.verdict != "same") shown.push_back(&m);
+    }
+    std::stable_sort(shown.begin(), shown.end(),
+                     [&](const MetricChange* a, const MetricChange* b) { return rank(*a) < rank(*b); });
+    for (const MetricChange* mp : shown) {
+      const MetricChange& m = *mp;
       if (!header) {
         out << "\n" << CellName(c) << " (" << c.pairs << " pairs)\n";
         header = true;

@@ -196,6 +196,42 @@ class DashboardBrowserTest(unittest.TestCase):
             proc.terminate()
             proc.wait(10)
 
+    def test_eval_dashboard_serves_the_embedded_farm_until_ctrl_c(self):
+        import re
+        import signal
+        proc = subprocess.Popen(
+            [ENAVI, "eval", "--boards", "tx2", "--scenarios", "s1", "--seeds", "2", "--workers", "1",
+             "--episode-cmd", os.path.join(BUILD, "tests", "fake_episode"), "--dashboard",
+             "--domain", str(100 + (os.getpid() + 1) % 100)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            url, lines = None, []
+            deadline = time.time() + 60
+            while time.time() < deadline:
+                line = proc.stderr.readline()
+                if not line:
+                    break
+                lines.append(line)
+                m = re.match(r"dashboard: (http://\S+)/", line)
+                if m:
+                    url = m.group(1)
+                if "keeps serving until Ctrl-C" in line:
+                    break
+            self.assertIsNotNone(url, "".join(lines))
+            with urllib.request.urlopen(url + "/api/jobs") as r:
+                jobs = json.load(r)
+            self.assertEqual([(j["state"], j["done"]) for j in jobs], [("done", 4)])
+            with urllib.request.urlopen(url + "/") as r:
+                self.assertIn("/static/app.js", r.read().decode())
+            proc.send_signal(signal.SIGINT)
+            out, _ = proc.communicate(timeout=30)
+            self.assertEqual(proc.returncode, 0)
+            self.assertIn("tx2", out)  # the table was printed before serving on
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+
 
 if __name__ == "__main__":
     unittest.main(argv=[sys.argv[0]], verbosity=2)
