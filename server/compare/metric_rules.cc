@@ -29,7 +29,7 @@ const MetricRules& DefaultMetricRules() {
       {"emergency_stops", {Direction::kLower, 0.0, 0.0, false}},
       {"plan_failures", {Direction::kLower, 0.0, 0.0, false}},
       {"time_stopped_s", {Direction::kLower, 0.1, 0.10, false}},
-      {"setpoint_lag_p95_s", {Direction::kLower, 0.0, 0.10, false}},
+      {"setpoint_lag_p95_m", {Direction::kLower, 0.0, 0.10, false}},
   };
   return rules;
 }

@@ -3,12 +3,17 @@
 #include "api/job_spec.h"
 #include "api/provenance.h"
 #include "tests/support/synthetic_result.h"
+#include "workers/sim/episode_config.h"
 
 namespace enavi::testing {
 
 std::string SeedJob(server::Store& store, const std::string& spec_yaml, std::int64_t now_ms,
                     const std::string& worker, int series_len) {
-  const api::JobSpec job = api::ParseJobSpec(spec_yaml, "seed.yaml");
+  // Validated against the registry's methods, as `enavi serve` does; fake.* knobs pass.
+  api::JobSpecOptions options;
+  options.catalog = sim::MethodCatalog();
+  options.catalog.unchecked_prefixes = {"fake."};
+  const api::JobSpec job = api::ParseJobSpec(spec_yaml, "seed.yaml", options);
   server::JobMeta meta;
   meta.labels = job.labels;
   meta.provenance = {{"enavi_version", api::BuildVersion()}, {"git_commit", api::BuildCommit()},
