@@ -159,14 +159,14 @@ class Store {
   // ---- dashboard aggregates (computed in SQLite) ----
   /// Per board x scenario x method cell of a job (a page of cells, in that order): episodes,
   /// and per metric n, mean, std, min, max over the cell's results; "success_only" repeats the
-  /// statistics over successful episodes. {"cells": [...], "total_cells", "offset", "limit"}.
+  /// statistics over successful episodes. {"cells": [...], "total" (cells), "offset", "limit"}.
   nlohmann::json JobSummary(const std::string& job_id, const Page& page);
   /// A page of result objects (as Results) in episode order: {"results", "total", ...}.
   nlohmann::json ResultsPage(const std::string& job_id, const Page& page);
   /// Failed episodes and unsuccessful flights with their reasons: {"failures", "total", ...}.
   nlohmann::json JobFailures(const std::string& job_id, const Page& page);
   /// Mean of `metric` per job and board over the jobs with label `key=value`, oldest first:
-  /// {"points": [{"job_id", "name", "created_ms", "board", "n", "mean"}], "total_jobs", ...}.
+  /// {"points": [{"job_id", "name", "created_ms", "board", "n", "mean"}], "total" (jobs), ...}.
   nlohmann::json Trend(const std::string& key, const std::string& value,
                        const std::string& metric, const Page& page);
 
@@ -176,7 +176,6 @@ class Store {
   /// Every worker this database has seen: {"worker_id", "host", "version", ...}.
   nlohmann::json KnownWorkers();
 
-  bool read_only() const { return options_.read_only; }
   int max_attempts() const { return options_.max_attempts; }
 
  private:
