@@ -14,7 +14,7 @@ import sys
 import tempfile
 import unittest
 
-BUILD, SOURCE = sys.argv[1], sys.argv[2]
+BUILD, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 ENAVI = os.path.join(BUILD, "bin", "enavi")
 SCHEMA = os.path.join(SOURCE, "tests", "browser", "junit.xsd")
 

@@ -25,7 +25,7 @@ import unittest
 import urllib.error
 import urllib.request
 
-BUILD, SOURCE = sys.argv[1], sys.argv[2]
+BUILD, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 ENAVI = os.path.join(BUILD, "bin", "enavi")
 SEED = os.path.join(BUILD, "tests", "seed_dashboard_db")
 HOSTILE = "<img src=x onerror=alert(1)>"
@@ -220,7 +220,7 @@ class DashboardBrowserTest(unittest.TestCase):
             self.assertIsNotNone(url, "".join(lines))
             with urllib.request.urlopen(url + "/api/jobs") as r:
                 jobs = json.load(r)
-            self.assertEqual([(j["state"], j["done"]) for j in jobs], [("done", 4)])
+            self.assertEqual([(j["state"], j["done"]) for j in jobs], [("done", 4)], jobs)
             with urllib.request.urlopen(url + "/") as r:
                 self.assertIn("/static/app.js", r.read().decode())
             proc.send_signal(signal.SIGINT)
