@@ -87,8 +87,22 @@ JobProgress FarmClient::Status(const std::string& job_id) {
   return Request("GET", "/api/jobs/" + job_id).get<JobProgress>();
 }
 
-std::vector<JobProgress> FarmClient::Jobs() {
-  return Request("GET", "/api/jobs").get<std::vector<JobProgress>>();
+std::vector<JobProgress> FarmClient::Jobs(const std::map<std::string, std::string>& labels) {
+  // Label characters are URL-safe (api::LabelError) except '+', which a query reads as a space.
+  std::string query;
+  for (const auto& [k, v] : labels) {
+    query += query.empty() ? "?label=" : "&label=";
+    query += k;
+    query += '=';
+    for (char c : v) {
+      if (c == '+') {
+        query += "%2B";
+      } else {
+        query += c;
+      }
+    }
+  }
+  return Request("GET", "/api/jobs" + query).get<std::vector<JobProgress>>();
 }
 
 nlohmann::json FarmClient::Results(const std::string& job_id) {

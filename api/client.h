@@ -1,6 +1,7 @@
 #pragma once
 // Client library for the farm's HTTP API (routes in api/http_schema.h).
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -29,7 +30,8 @@ class FarmClient {
   /// @throws std::invalid_argument when the server rejects the spec (message from the server).
   Submitted Submit(const std::string& yaml, const std::string& file_name);
   JobProgress Status(const std::string& job_id);
-  std::vector<JobProgress> Jobs();
+  /// Every job, or those carrying all of `labels`.
+  std::vector<JobProgress> Jobs(const std::map<std::string, std::string>& labels = {});
   /// A list of result objects (board, scenario, method, seed, metrics) in episode order.
   nlohmann::json Results(const std::string& job_id);
   nlohmann::json Episodes(const std::string& job_id);

@@ -2,6 +2,8 @@
 
 #include <openssl/evp.h>
 
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 namespace enavi::api {
@@ -19,6 +21,14 @@ std::string Sha256Hex(std::string_view bytes) {
     hex[2 * i + 1] = kDigits[digest[i] & 15];
   }
   return hex;
+}
+
+std::string Sha256File(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path.string() + ": cannot read (for its sha256)");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return Sha256Hex(text.str());
 }
 
 }  // namespace enavi::api

@@ -1,7 +1,9 @@
 #include "api/job_spec.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -253,6 +255,20 @@ constexpr std::initializer_list<const char*> kWorldFileExtensions = {
 constexpr std::array<const char*, 5> kUnits = {"m", "cm", "mm", "in", "ft"};
 constexpr std::array<const char*, 2> kUpAxes = {"y", "z"};
 
+std::map<std::string, std::string> Labels(const Context& ctx, const YAML::Node& n) {
+  std::map<std::string, std::string> labels = StringMap(ctx, n, "labels");
+  if (labels.size() > kMaxLabels) {
+    ctx.Fail(n, "labels", std::to_string(labels.size()) + " labels, at most " +
+                              std::to_string(kMaxLabels));
+  }
+  for (const auto& kv : n) {
+    const std::string key = kv.first.as<std::string>();
+    const std::string error = LabelError(key, labels.at(key));
+    if (!error.empty()) ctx.Fail(kv.first, "labels." + key, error);
+  }
+  return labels;
+}
+
 ScenarioEntry Scenario(const Context& ctx, const YAML::Node& n) {
   ScenarioEntry entry;
   if (n.IsMap()) {
@@ -415,7 +431,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   CheckKeys(ctx, root, "",
             {"name", "boards", "scenarios", "methods", "seeds", "clock", "cost", "dilation",
              "timeout_s", "policy", "world_params", "overrides", "episode_overrides", "episodes",
-             "collect", "sample"});
+             "collect", "sample", "labels"});
   // Either the matrix or an explicit episode list.
   if (root["episodes"]) {
     for (const char* matrix : {"boards", "scenarios", "seeds"}) {
@@ -485,6 +501,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   }
   if (root["world_params"]) job.world_params = StringMap(ctx, root["world_params"], "world_params");
   if (root["overrides"]) job.overrides = Tunables(ctx, root["overrides"], "overrides", job.methods);
+  if (root["labels"]) job.labels = Labels(ctx, root["labels"]);
   if (const YAML::Node list = root["episode_overrides"]) {
     if (!list.IsSequence()) ctx.Fail(list, "episode_overrides", "expected a list");
     for (const auto& item : list) job.episode_overrides.push_back(Override(ctx, item, job.methods));
@@ -572,6 +589,35 @@ std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
     }
   }
   return episodes;
+}
+
+std::string LabelError(const std::string& key, const std::string& value) {
+  auto in = [](const std::string& text, const char* extra) {
+    return std::all_of(text.begin(), text.end(), [extra](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || std::strchr(extra, c) != nullptr;
+    });
+  };
+  if (key.empty() || key.size() > 63) return "label keys have 1..63 characters";
+  const bool key_ok = in(key, "_.-") &&
+                      std::none_of(key.begin(), key.end(), [](char c) { return std::isupper(static_cast<unsigned char>(c)); }) &&
+                      std::isalnum(static_cast<unsigned char>(key.front()));
+  if (!key_ok) return "label keys are lower-case letters, digits and _ . - (starting with a letter or digit)";
+  if (value.empty() || value.size() > 128) return "label values have 1..128 characters";
+  if (!in(value, "_.:/@+-")) return "label values are letters, digits and _ . : / @ + -";
+  return "";
+}
+
+std::pair<std::string, std::string> ParseLabelFilter(const std::string& text,
+                                                     const std::string& field) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) {
+    throw std::invalid_argument(field + ": '" + text + "': expected key=value");
+  }
+  std::string key = text.substr(0, eq), value = text.substr(eq + 1);
+  if (const std::string error = LabelError(key, value); !error.empty()) {
+    throw std::invalid_argument(field + ": '" + text + "': " + error);
+  }
+  return {std::move(key), std::move(value)};
 }
 
 std::string ScenarioOf(const std::string& world) {

@@ -19,6 +19,7 @@
 //   policy: policies/enavi.json   # E-Navi policy file under an allowed root; default: shipped
 //   world_params: {density: "0.3"}
 //   overrides: {planner.v_max: 1.5}  # tunables of every listed method, checked here
+//   labels: {branch: main, suite: nightly}   # free key/value tags, queryable (see LabelError)
 //   episode_overrides:            # later entries win
 //     - match: {board: tx2, method: [enavi], scenario: s1, seed: 2}
 //       timeout_s: 120
@@ -39,6 +40,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "api/episode.h"
@@ -56,6 +58,8 @@ inline constexpr std::int64_t kMaxSeedCount = 1000;
 inline constexpr double kMaxTimeoutS = 3600.0;
 /// Largest emulated-clock dilation (1 sim second = dilation wall seconds).
 inline constexpr double kMaxDilation = 100.0;
+/// A job carries at most this many labels.
+inline constexpr std::size_t kMaxLabels = 32;
 
 /// Bad job spec: the message reads "FILE:LINE: field: reason".
 class JobSpecError : public std::invalid_argument {
@@ -126,6 +130,7 @@ struct JobSpec {
   std::vector<EpisodeOverride> episode_overrides;
   std::vector<EpisodePick> episodes;  ///< explicit list instead of the matrix (when non-empty)
   std::optional<CollectSpec> collect;
+  std::map<std::string, std::string> labels;  ///< free tags (branch, commit, suite, ...)
 
   std::size_t MatrixSize() const {
     if (!episodes.empty()) return episodes.size() * methods.size();
@@ -144,6 +149,16 @@ JobSpec LoadJobSpec(const std::filesystem::path& path, const JobSpecOptions& opt
 /// The episodes of a job, in a fixed order: boards, then scenarios, then methods, then seeds,
 /// each in the order the spec lists them. Same spec -> same list.
 std::vector<EpisodeSpec> ExpandJob(const JobSpec& job);
+
+/// Why `key: value` is not a valid label, or "" when it is. Keys: 1..63 characters of
+/// [a-z0-9_.-], starting with a letter or digit; values: 1..128 characters of [A-Za-z0-9_.:/@+-].
+/// The charset keeps labels safe in URLs, shell commands and HTML without quoting surprises.
+std::string LabelError(const std::string& key, const std::string& value);
+
+/// Parses a "key=value" label filter (`enavi status --label`, `GET /api/jobs?label=`).
+/// @throws std::invalid_argument naming `field` and the reason.
+std::pair<std::string, std::string> ParseLabelFilter(const std::string& text,
+                                                     const std::string& field);
 
 /// Scenario id of a world string as it appears in EpisodeSpec::world ("custom" for files).
 std::string ScenarioOf(const std::string& world);

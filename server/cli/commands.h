@@ -14,6 +14,13 @@ namespace enavi::cli {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitBadInput = 2;
+/// `enavi compare`: the candidate regressed (a CI job gates on this).
+inline constexpr int kExitRegression = 3;
+
+/// Thrown by a handler to end with a specific exit status after printing its output.
+struct ExitStatus {
+  int code = kExitOk;
+};
 
 /// --units, --scale, --up, --recenter (mesh worlds) and --model-path (SDF worlds), shared by
 /// `enavi fly` and `enavi world` (server/cli/world_cmd.cc).
@@ -37,5 +44,9 @@ void RegisterClientCommands(CLI::App& app);  // submit, status, results, cancel
 void RegisterEvalCommand(CLI::App& app);
 /// `enavi dataset export` (server/cli/dataset_cmd.cc).
 void RegisterDatasetCommands(CLI::App& app);
+/// `enavi compare` (server/cli/compare_cmd.cc).
+void RegisterCompareCommand(CLI::App& app);
+/// `enavi dashboard` (server/cli/dashboard_cmd.cc).
+void RegisterDashboardCommand(CLI::App& app);
 
 }  // namespace enavi::cli

@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include "server/eval/local_farm.h"
+#include "server/http/http_api.h"
 #include "server/eval/tables.h"
 #include "server/scheduler/farm_server.h"
 #include "server/store/store.h"
@@ -39,7 +40,6 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   // Validate the matrix exactly as a submitted job; errors name the line of the flag.
   const std::string yaml = EvalJobYaml(options);
   const api::JobSpec job = api::ParseJobSpec(yaml, "enavi eval flags", options.job_spec);
-  const auto episodes = api::ExpandJob(job);
 
   LocalFarmOptions farm_options;
   farm_options.db = options.db;
@@ -52,9 +52,15 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   LocalFarm local(farm_options);
   Store& store = local.store();
   FarmServer& farm = local.farm();
+  std::unique_ptr<HttpApi> http;
+  if (options.dashboard) {
+    http = std::make_unique<HttpApi>(&farm, *options.dashboard);
+    http->Start();
+    progress_out << "dashboard: " << http->url() << "/\n" << std::flush;
+  }
 
   EvalReport report;
-  report.job_id = farm.Submit(job.name, yaml, episodes);
+  report.job_id = farm.Submit(job, yaml);
   auto last_print = std::chrono::steady_clock::time_point{};
   while (true) {
     report.progress = *store.Progress(report.job_id, NowMs());
@@ -76,9 +82,11 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   }
   if (options.progress_bar) progress_out << "\n";
 
-  // Graceful stop: workers drain (nothing runs now) and leave; then the server.
-  local.Stop();
   report.results = store.Results(report.job_id);
+  // The dashboard serves the finished job (workers idle) until the caller lets go.
+  if (http && options.while_serving) options.while_serving(report);
+  if (http) http->Stop();
+  local.Stop();
   return report;
 }
 

@@ -4,7 +4,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include "api/provenance.h"
 #include "navstack/rl/rollout.h"
+#include "server/scheduler/collection.h"
 
 namespace enavi::server {
 
@@ -37,12 +39,30 @@ void FarmServer::Stop() {
   if (thread_.joinable()) thread_.join();
 }
 
+std::string FarmServer::Submit(const api::JobSpec& job, const std::string& spec_yaml) {
+  JobMeta meta;
+  meta.labels = job.labels;
+  meta.provenance["enavi_version"] = api::BuildVersion();
+  meta.provenance["git_commit"] = api::BuildCommit();
+  meta.provenance["clock"] = job.clock;
+  meta.provenance["cost"] = job.cost;
+  if (!job.policy.empty()) {
+    meta.provenance["policy"] = job.policy;
+    const bool by_hash = job.policy.rfind(api::kPolicyHashPrefix, 0) == 0;
+    meta.provenance["policy_sha256"] =
+        by_hash ? job.policy.substr(std::string(api::kPolicyHashPrefix).size()) : api::Sha256File(job.policy);
+  }
+  std::vector<api::EpisodeSpec> episodes = api::ExpandJob(job);
+  const std::optional<CollectionInfo> collect = PrepareCollection(store_, job, &episodes);
+  return Submit(job.name, spec_yaml, episodes, meta, collect);
+}
+
 std::string FarmServer::Submit(const std::string& name, const std::string& spec_yaml,
-                               const std::vector<api::EpisodeSpec>& episodes,
+                               const std::vector<api::EpisodeSpec>& episodes, const JobMeta& meta,
                                const std::optional<CollectionInfo>& collect) {
   const std::int64_t now = NowMs();
   if (collect) PublishPolicy(collect->policy_hash);
-  std::string job_id = store_->CreateJob(name, spec_yaml, episodes, now, collect);
+  std::string job_id = store_->CreateJob(name, spec_yaml, episodes, now, meta, collect);
   spdlog::info("job {} '{}': {} episodes", job_id, name, episodes.size());
   PublishEvents({{job_id, "submitted", "", name}}, now);
   bus_->Wake();
@@ -150,6 +170,7 @@ void FarmServer::HandleStatuses(const std::vector<api::WorkerStatus>& statuses,
       }
     }
     if (is_new) {
+      store_->RecordWorker(s, now_ms);
       spdlog::info("worker {} on {} (pid {}): {} slots", s.worker_id, s.host, s.pid, s.slots);
     }
   }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "api/farm_bus.h"
+#include "api/job_spec.h"
 #include "server/store/store.h"
 
 namespace enavi::server {
@@ -63,8 +64,11 @@ class FarmServer {
   /// Stores a job and starts scheduling it; returns the job id.
   /// A collection job's policy must be in the store (Store::PutPolicy) first.
   std::string Submit(const std::string& name, const std::string& spec_yaml,
-                     const std::vector<api::EpisodeSpec>& episodes,
+                     const std::vector<api::EpisodeSpec>& episodes, const JobMeta& meta = {},
                      const std::optional<CollectionInfo>& collect = std::nullopt);
+  /// Expands a validated job spec and stores it with its labels and provenance (this server's
+  /// build, the policy's sha256) and, for a collection job, its policy; returns the job id.
+  std::string Submit(const api::JobSpec& job, const std::string& spec_yaml);
   /// Cancels a job and tells workers to stop its episodes. False: no such job.
   bool Cancel(const std::string& job_id);
 

@@ -13,6 +13,7 @@
 #include "workers/sim/embree_scene.h"
 #include "workers/sim/emulated_nav_link.h"
 #include "workers/sim/episode_config.h"
+#include "workers/sim/episode_provenance.h"
 #include "workers/sim/flight_recorder.h"
 #include "workers/sim/quadrotor.h"
 #include "workers/sim/static_world.h"
@@ -108,6 +109,7 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   result.notes["triangles"] = std::to_string(prepared.triangles);
   if (!world.metadata.import_note.empty()) result.notes["world_import"] = world.metadata.import_note;
   result.notes["depth_stream"] = std::to_string(config.nav.camera.width) + "x" + std::to_string(config.nav.camera.height);
+  result.notes.merge(EpisodeProvenance(spec, board, config.nav.strategy.has_value()));
 
   // Vehicle: hovering at the start, facing the goal.
   const navstack::VehicleParams vehicle;
