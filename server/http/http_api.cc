@@ -24,6 +24,9 @@
 namespace enavi::server {
 namespace {
 
+constexpr std::size_t kMaxPolicyBytes = 64u << 20;
+
+
 void Reply(httplib::Response& res, int status, const nlohmann::json& body) {
   res.status = status;
   res.set_content(body.dump(), "application/json");
@@ -271,9 +274,11 @@ void HttpApi::Routes() {
 
   s.Post(".*", [this, &store](const httplib::Request& req, httplib::Response& res) {
     if (!farm_) return Error(res, 405, "read-only dashboard: this server accepts no changes");
-    if (req.body.size() > options_.max_body_bytes) {
+    // Job specs are small; a policy (the shipped one is 1.8 MB of JSON) has a limit of its own.
+    const std::size_t limit = req.path == "/api/policies" ? kMaxPolicyBytes : options_.max_body_bytes;
+    if (req.body.size() > limit) {
       return Error(res, 413, "request body of " + std::to_string(req.body.size()) + " bytes, above " +
-                                 std::to_string(options_.max_body_bytes));
+                                 std::to_string(limit));
     }
     if (req.path == "/api/jobs") {
       const std::string file = req.has_header("X-Enavi-File") ? req.get_header_value("X-Enavi-File")
