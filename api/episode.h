@@ -22,7 +22,7 @@ inline constexpr std::array<const char*, 2> kClocks = {"virtual", "emulated"};
 inline constexpr std::array<const char*, 2> kCostModes = {"model", "measured"};
 
 struct EpisodeSpec {
-  std::string world = "s1";  ///< scenario id (s1..s5, forest, empty) or a .yaml/.obj path
+  std::string world = "s1";  ///< scenario id (s1..s5, canyon, forest, empty) or a .yaml/.obj path
   std::uint64_t seed = 1;    ///< world generator seed and episode seed (sensor noise, planner)
   std::map<std::string, std::string> world_params;  ///< generator parameters
   std::optional<Vec3> start;  ///< required for .obj worlds

@@ -37,8 +37,7 @@
 namespace enavi::api {
 
 inline constexpr std::array<const char*, 6> kBoards = {"pi4b", "tx2", "nx", "opi5", "x86", "host"};
-inline constexpr std::array<const char*, 7> kScenarios = {"s1", "s2", "s3", "s4",
-                                                          "s5", "forest", "empty"};
+inline constexpr std::array<const char*, 8> kScenarios = {"s1", "s2", "s3", "s4", "s5", "canyon", "forest", "empty"};
 /// A job expands to at most this many episodes.
 inline constexpr std::size_t kMaxJobEpisodes = 10000;
 /// `seeds: N` accepts 1..kMaxSeedCount; a seed list holds at most that many entries.
