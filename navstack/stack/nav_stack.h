@@ -5,6 +5,7 @@
 // goes out, so the same class could fly a real drone through an adapter.
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -148,6 +149,8 @@ class NavStack {
   EciTracker eci_tracker_;
   DepthFramePtr last_eci_frame_;
   double eci_ = 0, d_eci_ = 0;
+  double d0_ = std::numeric_limits<double>::infinity();           ///< nearest range, latest frame
+  double speed_limit_ = std::numeric_limits<double>::infinity();  ///< StrategyDecision::v_limit
   double straight_length_ = 0;
   double flown_ = 0;
   Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();

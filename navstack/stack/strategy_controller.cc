@@ -1,11 +1,19 @@
 #include "navstack/stack/strategy_controller.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 namespace enavi::navstack {
 namespace {
+
+// Plans never go slower than this, m/s (planner.v_max's range starts at 0.2): at the limit's
+// zero, the vehicle is already as near as the margin, and a crawl still lets the planner back off.
+constexpr double kMinSpeedLimit = 0.3;
+
+// The body's radius, plus half a cell: a coarse map may put an obstacle that much nearer.
+double ReactionMargin(const StrategyInputs& in) { return in.robot_radius + 0.5 * in.flight.resolution; }
 
 ConstraintInputs ToConstraints(const StrategyInputs& in) {
   ConstraintInputs c;
@@ -15,6 +23,10 @@ ConstraintInputs ToConstraints(const StrategyInputs& in) {
   c.num_cores = in.cores;
   c.u_cur = in.u_cur;
   c.current = in.current;
+  c.reaction.d0 = in.d0;
+  c.reaction.speed = in.flight.v_WB.norm();
+  c.reaction.a_brake = in.a_brake;
+  c.reaction.margin = ReactionMargin(in);
   return c;
 }
 
@@ -58,6 +70,7 @@ StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eige
                                                   options_.record ? &step : nullptr);
   d.f = f.f;
   d.fallback = f.fallback_used;
+  d.reaction_infeasible = f.reaction_infeasible;
   if (options_.record) rollout_.steps.push_back(std::move(step));
 
   // Paper Sec. V.D: over capacity, periods are scaled down proportionally, and overload that
@@ -67,6 +80,9 @@ StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eige
     d.f = scaled.f;
     d.scaled = scaled.scaled;
   }
+  // New plans fly no faster than the chosen rates can stop from (the rates may be scaled above).
+  d.v_limit = std::max(kMinSpeedLimit,
+                       SafeSpeed(in.d0, ReactionMargin(in), in.a_brake, ReactionTime(d.f, in.wcet, in.f_sen)));
   const OverloadMonitor::Update overload = overload_.Observe(in.t, in.u_cur, in.cores);
   failsafe_ = overload.mode == OverloadMonitor::Mode::kFailSafe;
   d.failsafe = failsafe_;
