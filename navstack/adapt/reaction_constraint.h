@@ -16,16 +16,22 @@
 //
 //   v T_react + v^2 / (2 a) <= d0 - margin                                     (1)
 //
-// with d0 the nearest obstacle range the eci computes (paper Sec. IV) and margin what the body
-// needs (its radius, plus half a map cell: on a coarse map an obstacle may be that much nearer
-// than its cell says). In the paper's own time, t0 = 2 d0 / v (Eq. eci-d0, the time to stop
-// over d0 at constant deceleration), (1) times 2/v reads
+// with d0 the range of the nearest obstacle ahead and margin what the body needs (its radius,
+// plus half a map cell: on a coarse map an obstacle may be that much nearer than its cell says).
+// In the paper's own time, t0 = 2 d0 / v (Eq. eci-d0, the time to stop over d0 at constant
+// deceleration), (1) times 2/v reads
 //
 //   2 T_react + v / a <= t0 - 2 margin / v,                                    (2)
 //
-// which is what CheckReaction compares. It is the whole-field-of-view nearest range, not the
-// range along the path: conservative in a narrow street (a side wall counts), and blind only to
-// what the camera does not see.
+// which is what CheckReaction compares.
+//
+// Which d0: the eci's own d0 is the nearest return anywhere in the view. In a street canyon that
+// is a side wall the vehicle flies past, and at 1.5 m altitude the ground; with it, (2) masked
+// the slow rates all along the street and the speed limit held the vehicle back (canyon, 5
+// boards: E-Navi's CPU +50 %, flight time +10 %) for walls it was never going to reach. The
+// stack passes EciResult::d_ahead instead: a lower bound of the nearest return in the eci's
+// centre zone, the one aligned with the velocity (about 29 x 19 deg on the farm's camera).
+// Blind, like the eci, to what the camera does not see.
 
 #include <limits>
 
@@ -37,8 +43,9 @@ struct TaskWcets;  // frequency_constraints.h
 
 /// What the reaction constraint looks at, apart from the candidate rates.
 struct ReactionInputs {
-  /// d0, m: nearest obstacle range in the latest depth frame (EciResult::d0). +infinity (the
-  /// default) when not measured: the constraint then holds for every candidate.
+  /// d0, m: range of the nearest obstacle ahead in the latest depth frame (the stack passes
+  /// EciResult::d_ahead). +infinity (the default) when not measured: the constraint then holds
+  /// for every candidate.
   double d0 = std::numeric_limits<double>::infinity();
   double speed = 0.0;    ///< v, m/s: the vehicle's speed
   double a_brake = 3.0;  ///< a, m/s^2: deceleration of an emergency stop (the planner's a_max)

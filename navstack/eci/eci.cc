@@ -291,6 +291,7 @@ EciResult ComputeEciWith(const Kernels& kernels, const DepthImage& depth,
   EciResult result;
   result.zones = M;
   result.d0 = d_per;
+  result.d_ahead = d_per;
   result.layers = 1;
 
   // d0: nearest return, clamped to [d_min, d_per].
@@ -304,6 +305,7 @@ EciResult ComputeEciWith(const Kernels& kernels, const DepthImage& depth,
   // obstacle beyond d_per / 3 would score 0 (our reading, DESIGN.md section 5).
   const int lay = std::max(2, static_cast<int>(std::floor((d_per - d0) / (2.0 * d0))) + 1);
   result.d0 = d0;
+  result.d_ahead = d0;
   result.layers = lay;
 
   // Layer edges as r^2 thresholds: [0] = 0 (any return), [j] = ((2j - 1) d0)^2 for j = 1..Lay;
@@ -375,6 +377,17 @@ EciResult ComputeEciWith(const Kernels& kernels, const DepthImage& depth,
     }
   }
   result.eci = sum_w > 0.0 ? sum_w_occ / sum_w : 0.0;
+  // Nearest return ahead: the near edge of the centre zone's first non-empty layer.
+  if (result.velocity_aligned) {
+    const int centre = M / 2;
+    result.d_ahead = std::min(d_per, (2.0 * lay - 1.0) * d0);
+    for (int layer = 0; layer < lay; ++layer) {
+      const std::size_t idx = (static_cast<std::size_t>(layer) * M + centre) * M + centre;
+      if (result.pixel_counts[idx] == 0) continue;
+      result.d_ahead = layer == 0 ? nearest : (2.0 * layer - 1.0) * d0;
+      break;
+    }
+  }
   return result;
 }
 

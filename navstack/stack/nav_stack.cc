@@ -272,10 +272,10 @@ JobOutput NavStack::EciJob() {
   last_eci_frame_ = frame;
   const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * frame->v_W;
   const EciResult r = ComputeEci(frame->image, options_.camera, v_C, options_.eci, &out.work);
-  out.commit = [this, eci = r.eci, d0 = r.d0] {
+  out.commit = [this, eci = r.eci, d_ahead = r.d_ahead] {
     d_eci_ = eci_tracker_.Update(eci);
     eci_ = eci;
-    d0_ = d0;
+    d_ahead_ = d_ahead;
     strategy_->ObserveEci(executor_->now(), eci);
   };
   return out;
@@ -297,7 +297,7 @@ StrategyInputs NavStack::GatherStrategyInputs(double t) {
              executor_->stats(TaskId::kCollision).cost_recent_s, executor_->stats(TaskId::kDifference).cost_recent_s};
   in.trajectory_duration = trajectory_ ? trajectory_->duration() : std::numeric_limits<double>::infinity();
   in.current = {rates_.f_per, rates_.f_col, rates_.f_dif};
-  in.d0 = d0_;
+  in.d_ahead = d_ahead_;
   in.a_brake = options_.planner.a_max;
   in.robot_radius = options_.planner.robot_radius;
   in.flight.eci = eci_;

@@ -149,7 +149,7 @@ class NavStack {
   EciTracker eci_tracker_;
   DepthFramePtr last_eci_frame_;
   double eci_ = 0, d_eci_ = 0;
-  double d0_ = std::numeric_limits<double>::infinity();           ///< nearest range, latest frame
+  double d_ahead_ = std::numeric_limits<double>::infinity();      ///< EciResult::d_ahead, latest frame
   double speed_limit_ = std::numeric_limits<double>::infinity();  ///< StrategyDecision::v_limit
   double straight_length_ = 0;
   double flown_ = 0;

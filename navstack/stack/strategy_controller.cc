@@ -23,7 +23,7 @@ ConstraintInputs ToConstraints(const StrategyInputs& in) {
   c.num_cores = in.cores;
   c.u_cur = in.u_cur;
   c.current = in.current;
-  c.reaction.d0 = in.d0;
+  c.reaction.d0 = in.d_ahead;
   c.reaction.speed = in.flight.v_WB.norm();
   c.reaction.a_brake = in.a_brake;
   c.reaction.margin = ReactionMargin(in);
@@ -82,7 +82,7 @@ StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eige
   }
   // New plans fly no faster than the chosen rates can stop from (the rates may be scaled above).
   d.v_limit = std::max(kMinSpeedLimit,
-                       SafeSpeed(in.d0, ReactionMargin(in), in.a_brake, ReactionTime(d.f, in.wcet, in.f_sen)));
+                       SafeSpeed(in.d_ahead, ReactionMargin(in), in.a_brake, ReactionTime(d.f, in.wcet, in.f_sen)));
   const OverloadMonitor::Update overload = overload_.Observe(in.t, in.u_cur, in.cores);
   failsafe_ = overload.mode == OverloadMonitor::Mode::kFailSafe;
   d.failsafe = failsafe_;

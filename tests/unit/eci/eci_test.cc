@@ -144,6 +144,30 @@ TEST(EciTest, VelocityTowardObstacleRaisesEci) {
   EXPECT_DOUBLE_EQ(backwards.eci, Eci(scene).eci);
 }
 
+TEST(EciTest, RangeAheadIsTheCentreZonesNotTheNearestAnywhere) {
+  const Eigen::Vector3d forward(0.0, 0.0, 2.0);  // v_C: flying along the optical axis
+  // A cube dead ahead at 2 m: the nearest return is ahead, in layer 1 = [d0, 3 d0).
+  const EciResult ahead = Eci(CubeAt(2.0), forward);
+  EXPECT_NEAR(ahead.d_ahead, ahead.d0, 1e-12);
+  EXPECT_NEAR(ahead.d0, 2.0, 0.01);
+  // The same cube 1.2 m to the left (24-37 deg off the velocity, outside the 29 deg wide centre
+  // zone): its nearest corner is the nearest return anywhere, nothing is ahead within the layers.
+  const EciResult side = Eci(CubeAt(2.0, -1.2, 0.0), forward);
+  EXPECT_NEAR(side.d0, std::hypot(2.0, 0.9), 0.01);
+  EXPECT_DOUBLE_EQ(side.d_ahead, std::min(10.0, (2.0 * side.layers - 1.0) * side.d0));
+  // The side cube behind a far one ahead at 7 m: d_ahead is the near edge of the far one's
+  // layer, a lower bound of its range.
+  Scene both = CubeAt(2.0, -1.2, 0.0);
+  both.boxes.push_back(CubeAt(7.0).boxes[0]);
+  const EciResult r = Eci(both, forward);
+  const int k = static_cast<int>(std::floor((7.0 - r.d0) / (2 * r.d0))) + 1;
+  EXPECT_DOUBLE_EQ(r.d_ahead, (2.0 * k - 1.0) * r.d0);
+  EXPECT_LE(r.d_ahead, 7.0);
+  EXPECT_GT(r.d_ahead, r.d0);
+  // Hovering: the centre zone is not the direction of motion, so d_ahead falls back to d0.
+  EXPECT_DOUBLE_EQ(Eci(CubeAt(2.0, -1.2, 0.0)).d_ahead, Eci(CubeAt(2.0, -1.2, 0.0)).d0);
+}
+
 TEST(EciTest, LayerCountFollowsFormula) {
   for (double d : {0.6, 0.8, 1.0, 1.7, 2.5, 3.2}) {
     const EciResult r = Eci(WallAt(d));
