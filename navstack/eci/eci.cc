@@ -377,16 +377,21 @@ EciResult ComputeEciWith(const Kernels& kernels, const DepthImage& depth,
     }
   }
   result.eci = sum_w > 0.0 ? sum_w_occ / sum_w : 0.0;
-  // Nearest return ahead: the near edge of the centre zone's first non-empty layer.
+  // Nearest return ahead: one more pass over the centre zone's pixels (1/M^2 of the image).
   if (result.velocity_aligned) {
     const int centre = M / 2;
-    result.d_ahead = std::min(d_per, (2.0 * lay - 1.0) * d0);
-    for (int layer = 0; layer < lay; ++layer) {
-      const std::size_t idx = (static_cast<std::size_t>(layer) * M + centre) * M + centre;
-      if (result.pixel_counts[idx] == 0) continue;
-      result.d_ahead = layer == 0 ? nearest : (2.0 * layer - 1.0) * d0;
-      break;
+    float ahead2 = std::numeric_limits<float>::infinity();
+    for (int v = row_bounds[centre]; v < row_bounds[centre + 1]; ++v) {
+      const float* row = depth.data.data() + static_cast<std::size_t>(v) * W;
+      for (int u = col_bounds[centre]; u < col_bounds[centre + 1]; ++u) {
+        if (row[u] > 0.0f) ahead2 = std::min(ahead2, Range2(row[u], row_c[v], col_a[u]));
+      }
     }
+    if (work != nullptr) {
+      work->Add(WorkUnit::kPixel, std::int64_t{row_bounds[centre + 1] - row_bounds[centre]} *
+                                      (col_bounds[centre + 1] - col_bounds[centre]));
+    }
+    result.d_ahead = std::min(d_per, std::sqrt(static_cast<double>(ahead2)));
   }
   return result;
 }
