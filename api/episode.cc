@@ -72,6 +72,11 @@ nlohmann::json ResultSummaryJson(const EpisodeResult& r) {
       {"jobs_released", r.jobs_released},
       {"deadline_misses", r.deadline_misses},
       {"replans", r.replans},
+      {"replans_by_trigger", r.replans_by_trigger},
+      {"plan_failures", r.plan_failures},
+      {"emergency_stops", r.emergency_stops},
+      {"time_stopped_s", r.time_stopped_s},
+      {"setpoint_lag_p95_m", r.setpoint_lag_p95_m},
       {"eci", {{"min", r.eci.min}, {"mean", r.eci.mean}, {"max", r.eci.max}}},
       {"eci_time_ms_mean", r.eci_time_ms_mean},
       {"adapter_time_ms_mean", r.adapter_time_ms_mean},
@@ -122,6 +127,11 @@ void from_json(const nlohmann::json& j, EpisodeResult& r) {
   GetIf(j, "jobs_released", r.jobs_released);
   GetIf(j, "deadline_misses", r.deadline_misses);
   GetIf(j, "replans", r.replans);
+  GetIf(j, "replans_by_trigger", r.replans_by_trigger);
+  GetIf(j, "plan_failures", r.plan_failures);
+  GetIf(j, "emergency_stops", r.emergency_stops);
+  GetIf(j, "time_stopped_s", r.time_stopped_s);
+  GetIf(j, "setpoint_lag_p95_m", r.setpoint_lag_p95_m);
   if (auto it = j.find("eci"); it != j.end()) {
     GetIf(*it, "min", r.eci.min);
     GetIf(*it, "mean", r.eci.mean);

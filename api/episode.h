@@ -16,10 +16,35 @@ namespace enavi::api {
 
 using Vec3 = std::array<double, 3>;
 
-/// Methods, clocks and cost modes the farm knows (DESIGN.md sections 4, 5).
-inline constexpr std::array<const char*, 2> kMethods = {"baseline", "enavi"};
+/// Clocks and cost modes the farm knows (DESIGN.md section 4). Methods come from the registry
+/// (navstack/methods), handed to job validation as a MethodCatalog.
 inline constexpr std::array<const char*, 2> kClocks = {"virtual", "emulated"};
 inline constexpr std::array<const char*, 2> kCostModes = {"model", "measured"};
+
+/// A tunable as job validation sees it.
+struct TunableRange {
+  std::string name;
+  double min = 0, max = 0;
+  bool integer = false;
+};
+/// A registered navigation method as job validation sees it.
+struct MethodEntry {
+  std::string name;
+  std::string summary;
+  std::vector<TunableRange> tunables;  ///< every override a spec for this method may set
+};
+struct MethodCatalog {
+  std::vector<MethodEntry> methods;
+  /// Overrides with one of these prefixes pass unchecked (episode commands other than
+  /// `enavi fly`, e.g. the farm tests' fake episode with its `fake.*` knobs).
+  std::vector<std::string> unchecked_prefixes;
+
+  const MethodEntry* Find(const std::string& name) const {
+    for (const MethodEntry& m : methods)
+      if (m.name == name) return &m;
+    return nullptr;
+  }
+};
 
 struct EpisodeSpec {
   std::string world = "s1";  ///< scenario id (s1..s5, canyon, forest, empty) or a .yaml/.obj path
@@ -82,6 +107,11 @@ struct EpisodeResult {
   std::int64_t jobs_released = 0;
   std::int64_t deadline_misses = 0;
   std::int64_t replans = 0;
+  std::map<std::string, std::int64_t> replans_by_trigger;  ///< what asked for each plan that landed
+  std::int64_t plan_failures = 0;   ///< planning calls that returned no trajectory
+  std::int64_t emergency_stops = 0;
+  double time_stopped_s = 0;        ///< below 0.1 m/s after first exceeding 0.5 m/s, before the end
+  double setpoint_lag_p95_m = 0;    ///< p95 of |reference position - vehicle position|
   EciSummary eci;
   double eci_time_ms_mean = 0;
   double adapter_time_ms_mean = 0;

@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 // Error reporting: every message reads FILE:LINE: field: reason.
 class Context {
  public:
-  Context(std::string file, const JobSpecOptions& options) : file_(std::move(file)) {
+  Context(std::string file, const JobSpecOptions& options) : file_(std::move(file)), catalog_(options.catalog) {
     std::vector<fs::path> roots = options.allowed_roots;
     if (roots.empty()) roots.push_back(fs::current_path());
     for (const auto& r : roots) roots_.push_back(fs::weakly_canonical(fs::absolute(r)));
@@ -30,9 +30,11 @@ class Context {
   }
 
   const std::vector<fs::path>& roots() const { return roots_; }
+  const MethodCatalog& catalog() const { return catalog_; }
 
  private:
   std::string file_;
+  const MethodCatalog& catalog_;
   std::vector<fs::path> roots_;
 };
 
@@ -43,6 +45,18 @@ std::string Join(const auto& items) {
     out += i;
   }
   return out;
+}
+
+std::vector<std::string> MethodNames(const Context& ctx) {
+  std::vector<std::string> names;
+  for (const MethodEntry& m : ctx.catalog().methods) names.push_back(m.name);
+  return names;
+}
+
+std::string Format(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
 }
 
 template <typename List>
@@ -175,8 +189,32 @@ std::map<std::string, std::string> StringMap(const Context& ctx, const YAML::Nod
 }
 
 // Tunable names: lower-case identifiers (the runner validates names and ranges).
+// An override must be a tunable of every method it applies to, inside that tunable's range.
+void CheckTunable(const Context& ctx, const YAML::Node& at, const std::string& field, const std::string& key,
+                  double value, const std::vector<std::string>& methods) {
+  for (const std::string& prefix : ctx.catalog().unchecked_prefixes)
+    if (key.rfind(prefix, 0) == 0) return;
+  for (const std::string& method : methods) {
+    const MethodEntry* m = ctx.catalog().Find(method);
+    if (!m) continue;  // reported where the method was named
+    const auto t = std::find_if(m->tunables.begin(), m->tunables.end(),
+                                [&](const TunableRange& r) { return r.name == key; });
+    if (t == m->tunables.end()) {
+      std::vector<std::string> names;
+      for (const TunableRange& r : m->tunables) names.push_back(r.name);
+      ctx.Fail(at, field + "." + key, "not a tunable of method " + method + " (known: " + Join(names) + ")");
+    }
+    if (value < t->min || value > t->max || (t->integer && value != std::floor(value))) {
+      std::ostringstream range;
+      range << "[" << t->min << ", " << t->max << "]";
+      ctx.Fail(at, field + "." + key,
+               "method " + method + ": " + Format(value) + " is outside " + range.str() + (t->integer ? " or not an integer" : ""));
+    }
+  }
+}
+
 std::map<std::string, double> Tunables(const Context& ctx, const YAML::Node& n,
-                                       const std::string& field) {
+                                       const std::string& field, const std::vector<std::string>& methods) {
   if (!n.IsMap()) ctx.Fail(n, field, "expected a map of tunable: number");
   std::map<std::string, double> out;
   for (const auto& kv : n) {
@@ -186,9 +224,9 @@ std::map<std::string, double> Tunables(const Context& ctx, const YAML::Node& n,
              std::isdigit(static_cast<unsigned char>(c)) || c == '_' || c == '.';
     });
     if (!ok) ctx.Fail(kv.first, field + "." + key, "tunable names are lower_case identifiers");
-    if (!out.emplace(key, Number(ctx, kv.second, field + "." + key, -1e12, 1e12)).second) {
-      ctx.Fail(kv.first, field + "." + key, "duplicate key");
-    }
+    const double value = Number(ctx, kv.second, field + "." + key, -1e12, 1e12);
+    if (!out.emplace(key, value).second) ctx.Fail(kv.first, field + "." + key, "duplicate key");
+    CheckTunable(ctx, kv.second, field, key, value, methods);
   }
   return out;
 }
@@ -250,7 +288,7 @@ std::vector<std::uint64_t> Seeds(const Context& ctx, const YAML::Node& n) {
   return seeds;
 }
 
-EpisodeOverride Override(const Context& ctx, const YAML::Node& n) {
+EpisodeOverride Override(const Context& ctx, const YAML::Node& n, const std::vector<std::string>& job_methods) {
   const std::string f = "episode_overrides";
   if (!n.IsMap()) ctx.Fail(n, f, "expected a map with match: and settings");
   CheckKeys(ctx, n, f, {"match", "timeout_s", "dilation", "policy", "overrides", "world_params"});
@@ -259,7 +297,7 @@ EpisodeOverride Override(const Context& ctx, const YAML::Node& n) {
     if (!m.IsMap()) ctx.Fail(m, f + ".match", "expected a map of board/scenario/method/seed");
     CheckKeys(ctx, m, f + ".match", {"board", "scenario", "method", "seed"});
     if (m["board"]) o.boards = Choices(ctx, m["board"], f + ".match.board", kBoards, "board");
-    if (m["method"]) o.methods = Choices(ctx, m["method"], f + ".match.method", kMethods, "method");
+    if (m["method"]) o.methods = Choices(ctx, m["method"], f + ".match.method", MethodNames(ctx), "method");
     if (m["scenario"]) {
       for (const auto& item : Items(ctx, m["scenario"], f + ".match.scenario")) {
         o.scenarios.push_back(Scenario(ctx, item).world);
@@ -279,7 +317,7 @@ EpisodeOverride Override(const Context& ctx, const YAML::Node& n) {
     o.policy = ResolveFile(ctx, n["policy"], f + ".policy",
                            Scalar(ctx, n["policy"], f + ".policy"), {".json", ".bin", ".pt"});
   }
-  if (n["overrides"]) o.overrides = Tunables(ctx, n["overrides"], f + ".overrides");
+  if (n["overrides"]) o.overrides = Tunables(ctx, n["overrides"], f + ".overrides", o.methods.empty() ? job_methods : o.methods);
   if (n["world_params"]) o.world_params = StringMap(ctx, n["world_params"], f + ".world_params");
   return o;
 }
@@ -296,6 +334,8 @@ bool Matches(const EpisodeOverride& o, const EpisodeSpec& e) {
 
 JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
                      const JobSpecOptions& options) {
+  if (options.catalog.methods.empty())
+    throw std::logic_error("ParseJobSpec: no method catalog (the composition root passes the registry's)");
   const Context ctx(file_name, options);
   YAML::Node loaded;
   try {
@@ -321,7 +361,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
     job.name = fs::path(file_name).stem().string();
   }
   job.boards = Choices(ctx, root["boards"], "boards", kBoards, "board");
-  job.methods = Choices(ctx, root["methods"], "methods", kMethods, "method");
+  job.methods = Choices(ctx, root["methods"], "methods", MethodNames(ctx), "method");
   for (const auto& item : Items(ctx, root["scenarios"], "scenarios")) {
     ScenarioEntry entry = Scenario(ctx, item);
     for (const auto& other : job.scenarios) {
@@ -340,10 +380,10 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
                              {".json", ".bin", ".pt"});
   }
   if (root["world_params"]) job.world_params = StringMap(ctx, root["world_params"], "world_params");
-  if (root["overrides"]) job.overrides = Tunables(ctx, root["overrides"], "overrides");
+  if (root["overrides"]) job.overrides = Tunables(ctx, root["overrides"], "overrides", job.methods);
   if (const YAML::Node list = root["episode_overrides"]) {
     if (!list.IsSequence()) ctx.Fail(list, "episode_overrides", "expected a list");
-    for (const auto& item : list) job.episode_overrides.push_back(Override(ctx, item));
+    for (const auto& item : list) job.episode_overrides.push_back(Override(ctx, item, job.methods));
   }
 
   // Each factor is bounded above, so the product cannot overflow before this check.

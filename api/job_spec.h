@@ -4,11 +4,11 @@
 //
 //   name: tx2-city                # optional; default: the file's stem
 //   boards: [tx2, pi4b]           # pi4b tx2 nx opi5 x86 host
-//   scenarios:                    # s1..s5 forest empty, or a world file under an allowed root
+//   scenarios:                    # s1..s5 canyon forest empty, or a world file under an allowed root
 //     - s1
 //     - worlds/hall.yaml
 //     - {world: meshes/yard.obj, start: [0, 0, 1], goal: [30, 0, 1], params: {k: v}}
-//   methods: [baseline, enavi]
+//   methods: [baseline, fixed, enavi]  # the registered methods
 //   seeds: 3                      # a count (1..N) or a list [1, 7, 9]
 //   clock: virtual                # virtual | emulated
 //   cost: model                   # model | measured
@@ -16,11 +16,11 @@
 //   timeout_s: 0                  # 0: derived from the start-goal distance
 //   policy: policies/enavi.json   # E-Navi policy file under an allowed root; default: shipped
 //   world_params: {density: "0.3"}
-//   overrides: {f_per_max: 20}    # named tunables, validated by the episode runner
+//   overrides: {planner.v_max: 1.5}  # tunables of every listed method, checked here
 //   episode_overrides:            # later entries win
 //     - match: {board: tx2, method: [enavi], scenario: s1, seed: 2}
 //       timeout_s: 120
-//       overrides: {f_per_max: 15}
+//       overrides: {strategy.f_adapt: 10}
 
 #include <array>
 #include <cstddef>
@@ -58,6 +58,9 @@ struct JobSpecOptions {
   /// taken relative to the first. Empty: the current directory.
   std::vector<std::filesystem::path> allowed_roots;
   std::size_t max_episodes = kMaxJobEpisodes;
+  /// The navigation methods and their tunables (the registry's, as data): `methods` and every
+  /// override are checked against it. Required.
+  MethodCatalog catalog;
 };
 
 struct ScenarioEntry {

@@ -36,6 +36,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "navstack/methods/method.h"
 #include "navstack/common/cpu_time.h"
 #include "navstack/control/controller.h"
 #include "navstack/eci/eci.h"
@@ -207,7 +208,7 @@ nlohmann::json Bench(const std::string& world_id, const std::map<std::string, st
   j["tasks"] = per_task;
   j["per_frame_ms"] = {
       {"eci", ms_per_job(eci.cpu_s, eci.jobs)},
-      {method == "baseline" ? "map_update_0.1m" : "map_update", ms_per_job(tasks[0].cpu_with_work_s, tasks[0].jobs_with_work)},
+      {"map_update", ms_per_job(tasks[0].cpu_with_work_s, tasks[0].jobs_with_work)},
       {"replan", ms_per_job(tasks[1].cpu_with_work_s, tasks[1].jobs_with_work)},
       {"collision_check", ms_per_job(tasks[2].cpu_with_work_s, tasks[2].jobs_with_work)}};
   if (replay) {
@@ -263,6 +264,12 @@ int main(int argc, char** argv) {
       params[kv.substr(0, eq)] = kv.substr(eq + 1);
     } else if (a == "--method" && has_value) {
       method = argv[++i];
+      if (!navstack::FindMethod(method)) {
+        std::string known;
+        for (const std::string& n : navstack::MethodNames()) known += (known.empty() ? "" : ", ") + n;
+        std::fprintf(stderr, "--method: unknown method '%s' (known: %s)\n", method.c_str(), known.c_str());
+        return 2;
+      }
     } else if (a == "--set" && has_value) {
       const std::string kv = argv[++i];
       const auto eq = kv.find('=');

@@ -46,6 +46,11 @@ class TaskExecutor {
   virtual const TaskStats& stats(TaskId task) const = 0;
   /// True while a job of the task is released and not finished.
   virtual bool active(TaskId task) const = 0;
+  /// Board time the calling job has used so far, for time limits inside a job (Ego-Planner's
+  /// 0.2 s search limit). Virtual clock: the cost model's price of `work_so_far` (measured mode:
+  /// of the host CPU the job's code took so far); emulated clock: sim time since `job_start`, the
+  /// now() the job read when it started, as ros::Time::now() differences measure it.
+  virtual double JobElapsed(TaskId task, const WorkCounts& work_so_far, double job_start) const = 0;
 };
 
 /// Sees every job as it finishes: what it did and the host CPU time its code and its commit

@@ -99,6 +99,7 @@ class RealtimeExecutor final : public TaskExecutor {
   /// thread asks for the same task again.
   const TaskStats& stats(TaskId task) const override;
   bool active(TaskId task) const override;
+  double JobElapsed(TaskId, const WorkCounts&, double job_start) const override { return now() - job_start; }
 
   /// Creates the workers (each runs on_worker_start first) and the release thread; returns once
   /// every worker has run its start hook. No job starts before Start().

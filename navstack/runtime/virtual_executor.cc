@@ -77,6 +77,7 @@ void VirtualExecutor::Start(TaskId task) {
   Slot& s = slot(task);
   Job& job = *s.job;
   const double cpu0 = ThreadCpuSeconds();
+  job_cpu0_ = cpu0;
   JobOutput out = s.fn();
   const double host_cpu = ThreadCpuSeconds() - cpu0;
   const double cost = cost_.JobSeconds(task, out.work, host_cpu + s.commit_cpu_mean_s);
@@ -90,6 +91,10 @@ void VirtualExecutor::Start(TaskId task) {
   s.stats.cost_max_s = std::max(s.stats.cost_max_s, cost);
   s.stats.cost_recent_s = s.stats.started == 1 ? cost : 0.75 * s.stats.cost_recent_s + 0.25 * cost;
   s.stats.host_cpu_s += host_cpu;
+}
+
+double VirtualExecutor::JobElapsed(TaskId task, const WorkCounts& work_so_far, double) const {
+  return cost_.JobSeconds(task, work_so_far, ThreadCpuSeconds() - job_cpu0_);
 }
 
 void VirtualExecutor::Finish(TaskId task) {

@@ -38,6 +38,7 @@ class VirtualExecutor final : public TaskExecutor {
   double now() const override { return now_; }
   int cores() const override { return cores_; }
   const TaskStats& stats(TaskId task) const override { return slot(task).stats; }
+  double JobElapsed(TaskId task, const WorkCounts& work_so_far, double job_start) const override;
   bool active(TaskId task) const override { return slot(task).job.has_value(); }
   void SetJobObserver(JobObserver observer) { observer_ = std::move(observer); }
 
@@ -75,6 +76,7 @@ class VirtualExecutor final : public TaskExecutor {
   double now_;
   std::array<Slot, kTaskCount> slots_;
   JobObserver observer_;
+  double job_cpu0_ = 0;  ///< host thread CPU when the job whose code runs now started
 };
 
 }  // namespace enavi::navstack

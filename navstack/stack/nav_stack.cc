@@ -5,32 +5,10 @@
 #include <limits>
 #include <utility>
 
+#include "navstack/methods/method_util.h"
 #include "navstack/planning/collision_check.h"
 
 namespace enavi::navstack {
-namespace {
-
-// splitmix64: decorrelates the per-plan seeds drawn from one episode seed.
-std::uint64_t Mix(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-double YawOf(const Eigen::Quaterniond& q_WB) {
-  const Eigen::Vector3d x_W = q_WB * Eigen::Vector3d::UnitX();
-  return std::atan2(x_W.y(), x_W.x());
-}
-
-TrajectorySample HoldAt(const Eigen::Vector3d& p, double yaw) {
-  TrajectorySample s;
-  s.p = p;
-  s.yaw = yaw;
-  return s;
-}
-
-}  // namespace
 
 NavStack::NavStack(const NavStackOptions& options, TaskExecutor* executor, const VehicleState& initial)
     : options_(options),
@@ -120,8 +98,9 @@ void NavStack::AddEvent(std::string kind, std::string detail) {
 void NavStack::RequestReplan(const char* why) {
   // The baseline's 20 Hz timer replans anyway; a trigger would only collide with it.
   if (rates_.f_plan > 0) return;
+  // Several triggers before the job starts coalesce into one plan: it is billed to the first.
+  if (pending_trigger_.empty()) pending_trigger_ = why;
   executor_->Trigger(TaskId::kPlanning, options_.triggered_plan_deadline_s);
-  (void)why;
 }
 
 JobOutput NavStack::PerceptionJob() {
@@ -153,22 +132,13 @@ JobOutput NavStack::PerceptionJob() {
   return out;
 }
 
-Eigen::AlignedBox3d NavStack::RemainingBox(const Trajectory& traj, double t, double pad) const {
-  Eigen::AlignedBox3d box;
-  const double step = 0.1;
-  for (double s = t; s <= traj.end_time() + step; s += step) box.extend(traj.Sample(s).p);
-  box.min().array() -= pad;
-  box.max().array() += pad;
-  return box;
-}
-
 JobOutput NavStack::CollisionJob() {
   JobOutput out;
   const std::shared_ptr<const Trajectory> traj = trajectory_;
   const double t = executor_->now();
   if (!traj || stopped_ || t >= traj->end_time()) return out;
   const double radius = options_.planner.robot_radius;
-  const VoxelGrid grid = map_->ExtractGrid(RemainingBox(*traj, t, radius + map_->resolution()), &out.work);
+  const VoxelGrid grid = map_->ExtractGrid(SweptBox(*traj, t, traj->end_time(), radius + map_->resolution()), &out.work);
   CollisionCheckResult hit = CheckTrajectory(*traj, t, traj->end_time(), grid, radius, &out.work);
   // A hit right where the vehicle is means it is already inside inflated space and the plan is
   // escaping from it (the planner relaxes clearance near its start): look further along instead
@@ -208,6 +178,7 @@ JobOutput NavStack::DifferenceJob() {
 JobOutput NavStack::PlanningJob() {
   JobOutput out;
   const double t = executor_->now();
+  const std::string trigger = rates_.f_plan > 0 ? "timer" : std::exchange(pending_trigger_, {});
   // Continue the current reference from where the vehicle will be when this plan lands; start
   // from the measured state when there is no reference to continue or it has drifted away.
   const double t_start = t + plan_latency_estimate_;
@@ -224,7 +195,7 @@ JobOutput NavStack::PlanningJob() {
   request.start = start;
   request.goal_W = options_.goal;
   request.flight_bounds_W = options_.flight_bounds;
-  request.seed = static_cast<std::uint32_t>(Mix(options_.seed ^ Mix(static_cast<std::uint64_t>(plan_calls_++))));
+  request.seed = PlanSeed(options_.seed, plan_calls_++);
   request.grid = std::make_shared<const VoxelGrid>(
       map_->ExtractGrid(PlanningVolume(start.p, options_.goal, options_.flight_bounds, options_.planner), &out.work));
   // The planner measures clearance to occupied cell centres (minus half a cell); the collision
@@ -244,7 +215,7 @@ JobOutput NavStack::PlanningJob() {
     score.path_length = result->path_length;
     score.straight_length = (result->goal_used_W - start.p).norm();
   }
-  out.commit = [this, result, t, score] {
+  out.commit = [this, result, t, score, trigger] {
     if (strategy_) strategy_->OnPlanned(executor_->now(), result->ok(), score);
     // Latency = board time from start to finish; the next plan aims that far ahead.
     const double latency = executor_->now() - t;
@@ -260,7 +231,7 @@ JobOutput NavStack::PlanningJob() {
     stopped_ = false;
     last_search_path_ = result->search_path;
     ++replans_;
-    AddEvent("replan", result->goal_is_local ? "local goal" : "goal");
+    AddEvent("replan", trigger);
   };
   return out;
 }

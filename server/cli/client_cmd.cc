@@ -11,6 +11,7 @@
 #include "api/job_spec.h"
 #include "server/cli/commands.h"
 #include "server/eval/tables.h"
+#include "workers/sim/episode_config.h"
 
 namespace enavi::cli {
 namespace {
@@ -47,6 +48,7 @@ void RunSubmit(const SubmitFlags& f) {
     // Local validation against local roots: the same parser the server runs.
     api::JobSpecOptions options;
     for (const auto& r : f.world_roots) options.allowed_roots.emplace_back(r);
+    options.catalog = sim::MethodCatalog();
     const api::JobSpec job = api::ParseJobSpec(ReadFile(f.file), f.file, options);
     std::cout << f.file << ": valid; " << job.MatrixSize() << " episodes (" << job.boards.size()
               << " boards x " << job.scenarios.size() << " scenarios x " << job.methods.size()

@@ -10,6 +10,7 @@
 #include "server/cli/farm_flags.h"
 #include "server/eval/eval.h"
 #include "server/eval/tables.h"
+#include "workers/sim/episode_config.h"
 
 namespace enavi::cli {
 namespace {
@@ -18,6 +19,7 @@ struct EvalFlags {
   server::EvalOptions options;
   std::string db;
   std::vector<std::string> world_roots;
+  std::vector<std::string> unchecked_override_prefixes;
   int domain = -1;
   double episode_timeout_s = 3600;
   bool json = false;
@@ -32,6 +34,8 @@ void RunEvalCommand(EvalFlags f, const CLI::App& root) {
   server::EvalOptions& o = f.options;
   o.db = f.db;
   for (const auto& r : f.world_roots) o.job_spec.allowed_roots.emplace_back(r);
+  o.job_spec.catalog = sim::MethodCatalog();
+  o.job_spec.catalog.unchecked_prefixes = f.unchecked_override_prefixes;
   if (f.domain >= 0) o.domain = static_cast<std::uint32_t>(f.domain);
   o.episode_timeout = std::chrono::seconds(static_cast<std::int64_t>(f.episode_timeout_s));
   o.progress_bar = isatty(STDERR_FILENO) == 1;
@@ -67,7 +71,9 @@ void RegisterEvalCommand(CLI::App& app) {
   sub->add_option("--scenarios", o.scenarios, "scenarios or world files (comma-separated)")
       ->delimiter(',')
       ->capture_default_str();
-  sub->add_option("--methods", o.methods, "methods (comma-separated)")->delimiter(',')->capture_default_str();
+  std::string method_names;
+  for (const std::string& m : navstack::MethodNames()) method_names += (method_names.empty() ? "" : ", ") + m;
+  sub->add_option("--methods", o.methods, "methods (comma-separated): " + method_names)->delimiter(',')->capture_default_str();
   sub->add_option("--seeds", o.seeds, "seeds 1..N per cell")->capture_default_str();
   sub->add_option("--clock", o.clock, "virtual or emulated")->capture_default_str();
   sub->add_option("--cost", o.cost, "cost model: model or measured")->capture_default_str();
@@ -81,6 +87,9 @@ void RegisterEvalCommand(CLI::App& app) {
       ->check(CLI::Range(1.0, 7 * 24 * 3600.0))
       ->capture_default_str();
   sub->add_option("--world-root", f->world_roots, "allowed root for world files (default: cwd)");
+  sub->add_option("--unchecked-overrides", f->unchecked_override_prefixes,
+                  "override-name prefix that passes unchecked, for an --episode-cmd other than `enavi fly`")
+      ->group("");
   sub->add_option("--domain", f->domain, "DDS domain (default: derived from the pid)")
       ->check(CLI::Range(0, 232));
   sub->add_flag("--json", f->json, "print the result objects as JSON instead of the table");

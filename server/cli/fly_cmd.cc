@@ -177,9 +177,11 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--board", args->spec.board, "onboard computer to emulate")
       ->capture_default_str()
       ->check(CLI::IsMember(board::KnownBoards()));
-  fly->add_option("--method", args->spec.method, "navigation stack")
+  std::string methods = "navigation method:";
+  for (const navstack::MethodInfo& m : navstack::Methods()) methods += "\n    " + m.name + ": " + m.summary;
+  fly->add_option("--method", args->spec.method, methods)
       ->capture_default_str()
-      ->check(CLI::IsMember({"baseline", "enavi"}));
+      ->check(CLI::IsMember(navstack::MethodNames()));
   fly->add_option("--clock", args->spec.clock, "virtual (sim-time EDF) or emulated (throttled cgroup)")
       ->capture_default_str()
       ->check(CLI::IsMember({"virtual", "emulated"}));
@@ -202,9 +204,17 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--timeout", args->spec.timeout_s, "episode timeout in sim seconds (0: from the distance)")
       ->check(CLI::Range(0.0, api::kMaxTimeoutS));
   fly->add_option("--policy", args->spec.policy, "E-Navi frequency-adapter policy (default: the shipped one)");
-  std::string tunables = "override a tunable, name=value (repeatable):";
-  for (const auto& t : sim::Tunables())
-    tunables += "\n    " + t.name + " [" + CLI::detail::to_string(t.min) + ", " + CLI::detail::to_string(t.max) + "]: " + t.help;
+  std::string tunables = "override a tunable, name=value (repeatable); every method's:";
+  auto list = [&](const std::vector<sim::Tunable>& ts) {
+    for (const auto& t : ts)
+      tunables += "\n    " + t.name + " [" + CLI::detail::to_string(t.min) + ", " + CLI::detail::to_string(t.max) +
+                  "] (" + CLI::detail::to_string(t.default_value) + "): " + t.help;
+  };
+  list(sim::CommonTunables());
+  for (const navstack::MethodInfo& m : navstack::Methods()) {
+    tunables += "\n  method " + m.name + ":";
+    list(m.tunables);
+  }
   fly->add_option("--set", args->overrides, tunables);
   fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv and plots here");
   fly->add_flag("--json", args->json, "print one JSON object with the results on stdout");

@@ -12,6 +12,7 @@
 #include "server/http/http_api.h"
 #include "server/scheduler/farm_server.h"
 #include "server/store/store.h"
+#include "workers/sim/episode_config.h"
 
 namespace enavi::cli {
 namespace {
@@ -24,6 +25,7 @@ struct ServeFlags {
   int max_attempts = 3;
   double lease_s = 15;
   std::string ready_file;
+  std::vector<std::string> unchecked_override_prefixes;
   bool verbose = false;
   BusFlags bus;
 };
@@ -57,6 +59,8 @@ void RunServe(const ServeFlags& f) {
   http.port = port;
   http.token = f.token;
   for (const auto& r : f.world_roots) http.job_spec.allowed_roots.emplace_back(r);
+  http.job_spec.catalog = sim::MethodCatalog();
+  http.job_spec.catalog.unchecked_prefixes = f.unchecked_override_prefixes;
   server::HttpApi api(&farm, http);
 
   farm.Start();
@@ -92,6 +96,10 @@ void RegisterServeCommand(CLI::App& app) {
       ->check(CLI::Range(2.0, 3600.0))
       ->capture_default_str();
   sub->add_option("--ready-file", f->ready_file, "write the HTTP URL here once serving");
+  sub->add_option("--unchecked-overrides", f->unchecked_override_prefixes,
+                  "override-name prefix that passes unchecked at submit, for workers whose --episode-cmd "
+                  "is not `enavi fly` (repeatable)")
+      ->group("");
   sub->add_flag("-v,--verbose", f->verbose, "debug logging");
   AddBusFlags(sub, &f->bus);
   sub->callback([f] { RunServe(*f); });

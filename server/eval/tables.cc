@@ -88,7 +88,7 @@ struct Mean {
 std::string ResultsTable(const nlohmann::json& results) {
   std::vector<std::vector<std::string>> rows = {
       {"episode", "board", "scenario", "method", "seed", "success", "end", "flight s", "path m",
-       "nav cpu %", "vel std", "miss %"}};
+       "nav cpu %", "vel std", "miss %", "e-stops"}};
   for (const auto& r : results) {
     rows.push_back({r.value("episode_id", ""), r.value("board", ""), r.value("scenario", ""),
                     r.value("method", ""), Str(r.value("seed", nlohmann::json())),
@@ -96,7 +96,8 @@ std::string ResultsTable(const nlohmann::json& results) {
                     Fixed(r.value("flight_time_s", 0.0), 2), Fixed(r.value("path_length_m", 0.0), 2),
                     Fixed(r.value("nav_cpu_util_pct", 0.0), 1),
                     Fixed(r.value("velocity_std_mps", 0.0), 3),
-                    Fixed(100.0 * r.value("deadline_miss_ratio", 0.0), 1)});
+                    Fixed(100.0 * r.value("deadline_miss_ratio", 0.0), 1),
+                    Str(r.value("emergency_stops", nlohmann::json(0)))});
   }
   return Render(rows, 7);
 }
@@ -135,7 +136,7 @@ std::string PaperTable(const nlohmann::json& results) {
   };
   struct Row {
     std::map<std::string, Cell> by_scenario;
-    Mean success, vel_std, cpu_all, flight_all;
+    Mean success, vel_std, cpu_all, flight_all, estops, collisions;
   };
   std::vector<std::string> boards, methods, scenarios;
   auto note = [](std::vector<std::string>* list, const std::string& v) {
@@ -161,6 +162,8 @@ std::string PaperTable(const nlohmann::json& results) {
     }
     row.success.Add(ok ? 1.0 : 0.0);
     row.vel_std.Add(r.value("velocity_std_mps", 0.0));
+    row.estops.Add(r.value("emergency_stops", 0.0));
+    row.collisions.Add(r.value("collided", false) ? 1.0 : 0.0);
   }
   if (table.empty()) return "no results\n";
 
@@ -170,8 +173,8 @@ std::string PaperTable(const nlohmann::json& results) {
     head1.insert(head1.end(), {s, "", ""});
     head2.insert(head2.end(), {"cpu %", "time s", "path m"});
   }
-  head1.insert(head1.end(), {"all", ""});
-  head2.insert(head2.end(), {"success", "vel std"});
+  head1.insert(head1.end(), {"all", "", "", ""});
+  head2.insert(head2.end(), {"success", "collided", "vel std", "e-stops"});
   rows.push_back(head1);
   rows.push_back(head2);
   for (const auto& b : boards) {
@@ -190,7 +193,9 @@ std::string PaperTable(const nlohmann::json& results) {
         }
       }
       line.push_back(Fixed(100.0 * row.success.value(), 0) + "%");
+      line.push_back(Fixed(row.collisions.sum, 0));
       line.push_back(row.vel_std.Text(3));
+      line.push_back(row.estops.Text(1));
       rows.push_back(line);
     }
   }
@@ -210,6 +215,24 @@ std::string PaperTable(const nlohmann::json& results) {
                    reduction(base->second.flight_all, enavi->second.flight_all)});
   }
   if (red.size() > 1) out += "\nE-Navi vs baseline\n" + Render(red, 1);
+
+  // The gap split: runtime (baseline = Ego-Planner's node -> fixed = our stack at the same rates)
+  // plus configuration (fixed -> enavi), in points of CPU and seconds of flight; they add up.
+  std::vector<std::vector<std::string>> split = {{"board", "cpu gap", "= runtime", "+ configuration", "time gap s",
+                                                  "= runtime", "+ configuration"}};
+  for (const auto& b : boards) {
+    auto base = table.find({b, "baseline"}), fixed = table.find({b, "fixed"}), enavi = table.find({b, "enavi"});
+    if (base == table.end() || fixed == table.end() || enavi == table.end()) continue;
+    auto diff = [](const Mean& a, const Mean& c, int digits) -> std::string {
+      if (a.n == 0 || c.n == 0) return "-";
+      return Fixed(a.value() - c.value(), digits);
+    };
+    const Row &B = base->second, &F = fixed->second, &E = enavi->second;
+    split.push_back({b, diff(B.cpu_all, E.cpu_all, 1), diff(B.cpu_all, F.cpu_all, 1), diff(F.cpu_all, E.cpu_all, 1),
+                     diff(B.flight_all, E.flight_all, 2), diff(B.flight_all, F.flight_all, 2),
+                     diff(F.flight_all, E.flight_all, 2)});
+  }
+  if (split.size() > 1) out += "\nbaseline - enavi, split into runtime (baseline - fixed) and configuration (fixed - enavi)\n" + Render(split, 1);
   out += "\n(flight time and path length: mean over successful episodes; cpu %: navigation "
          "tasks, % of one board core, mean over all episodes)\n";
   return out;

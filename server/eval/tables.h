@@ -16,7 +16,9 @@ std::string ResultsTable(const nlohmann::json& results);
 std::string ResultsCsv(const nlohmann::json& results);
 
 /// Paper-style summary: rows board x method; per scenario nav CPU %, flight time and path
-/// length; success rate and velocity std; then the E-Navi vs baseline reduction per board.
+/// length; success rate, collisions, velocity std and emergency stops per episode; then the
+/// E-Navi vs baseline reduction per board and, with `fixed` in the results, the split of the
+/// gap into runtime (baseline vs fixed) and configuration (fixed vs enavi).
 /// Flight time and path length average successful episodes (a crash's flight time is not a
 /// flight time); CPU % and velocity std average all episodes.
 std::string PaperTable(const nlohmann::json& results);

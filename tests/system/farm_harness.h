@@ -112,7 +112,9 @@ class FarmFixture : public ::testing::Test {
     std::vector<std::string> argv = {EnaviBinary().string(), "serve", "--db",
                                      (dir_ / "farm.db").string(), "--http", "127.0.0.1:0",
                                      "--ready-file", ready.string(), "--domain",
-                                     std::to_string(domain_), "--partition", partition_};
+                                     std::to_string(domain_), "--partition", partition_,
+                                     // The fake episode's knobs are not `enavi fly` tunables.
+                                     "--unchecked-overrides", "fake."};
     for (const auto& a : BusArgs(node)) argv.push_back(a);
     Start(node, argv, {}, node + "-" + run);  // one log per start
     EXPECT_TRUE(Eventually([&] { return fs::exists(ready); }, 30s)) << "server did not start";

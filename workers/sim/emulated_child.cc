@@ -48,10 +48,11 @@ class OutputPublisher {
  public:
   OutputPublisher(LinkShared* shared) : shared_(shared), wire_(std::make_unique<ReferenceWire>()) {}
 
-  void Publish(navstack::NavStack& nav, double now) {
+  void Publish(navstack::Navigator& nav, double now) {
     ReferenceWire& w = *wire_;
     const std::shared_ptr<const navstack::Trajectory> traj = nav.trajectory();
-    // NavStack hands a new plan's predecessor over as `previous` unless it was holding.
+    // A method hands a new plan's predecessor over as `previous` unless it was holding (NavStack
+    // follows it until the new plan's start; Ego-Planner's plans start when they land).
     if (traj != last_traj_) {
       previous_ = following_ ? last_traj_ : nullptr;
       last_traj_ = traj;
@@ -146,7 +147,7 @@ int RunNavstackChild(const ChildArgs& a) {
   const double rate = a.speed / a.dilation;
   const navstack::DeadlineParams server = navstack::SpeedServerParams(std::min(1.0, rate), a.server_period_ns);
   std::vector<navstack::DeadlineResult> sched(static_cast<std::size_t>(a.threads));
-  navstack::NavStack* nav = nullptr;
+  navstack::Navigator* nav = nullptr;
   OutputPublisher publisher(shared);
 
   navstack::RealtimeExecutorOptions eo;
@@ -172,7 +173,8 @@ int RunNavstackChild(const ChildArgs& a) {
   eo.after_commit = [&](TaskId) { publisher.Publish(*nav, exec_ptr->now()); };
   navstack::RealtimeExecutor exec(eo);
   exec_ptr = &exec;
-  navstack::NavStack stack(*a.options, &exec, *a.initial);
+  const std::unique_ptr<navstack::Navigator> navigator = a.method->make(*a.options, &exec, *a.initial);
+  navstack::Navigator& stack = *navigator;
   nav = &stack;
   // Jobs use the stack: the workers must be gone before it is, also when this function throws.
   struct StopFirst {

@@ -11,7 +11,7 @@
 
 #include "navstack/runtime/cost_model.h"
 #include "navstack/runtime/virtual_executor.h"
-#include "navstack/stack/nav_stack.h"
+#include "navstack/methods/method.h"
 #include "workers/sim/emulated_wire.h"
 
 namespace enavi::sim::emulated {
@@ -38,6 +38,7 @@ struct LinkShared {
 /// What the navstack process gets from the simulator: pointers into the simulator's memory,
 /// valid in the child because fork copied it.
 struct ChildArgs {
+  const navstack::MethodInfo* method = nullptr;  ///< builds the navigator in the child
   const navstack::NavStackOptions* options = nullptr;
   const navstack::VehicleState* initial = nullptr;
   int threads = 1;

@@ -118,6 +118,7 @@ std::string DescribeWait(int status) {
 
 struct EmulatedNavLink::Impl {
   // Configuration.
+  const navstack::MethodInfo* method = nullptr;
   navstack::NavStackOptions options;
   navstack::VehicleState initial;
   int threads = 1;
@@ -278,6 +279,7 @@ void EmulatedNavLink::Impl::Start() {
   int go[2];
   if (pipe2(go, O_CLOEXEC) != 0) throw std::runtime_error(std::string("emulated clock: pipe: ") + std::strerror(errno));
   ChildArgs args;
+  args.method = method;
   args.options = &options;
   args.initial = &initial;
   args.threads = threads;
@@ -516,7 +518,8 @@ void EmulatedNavLink::Impl::Shutdown() {
 
 // ---------------------------------------------------------------------------------------------
 
-EmulatedNavLink::EmulatedNavLink(const navstack::NavStackOptions& options, int threads,
+EmulatedNavLink::EmulatedNavLink(const navstack::MethodInfo& method, const navstack::NavStackOptions& options,
+                                 int threads,
                                  navstack::SchedulingPolicy policy, const board::BoardProfile& board,
                                  double dilation, const navstack::VehicleState& initial,
                                  const EmulationOptions& emulation)
@@ -524,6 +527,7 @@ EmulatedNavLink::EmulatedNavLink(const navstack::NavStackOptions& options, int t
   if (threads < 1) throw std::invalid_argument("emulated clock: threads must be >= 1");
   if (options.strategy && options.strategy->record)
     throw std::invalid_argument("emulated clock: E-Navi rollouts (training) are recorded on the virtual clock only");
+  impl_->method = &method;
   impl_->options = options;
   impl_->initial = initial;
   impl_->threads = threads;

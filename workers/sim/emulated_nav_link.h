@@ -45,7 +45,8 @@ class EmulatedNavLink final : public NavLink {
   /// free CPUs. Throws std::invalid_argument when this host cannot emulate the board (no valid
   /// host calibration, no writable cgroup hierarchy, admission refused, board faster than the
   /// host), std::runtime_error when the navstack process fails to start.
-  EmulatedNavLink(const navstack::NavStackOptions& options, int threads, navstack::SchedulingPolicy policy,
+  EmulatedNavLink(const navstack::MethodInfo& method, const navstack::NavStackOptions& options, int threads,
+                  navstack::SchedulingPolicy policy,
                   const board::BoardProfile& board, double dilation, const navstack::VehicleState& initial,
                   const EmulationOptions& emulation = {});
   /// Stops the navstack process, removes the episode's groups.

@@ -72,10 +72,10 @@ std::unique_ptr<NavLink> MakeNavLink(const api::EpisodeSpec& spec, const Episode
                                      const EpisodeOptions& options) {
   const int threads = config.scheduler.threads > 0 ? std::min(config.scheduler.threads, board.cores) : board.cores;
   if (spec.clock == "virtual")
-    return std::make_unique<VirtualNavLink>(config.nav, threads, config.scheduler.policy, MakeCostModel(spec, board),
+    return std::make_unique<VirtualNavLink>(*config.method, config.nav, threads, config.scheduler.policy, MakeCostModel(spec, board),
                                             initial, options.job_observer);
   if (spec.clock == "emulated")
-    return std::make_unique<EmulatedNavLink>(config.nav, threads, config.scheduler.policy, board, spec.dilation, initial,
+    return std::make_unique<EmulatedNavLink>(*config.method, config.nav, threads, config.scheduler.policy, board, spec.dilation, initial,
                                              options.emulation);
   throw std::invalid_argument("clock: unknown clock '" + spec.clock + "' (known: virtual, emulated)");
 }
@@ -126,6 +126,7 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   const long series_every = std::max(1L, std::lround(options.series_dt / options.physics_dt));
 
   FlightRecorder recorder(record_every * options.physics_dt);
+  Eigen::Vector3d p_ref = world.start;
   double next_frame_t = 0.0;
   std::int64_t frame_index = 0;
   double eci_latest = 0, eci_sum = 0, eci_min = std::numeric_limits<double>::infinity(), eci_max = 0;
@@ -166,13 +167,21 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
 
     nav->AdvanceTo(t);
     for (const auto& e : nav->TakeEvents()) {
-      if (e.kind == "replan") ++result.replans;
+      if (e.kind == "replan") {
+        ++result.replans;
+        ++result.replans_by_trigger[e.detail.empty() ? "unspecified" : e.detail];
+      }
+      if (e.kind == "emergency_stop") ++result.emergency_stops;
       interval_events += (interval_events.empty() ? "" : ";") + e.kind;
       if (result.events.size() < 5000) result.events.push_back({e.t, e.kind, e.detail});
     }
 
-    if (k % control_every == 0) quad.SetCommand(controller.Update(state, nav->Reference(t)));
-    if (k % record_every == 0) recorder.Sample(state.p_WB, state.v_WB);
+    if (k % control_every == 0) {
+      const navstack::TrajectorySample ref = nav->Reference(t);
+      p_ref = ref.p;
+      quad.SetCommand(controller.Update(state, ref));
+    }
+    if (k % record_every == 0) recorder.Sample(state.p_WB, state.v_WB, p_ref);
     if (k % series_every == 0) {
       api::TimeSeries& s = result.series;
       const double busy = NavBusy(nav->Accounting());
@@ -229,6 +238,9 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   result.velocity_mean_mps = recorder.speed_mean();
   result.velocity_std_mps = recorder.speed_std();
   result.accel_peak_mps2 = recorder.accel_peak();
+  result.time_stopped_s = recorder.time_stopped();
+  result.setpoint_lag_p95_m = recorder.setpoint_lag_p95();
+  result.plan_failures = acc.plan_failures;
   auto util = [&](TaskId id) { return T > 0 ? 100.0 * acc[id].busy_s / T : 0.0; };
   result.task_cpu_util_pct = {util(TaskId::kPerception), util(TaskId::kPlanning), util(TaskId::kCollision),
                               util(TaskId::kDifference)};
@@ -239,6 +251,8 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
     const navstack::TaskStats& st = acc[id];
     result.jobs_released += st.released;
     result.deadline_misses += st.misses();
+    const std::string& label = config.method->task_labels[i];
+    if (label != navstack::TaskName(id)) result.notes["task." + std::string(navstack::TaskName(id)) + ".is"] = label;
     result.notes["task." + std::string(navstack::TaskName(id))] =
         "released " + std::to_string(st.released) + ", late " + std::to_string(st.late) + ", skipped " +
         std::to_string(st.skipped) + ", mean job " + std::to_string(1e3 * st.MeanCost()) + " ms, max " +
@@ -252,7 +266,6 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
                             : frame_index > 0             ? 1e3 * eci_cost_sum / frame_index
                                                           : 0.0;
   result.adapter_time_ms_mean = 1e3 * acc[TaskId::kAdapter].MeanCost();
-  result.notes["plan_failures"] = std::to_string(acc.plan_failures);
   for (const auto& [k, v] : acc.notes) result.notes[k] = v;
   return result;
 }

@@ -13,7 +13,7 @@
 #include "navstack/common/camera.h"
 #include "navstack/common/state.h"
 #include "navstack/runtime/executor.h"
-#include "navstack/stack/nav_stack.h"
+#include "navstack/methods/method.h"
 
 namespace enavi::sim {
 

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "navstack/runtime/cost_model.h"
+#include "navstack/methods/method.h"
 #include "navstack/runtime/virtual_executor.h"
 #include "workers/sim/nav_link.h"
 
@@ -12,20 +13,21 @@ namespace enavi::sim {
 
 class VirtualNavLink final : public NavLink {
  public:
-  VirtualNavLink(const navstack::NavStackOptions& options, int threads, navstack::SchedulingPolicy policy,
+  VirtualNavLink(const navstack::MethodInfo& method, const navstack::NavStackOptions& options, int threads,
+                 navstack::SchedulingPolicy policy,
                  std::unique_ptr<navstack::CostModel> cost, const navstack::VehicleState& initial,
                  navstack::JobObserver observer = {});
 
-  void OnState(const navstack::VehicleState& state) override { nav_.OnState(state); }
-  void OnFrame(navstack::DepthFramePtr frame) override { nav_.OnFrame(std::move(frame)); }
+  void OnState(const navstack::VehicleState& state) override { nav_->OnState(state); }
+  void OnFrame(navstack::DepthFramePtr frame) override { nav_->OnFrame(std::move(frame)); }
   void AdvanceTo(double t) override { executor_.AdvanceTo(t); }
-  navstack::TrajectorySample Reference(double t) override { return nav_.Reference(t); }
-  std::vector<navstack::NavEvent> TakeEvents() override { return nav_.TakeEvents(); }
-  navstack::TaskRates rates() const override { return nav_.rates(); }
-  double map_resolution() const override { return nav_.map_resolution(); }
+  navstack::TrajectorySample Reference(double t) override { return nav_->Reference(t); }
+  std::vector<navstack::NavEvent> TakeEvents() override { return nav_->TakeEvents(); }
+  navstack::TaskRates rates() const override { return nav_->rates(); }
+  double map_resolution() const override { return nav_->map_resolution(); }
   NavAccounting Accounting() const override;
-  void FinishEpisode(bool collided, bool reached_goal) override { nav_.FinishEpisode(collided, reached_goal); }
-  const navstack::rl::Rollout* rollout() const override { return nav_.rollout(); }
+  void FinishEpisode(bool collided, bool reached_goal) override { nav_->FinishEpisode(collided, reached_goal); }
+  const navstack::rl::Rollout* rollout() const override { return nav_->rollout(); }
   double OffBoardSeconds(navstack::TaskId task, const navstack::WorkCounts& work, double host_cpu_s) const override {
     return cost_->JobSeconds(task, work, host_cpu_s);
   }
@@ -33,7 +35,7 @@ class VirtualNavLink final : public NavLink {
  private:
   std::unique_ptr<navstack::CostModel> cost_;
   navstack::VirtualExecutor executor_;
-  navstack::NavStack nav_;
+  std::unique_ptr<navstack::Navigator> nav_;
 };
 
 }  // namespace enavi::sim

@@ -24,6 +24,11 @@ class JobSpecTest : public ::testing::Test {
     std::ofstream(root_ / "worlds/hall.yaml") << "name: hall\n";
     std::ofstream(root_ / "worlds/yard.obj") << "v 0 0 0\n";
     options_.allowed_roots = {root_};
+    // A catalog of the registry's shape: one common tunable, one of E-Navi's own.
+    const TunableRange v_max{"planner.v_max", 0.2, 10.0, false};
+    options_.catalog.methods = {{"baseline", "", {v_max, {"ego.emergency_stop", 0, 1, true}}},
+                                {"fixed", "", {v_max}},
+                                {"enavi", "", {v_max, {"strategy.f_adapt", 1.0, 30.0, false}}}};
   }
   void TearDown() override { fs::remove_all(root_); }
 
@@ -92,7 +97,7 @@ seeds: [3, 9]
 }
 
 TEST_F(JobSpecTest, ExpansionIsDeterministic) {
-  const std::string yaml = std::string(kMinimal) + "overrides: {f_per_max: 20}\n";
+  const std::string yaml = std::string(kMinimal) + "overrides: {planner.v_max: 1.5}\n";
   const auto a = ExpandJob(Parse(yaml));
   const auto b = ExpandJob(Parse(yaml));
   ASSERT_EQ(a.size(), b.size());
@@ -107,19 +112,19 @@ scenarios: [s1]
 methods: [baseline, enavi]
 seeds: 2
 timeout_s: 60
-overrides: {f_per_max: 30}
+overrides: {planner.v_max: 3}
 episode_overrides:
   - match: {board: tx2, method: enavi}
     timeout_s: 120
-    overrides: {f_per_max: 20}
+    overrides: {planner.v_max: 2}
   - match: {seed: 2, board: tx2, method: [enavi]}
-    overrides: {f_per_max: 10}
+    overrides: {planner.v_max: 1}
 )");
   for (const EpisodeSpec& e : ExpandJob(job)) {
     const bool tx2_enavi = e.board == "tx2" && e.method == "enavi";
     EXPECT_EQ(e.timeout_s, tx2_enavi ? 120.0 : 60.0) << e.board << " " << e.method;
-    const double expected = !tx2_enavi ? 30.0 : (e.seed == 2 ? 10.0 : 20.0);
-    EXPECT_EQ(e.overrides.at("f_per_max"), expected) << e.board << " " << e.method << " " << e.seed;
+    const double expected = !tx2_enavi ? 3.0 : (e.seed == 2 ? 1.0 : 2.0);
+    EXPECT_EQ(e.overrides.at("planner.v_max"), expected) << e.board << " " << e.method << " " << e.seed;
   }
 }
 
@@ -246,6 +251,35 @@ TEST_F(JobSpecTest, LoadJobSpecNamesTheFile) {
         << e.what();
   }
   EXPECT_THROW(LoadJobSpec(root_ / "absent.yaml", options_), std::invalid_argument);
+}
+
+TEST_F(JobSpecTest, OverridesAreCheckedAgainstEveryMethodTheyApplyTo) {
+  const std::string head = "boards: tx2\nscenarios: s1\nmethods: [baseline, enavi]\nseeds: 1\n";
+  // A tunable E-Navi has and the baseline does not: refused for the whole job, with the line.
+  const std::string e = Error(head + "overrides: {strategy.f_adapt: 10}\n");
+  EXPECT_EQ(e.rfind("job.yaml:5: overrides.strategy.f_adapt: not a tunable of method baseline (known: ", 0), 0u) << e;
+  // ... but fine where the override is narrowed to E-Navi.
+  const JobSpec job = Parse(head + "episode_overrides:\n  - match: {method: enavi}\n    overrides: {strategy.f_adapt: 10}\n");
+  EXPECT_EQ(job.episode_overrides.at(0).overrides.at("strategy.f_adapt"), 10.0);
+  // Out of range, and not an integer, name the method and the range.
+  EXPECT_EQ(Error(head + "overrides: {planner.v_max: 99}\n"),
+            "job.yaml:5: overrides.planner.v_max: method baseline: 99 is outside [0.2, 10]");
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: baseline\nseeds: 1\noverrides: {ego.emergency_stop: 0.5}\n"),
+            "job.yaml:5: overrides.ego.emergency_stop: method baseline: 0.5 is outside [0, 1] or not an integer");
+  EXPECT_EQ(Error(head + "overrides: {f_per_max: 20}\n").rfind("job.yaml:5: overrides.f_per_max: not a tunable", 0), 0u);
+}
+
+TEST_F(JobSpecTest, UncheckedPrefixesPassForOtherEpisodeCommands) {
+  options_.catalog.unchecked_prefixes = {"fake."};
+  const JobSpec job = Parse("boards: tx2\nscenarios: s1\nmethods: fixed\nseeds: 1\noverrides: {fake.hang: 1}\n");
+  EXPECT_EQ(job.overrides.at("fake.hang"), 1.0);
+}
+
+TEST_F(JobSpecTest, MethodsComeFromTheCatalog) {
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: rrt\nseeds: 1\n"),
+            "job.yaml:3: methods: unknown method 'rrt' (known: baseline, fixed, enavi)");
+  options_.catalog.methods.clear();
+  EXPECT_THROW(Parse("boards: tx2\nscenarios: s1\nmethods: fixed\nseeds: 1\n"), std::logic_error);
 }
 
 }  // namespace

@@ -1,3 +1,4 @@
+#include "workers/sim/episode_config.h"
 #include "server/http/http_api.h"
 
 #include <unistd.h>
@@ -46,6 +47,7 @@ class HttpApiTest : public ::testing::Test {
     HttpOptions http;
     http.token = token;
     http.job_spec.allowed_roots = {dir_};
+    http.job_spec.catalog = sim::MethodCatalog();
     api_ = std::make_unique<HttpApi>(farm_.get(), http);
     api_->Start();
     return api_->url();

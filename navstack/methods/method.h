@@ -1,0 +1,76 @@
+#pragma once
+// Navigation methods as plug-ins (STYLE.md rule 13, after MuJoCo's engine plugins): a method is
+// one MethodInfo of name, scheduler, tunables and factory, registered once by name. Every list a
+// user sees (CLI choices, job validation, tables, bench_episode) reads this registry.
+//
+// Adding a method: a folder under navstack/methods/ with a function returning its MethodInfo,
+// and one line in BuiltinMethods() (registry.cc); a test or a tool may also RegisterMethod() at
+// run time.
+
+#include <array>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "navstack/methods/navigator.h"
+#include "navstack/rl/policy_io.h"
+#include "navstack/runtime/executor.h"
+#include "navstack/runtime/task.h"
+#include "navstack/runtime/virtual_executor.h"
+
+namespace enavi::navstack {
+
+/// One parameter a job spec may override (STYLE.md rule 10: names and ranges).
+struct MethodTunable {
+  std::string name;  ///< e.g. "ego.latency_compensation"
+  double min = 0, max = 0;
+  double default_value = 0;
+  bool integer = false;
+  std::string help;
+};
+
+/// How the method's jobs share the board.
+struct MethodScheduler {
+  SchedulingPolicy policy = SchedulingPolicy::kGlobalEdf;
+  /// Threads the jobs may use: 0 = all board cores.
+  int threads = 0;
+};
+
+/// What the episode hands a method's Configure() besides the common options.
+struct MethodSetup {
+  std::uint64_t seed = 1;
+  /// The frequency-adapter policy, loaded for methods with `uses_policy` (else null).
+  std::shared_ptr<const rl::PolicyFile> policy;
+};
+
+struct MethodInfo {
+  std::string name;
+  std::string summary;  ///< one line for --help and tables
+  MethodScheduler scheduler;
+  std::vector<MethodTunable> tunables;
+  bool uses_policy = false;      ///< reads a frequency-adapter policy (--policy)
+  bool records_rollouts = false;  ///< can record a training rollout
+  /// What each task's CPU is for this method (results' per-task utilisation), by TaskId.
+  std::array<std::string, kTaskCount> task_labels = {"perception", "planning", "collision", "difference", "eci", "adapter"};
+  /// Sets the method's part of the options (rates, strategy) before the tunables apply.
+  std::function<void(const MethodSetup&, NavStackOptions*)> configure;
+  /// Builds the method on `executor`; the vehicle hovers at `initial` until its first plan.
+  std::function<std::unique_ptr<Navigator>(const NavStackOptions&, TaskExecutor*, const VehicleState&)> make;
+};
+
+/// Every registered method, built-ins first, in registration order.
+const std::deque<MethodInfo>& Methods();
+std::vector<std::string> MethodNames();
+/// The method called `name`, or null.
+const MethodInfo* FindMethod(std::string_view name);
+/// Adds a method. @throws std::invalid_argument for a duplicate or empty name, a missing
+/// factory, or a tunable whose default lies outside its range.
+void RegisterMethod(MethodInfo method);
+
+/// Options for method `info`: configure(), then its tunables' defaults in options->params.
+void ConfigureMethod(const MethodInfo& info, const MethodSetup& setup, NavStackOptions* options);
+
+}  // namespace enavi::navstack

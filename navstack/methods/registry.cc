@@ -1,0 +1,77 @@
+#include <deque>
+#include <mutex>
+#include <stdexcept>
+
+#include "navstack/methods/ego_planner/ego_planner_method.h"
+#include "navstack/methods/method.h"
+#include "navstack/stack/stack_methods.h"
+
+namespace enavi::navstack {
+namespace {
+
+void Check(const MethodInfo& m, const std::deque<MethodInfo>& existing) {
+  if (m.name.empty()) throw std::invalid_argument("method: empty name");
+  for (const MethodInfo& e : existing)
+    if (e.name == m.name) throw std::invalid_argument("method '" + m.name + "': registered twice");
+  if (!m.make) throw std::invalid_argument("method '" + m.name + "': no factory");
+  for (const MethodTunable& t : m.tunables)
+    if (!(t.min <= t.default_value && t.default_value <= t.max))
+      throw std::invalid_argument("method '" + m.name + "': tunable " + t.name + " default " +
+                                  std::to_string(t.default_value) + " is outside [" + std::to_string(t.min) + ", " +
+                                  std::to_string(t.max) + "]");
+}
+
+// The built-in methods: one line each.
+std::deque<MethodInfo> BuiltinMethods() {
+  std::deque<MethodInfo> out;
+  for (MethodInfo m : {EgoPlannerMethod(), FixedMethod(), EnaviMethod()}) {
+    Check(m, out);
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+// A deque: registering a method never moves the ones already handed out.
+std::deque<MethodInfo>& Registry() {
+  static std::deque<MethodInfo> methods = BuiltinMethods();
+  return methods;
+}
+
+std::mutex& RegistryMutex() {
+  static std::mutex m;
+  return m;
+}
+
+}  // namespace
+
+const std::deque<MethodInfo>& Methods() {
+  std::lock_guard<std::mutex> lock(RegistryMutex());
+  return Registry();
+}
+
+std::vector<std::string> MethodNames() {
+  std::vector<std::string> names;
+  for (const MethodInfo& m : Methods()) names.push_back(m.name);
+  return names;
+}
+
+const MethodInfo* FindMethod(std::string_view name) {
+  for (const MethodInfo& m : Methods())
+    if (m.name == name) return &m;
+  return nullptr;
+}
+
+void RegisterMethod(MethodInfo method) {
+  std::lock_guard<std::mutex> lock(RegistryMutex());
+  std::deque<MethodInfo>& methods = Registry();
+  Check(method, methods);
+  methods.push_back(std::move(method));
+}
+
+void ConfigureMethod(const MethodInfo& info, const MethodSetup& setup, NavStackOptions* options) {
+  if (info.configure) info.configure(setup, options);
+  options->seed = setup.seed;
+  for (const MethodTunable& t : info.tunables) options->params[t.name] = t.default_value;
+}
+
+}  // namespace enavi::navstack

@@ -1,0 +1,82 @@
+#include "navstack/stack/stack_methods.h"
+
+#include <stdexcept>
+
+#include "navstack/stack/nav_stack.h"
+
+namespace enavi::navstack {
+
+TaskRates FixedRates() {
+  TaskRates r;
+  r.f_per = 30.0;
+  r.f_plan = 20.0;
+  r.f_col = 0.0;
+  r.collision_on_map_update = true;
+  r.f_dif = 0.0;
+  r.resolution = 0.1;
+  return r;
+}
+
+TaskRates EnaviInitialRates() {
+  TaskRates r;
+  r.f_per = 10.0;
+  r.f_plan = 0.0;  // planning on triggers: collision, difference, end of trajectory
+  r.f_col = 5.0;
+  r.collision_on_map_update = false;
+  r.f_dif = 5.0;
+  r.resolution = 0.5;  // the Resolution Adapter's coarsest level; it refines from there
+  return r;
+}
+
+MethodInfo FixedMethod() {
+  MethodInfo m;
+  m.name = "fixed";
+  m.summary = "our stack at fixed 30 Hz perception / 20 Hz planning timer / 0.1 m, no adaptation";
+  m.scheduler = {SchedulingPolicy::kFifoNonPreemptive, 1};
+  m.tunables = {
+      {"rates.f_per", 1.0, 30.0, 30.0, false, "perception rate, Hz"},
+      {"rates.f_plan", 0.0, 50.0, 20.0, false, "planning timer, Hz (0: triggered)"},
+      {"rates.f_dif", 0.0, 30.0, 0.0, false, "difference detection rate, Hz"},
+      {"map.resolution", 0.05, 1.0, 0.1, false, "map resolution, m"},
+  };
+  m.configure = [](const MethodSetup&, NavStackOptions* o) { o->rates = FixedRates(); };
+  m.make = [](const NavStackOptions& options, TaskExecutor* executor, const VehicleState& initial) {
+    NavStackOptions o = options;
+    o.rates.f_per = o.Param("rates.f_per");
+    o.rates.f_plan = o.Param("rates.f_plan");
+    o.rates.f_dif = o.Param("rates.f_dif");
+    o.rates.resolution = o.map.resolution = o.Param("map.resolution");
+    return std::unique_ptr<Navigator>(std::make_unique<NavStack>(o, executor, initial));
+  };
+  return m;
+}
+
+MethodInfo EnaviMethod() {
+  MethodInfo m;
+  m.name = "enavi";
+  m.summary = "E-Navi: eci-driven map resolution and task frequencies under C1-C4, PPO policy";
+  m.scheduler = {SchedulingPolicy::kGlobalEdf, 0};
+  m.uses_policy = true;
+  m.records_rollouts = true;
+  m.tunables = {
+      {"strategy.explore", 0, 1, 0, true, "1 samples the policy's actions (training), 0 greedy"},
+      {"strategy.f_adapt", 1.0, 30.0, 5.0, false, "strategy controller decisions per second, Hz"},
+  };
+  m.configure = [](const MethodSetup& setup, NavStackOptions* o) {
+    if (!setup.policy) throw std::invalid_argument("policy: method enavi needs a frequency-adapter policy");
+    o->rates = EnaviInitialRates();
+    StrategyOptions strategy;
+    strategy.policy = setup.policy;
+    strategy.seed = setup.seed;
+    o->strategy = strategy;
+  };
+  m.make = [](const NavStackOptions& options, TaskExecutor* executor, const VehicleState& initial) {
+    NavStackOptions o = options;
+    o.strategy->mode = o.Param("strategy.explore") > 0 ? rl::ActMode::kSample : rl::ActMode::kGreedy;
+    o.strategy->f_adapt = o.Param("strategy.f_adapt");
+    return std::unique_ptr<Navigator>(std::make_unique<NavStack>(o, executor, initial));
+  };
+  return m;
+}
+
+}  // namespace enavi::navstack

@@ -1,0 +1,117 @@
+// Ego-Planner's runtime mechanisms one by one, on an empty map (no frames: unknown space is free,
+// so every plan goes straight to the local target) with a vehicle that tracks its reference
+// exactly, on the virtual clock with a cost model that makes planning take a chosen board time.
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "navstack/methods/ego_planner/ego_planner_node.h"
+#include "navstack/methods/method.h"
+#include "navstack/runtime/virtual_executor.h"
+
+namespace enavi::navstack {
+namespace {
+
+// A job that planned (it drew planner samples or optimised) takes `plan_s`; any other 0.5 ms.
+class PlanCost final : public CostModel {
+ public:
+  explicit PlanCost(double plan_s) : plan_s_(plan_s) {}
+  double JobSeconds(TaskId, const WorkCounts& w, double) const override {
+    const bool planned = w.Get(WorkUnit::kOptimizerEval) > 0 || w.Get(WorkUnit::kPlannerIteration) > 0;
+    return planned ? plan_s_ : 0.0005;
+  }
+  std::string mode() const override { return "model"; }
+
+ private:
+  double plan_s_;
+};
+
+struct Flight {
+  std::vector<NavEvent> events;
+  std::vector<double> jumps;  ///< how far back along x the reference moved when a replan landed
+  std::int64_t plan_failures = 0;
+  double final_x = 0;
+};
+
+Flight Fly(double plan_s, std::map<std::string, double> params, double duration = 8.0) {
+  const MethodInfo& method = *FindMethod("baseline");
+  NavStackOptions o;
+  ConfigureMethod(method, MethodSetup{}, &o);
+  for (const auto& [k, v] : params) o.params[k] = v;
+  o.goal = Eigen::Vector3d(30, 0, 1.5);
+  o.flight_bounds = Eigen::AlignedBox3d(Eigen::Vector3d(-5, -10, 0), Eigen::Vector3d(40, 10, 5));
+  PlanCost cost(plan_s);
+  VirtualExecutor exec(1, cost, SchedulingPolicy::kFifoNonPreemptive);
+  VehicleState s;
+  s.p_WB = Eigen::Vector3d(0, 0, 1.5);
+  auto nav = method.make(o, &exec, s);
+  Flight f;
+  for (double t = 0; t <= duration; t += 0.005) {
+    const TrajectorySample before = nav->Reference(t);
+    exec.AdvanceTo(t);
+    const TrajectorySample after = nav->Reference(t);
+    bool landed = false;
+    for (NavEvent& e : nav->TakeEvents()) {
+      landed = landed || (e.kind == "replan" && e.detail == "distance");
+      f.events.push_back(std::move(e));
+    }
+    if (landed) f.jumps.push_back(before.p.x() - after.p.x());
+    // Perfect tracking.
+    s.t = t;
+    s.p_WB = after.p;
+    s.v_WB = after.v;
+    nav->OnState(s);
+  }
+  f.plan_failures = nav->plan_failures();
+  f.final_x = s.p_WB.x();
+  return f;
+}
+
+int Count(const Flight& f, const std::string& kind, const std::string& detail = "") {
+  int n = 0;
+  for (const NavEvent& e : f.events) n += e.kind == kind && (detail.empty() || e.detail == detail);
+  return n;
+}
+
+TEST(EgoPlannerNodeTest, ReplansByDistanceNotByTimer) {
+  const Flight f = Fly(0.01, {});
+  EXPECT_EQ(Count(f, "replan", "start"), 1);
+  // Every thresh_replan (1.5 m) past the local start: at ~2 m/s a few per 8 s, not 20 Hz.
+  const int distance = Count(f, "replan", "distance");
+  EXPECT_GE(distance, 4);
+  EXPECT_LE(distance, 12);
+  EXPECT_GT(f.final_x, 10.0) << "it flew";
+}
+
+TEST(EgoPlannerNodeTest, ReferenceJumpsBackByTheDistanceFlownWhilePlanning) {
+  // Plans take 0.1 s of board time; stamped when planning ends, the new trajectory starts where
+  // the reference was when planning began: ~v x 0.1 s behind.
+  const Flight stamped = Fly(0.1, {});
+  ASSERT_GE(stamped.jumps.size(), 3u);
+  double mean = 0;
+  for (double j : stamped.jumps) mean += j / static_cast<double>(stamped.jumps.size());
+  EXPECT_GT(mean, 0.1) << "cruise 2 m/s x 0.1 s = 0.2 m";
+  EXPECT_LT(mean, 0.3);
+  // Switched off (stamped at planning start, i.e. latency compensated): no jump.
+  const Flight compensated = Fly(0.1, {{"ego.stamp_at_plan_end", 0}});
+  ASSERT_GE(compensated.jumps.size(), 3u);
+  for (double j : compensated.jumps) EXPECT_NEAR(j, 0.0, 0.02);
+  EXPECT_GT(compensated.final_x, stamped.final_x) << "losing 0.2 m per replan flies less far";
+}
+
+TEST(EgoPlannerNodeTest, SearchesOverTheirBoardTimeLimitFail) {
+  // 0.3 s of board time per plan against the 0.2 s limit: every plan fails, retried every tick.
+  const Flight limited = Fly(0.3, {}, 3.0);
+  EXPECT_EQ(Count(limited, "replan"), 0);
+  EXPECT_GT(limited.plan_failures, 5);
+  EXPECT_GT(Count(limited, "plan_failed"), 5);
+  EXPECT_NEAR(limited.final_x, 0.0, 1e-9) << "never left the start";
+  // Without the limit the same plans succeed.
+  const Flight unlimited = Fly(0.3, {{"ego.search_time_limit", 0}}, 3.0);
+  EXPECT_GE(Count(unlimited, "replan"), 1);
+}
+
+}  // namespace
+}  // namespace enavi::navstack
