@@ -82,8 +82,8 @@ StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eige
   }
   // When even the quickest rates cannot stop in time, new plans fly no faster than the chosen
   // rates (possibly scaled above) can stop from. Otherwise the rates carry it: limiting every plan
-  // by the nearest obstacle ahead held the vehicle back round every corner (canyon: 5-8 % longer
-  // flights) for walls the chosen rates would have caught anyway.
+  // by the nearest obstacle ahead held the vehicle back round every corner (canyon seed 1 on
+  // three boards: 4-8 % longer flights) for walls the chosen rates would have caught anyway.
   if (d.reaction_infeasible) {
     d.v_limit = std::max(kMinSpeedLimit, SafeSpeed(in.d_ahead, ReactionMargin(in), in.a_brake,
                                                    ReactionTime(d.f, in.wcet, in.f_sen)));
