@@ -23,12 +23,15 @@ enum class WorkUnit : int {
   kTrajectorySample,   ///< one trajectory sample checked against the map
   kCellProbe,          ///< one grid cell read while checking a trajectory sample's clearance
   kPolicyFlop,         ///< one multiply-add in the frequency adapter's network
+  kAstarExpansion,     ///< one node expanded by the planner's grid A* (26 neighbours scored)
+  kInflateCell,        ///< one grid cell packed into bits or dilated once (rebound planner's map)
   kCount
 };
 
 constexpr std::array<std::string_view, static_cast<int>(WorkUnit::kCount)> kWorkUnitNames = {
     "pixel",          "back_projection", "warp_pixel", "ray_step",           "voxel_update", "grid_cell", "distance_cell", "state_check",
-    "planner_iteration", "optimizer_eval", "trajectory_sample", "cell_probe", "policy_flop"};
+    "planner_iteration", "optimizer_eval", "trajectory_sample", "cell_probe", "policy_flop",
+    "astar_expansion", "inflate_cell"};
 
 struct WorkCounts {
   std::array<std::int64_t, static_cast<int>(WorkUnit::kCount)> n{};

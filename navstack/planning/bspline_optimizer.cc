@@ -7,6 +7,8 @@
 
 #include <lbfgs.h>
 
+#include "navstack/planning/lbfgs_array.h"
+
 namespace enavi::navstack {
 namespace {
 
@@ -144,24 +146,13 @@ int ProgressCallback(void* instance, const lbfgsfloatval_t*, const lbfgsfloatval
   return 0;  // never cancel: the iteration bound is param.max_iterations
 }
 
-// Owner of an lbfgs_malloc'd array (the library may use SSE and needs its own alignment).
-struct LbfgsArray {
-  explicit LbfgsArray(int n) : data(lbfgs_malloc(n)) {}
-  ~LbfgsArray() { lbfgs_free(data); }
-  LbfgsArray(const LbfgsArray&) = delete;
-  LbfgsArray& operator=(const LbfgsArray&) = delete;
-  lbfgsfloatval_t* data;
-};
+}  // namespace
 
-// How far the control-point bounds exceed the limits, as a time-scaling factor (1: within).
-// V_0, V_1 and A_0 are fixed by the start state and left out.
-double ExcessRatio(const UniformBspline& s, const PlannerOptions& options) {
+double LimitExcessRatio(const UniformBspline& s, const PlannerOptions& options) {
   const double r_v = s.MaxControlSpeed(2) / options.v_max;
   const double r_a = std::sqrt(s.MaxControlAcceleration(1) / options.a_max);
   return std::max({r_v, r_a, 1.0});
 }
-
-}  // namespace
 
 UniformBspline OptimizeControlPoints(const UniformBspline& spline, const DistanceField& field,
                                      const PlannerOptions& options, double clearance_weight,
@@ -244,7 +235,7 @@ UniformBspline OptimizeTrajectory(const UniformBspline& initial, const Trajector
     // Optimise, then stretch time while the limits are exceeded.
     while (true) {
       spline = OptimizeControlPoints(spline, field, options, clearance_weight, work, &sum);
-      const double ratio = ExcessRatio(spline, options);
+      const double ratio = LimitExcessRatio(spline, options);
       if (ratio <= 1.0 || reallocations_left == 0 || total_stretch >= kMaxTotalStretch) break;
       const double factor = std::min({ratio * kStretchMargin, kMaxStretchPerRound,
                                       kMaxTotalStretch / total_stretch});

@@ -27,6 +27,10 @@ struct OptimizationSummary {
   double min_clearance = std::numeric_limits<double>::infinity();  ///< dense samples outside the escape ball [m]
   bool within_limits = false;  ///< max_speed <= v_max and max_acceleration <= a_max
   bool clearance_ok = false;   ///< min_clearance >= robot_radius
+  // Rebound optimiser only (rebound_optimizer.h).
+  int rebounds = 0;          ///< L-BFGS runs cut short because a new obstacle was met
+  int astar_searches = 0;    ///< guiding A* searches run
+  int astar_expansions = 0;  ///< nodes they expanded
   std::string message;
 };
 
@@ -41,6 +45,10 @@ struct OptimizationSummary {
 UniformBspline OptimizeControlPoints(const UniformBspline& spline, const DistanceField& field,
                                      const PlannerOptions& options, double clearance_weight,
                                      WorkCounts* work, OptimizationSummary* summary);
+
+/// How far the control-point speed / acceleration bounds (V_0, V_1 and A_0 left out: the start
+/// state fixes them) exceed v_max / a_max, as a time-scaling factor; 1 when within the limits.
+double LimitExcessRatio(const UniformBspline& spline, const PlannerOptions& options);
 
 /// The same curve, slowed down by factor (> 0): duration x factor, about the same knot span, start
 /// (p, v, a) kept exactly, end at rest; the rest is refitted to the old curve's shape.

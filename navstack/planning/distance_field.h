@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "navstack/common/work.h"
+#include "navstack/planning/clearance_map.h"
 #include "navstack/map/voxel_grid.h"
 
 namespace enavi::navstack {
@@ -20,7 +21,7 @@ namespace enavi::navstack {
 /// -resolution/2 inside occupied cells, 0.5 * resolution next to them. Between cell centres the
 /// field is trilinear; outside the grid it is clamped to the border (nothing is known there).
 /// A grid without occupied cells gives kNoObstacleDistance everywhere.
-class DistanceField {
+class DistanceField : public ClearanceMap {
  public:
   /// Value everywhere when the grid has no occupied cell [m].
   static constexpr double kNoObstacleDistance = 1e3;
@@ -36,12 +37,15 @@ class DistanceField {
   double Distance(const Eigen::Vector3d& p_W, Eigen::Vector3d* grad_W) const;
   /// Value stored at a cell (no interpolation). @pre InBounds(cell).
   double CellDistance(const Eigen::Vector3i& cell) const { return dist_[Index(cell)]; }
+  /// The trilinear distance (exact everywhere, whatever is needed).
+  double Clearance(const Eigen::Vector3d& p_W, double /*needed*/) const override { return Distance(p_W); }
+  bool IsClear(const Eigen::Vector3d& p_W, double needed) const override { return Distance(p_W) >= needed; }
 
   const Eigen::Vector3d& origin() const { return origin_; }
-  double resolution() const { return resolution_; }
+  double resolution() const override { return resolution_; }
   const Eigen::Vector3i& dims() const { return dims_; }
   bool has_obstacles() const { return has_obstacles_; }
-  Eigen::AlignedBox3d Box() const { return {origin_, origin_ + dims_.cast<double>() * resolution_}; }
+  Eigen::AlignedBox3d Box() const override { return {origin_, origin_ + dims_.cast<double>() * resolution_}; }
   bool InBounds(const Eigen::Vector3i& c) const {
     return (c.array() >= 0).all() && (c.array() < dims_.array()).all();
   }

@@ -113,17 +113,17 @@ class SeededSampler : public ob::StateSampler {
 
 class ClearanceValidityChecker : public ob::StateValidityChecker {
  public:
-  ClearanceValidityChecker(const ob::SpaceInformationPtr& si, const DistanceField& field,
+  ClearanceValidityChecker(const ob::SpaceInformationPtr& si, const ClearanceMap& map,
                            const ClearanceRule& rule, std::int64_t* checks)
-      : ob::StateValidityChecker(si), field_(field), rule_(rule), checks_(checks) {}
+      : ob::StateValidityChecker(si), map_(map), rule_(rule), checks_(checks) {}
   bool isValid(const ob::State* state) const override {
     ++*checks_;
     const Vec3 p = ToVec(state);
-    return field_.Distance(p) >= rule_.RequiredAt(p);
+    return map_.IsClear(p, rule_.RequiredAt(p));
   }
 
  private:
-  const DistanceField& field_;
+  const ClearanceMap& map_;
   const ClearanceRule& rule_;
   std::int64_t* checks_;
 };
@@ -134,26 +134,26 @@ int MotionSteps(const Vec3& a, const Vec3& b, double step) {
 }
 
 // Index 1..n of the first point of a-b (a excluded) that violates rule; n + 1 if none does.
-int FirstInvalidStep(const DistanceField& field, const ClearanceRule& rule, const Vec3& a,
+int FirstInvalidStep(const ClearanceMap& map, const ClearanceRule& rule, const Vec3& a,
                      const Vec3& b, int n, std::int64_t* checks) {
   for (int i = 1; i <= n; ++i) {
     const Vec3 p = a + (b - a) * (static_cast<double>(i) / n);
     ++*checks;
-    if (field.Distance(p) < rule.RequiredAt(p)) return i;
+    if (!map.IsClear(p, rule.RequiredAt(p))) return i;
   }
   return n + 1;
 }
 
 class SteppedMotionValidator : public ob::MotionValidator {
  public:
-  SteppedMotionValidator(const ob::SpaceInformationPtr& si, const DistanceField& field,
+  SteppedMotionValidator(const ob::SpaceInformationPtr& si, const ClearanceMap& map,
                          const ClearanceRule& rule, double step, std::int64_t* checks)
-      : ob::MotionValidator(si), field_(field), rule_(rule), step_(step), checks_(checks) {}
+      : ob::MotionValidator(si), map_(map), rule_(rule), step_(step), checks_(checks) {}
 
   bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
     const Vec3 a = ToVec(s1), b = ToVec(s2);
     const int n = MotionSteps(a, b, step_);
-    const bool ok = FirstInvalidStep(field_, rule_, a, b, n, checks_) > n;
+    const bool ok = FirstInvalidStep(map_, rule_, a, b, n, checks_) > n;
     ok ? ++valid_ : ++invalid_;
     return ok;
   }
@@ -161,7 +161,7 @@ class SteppedMotionValidator : public ob::MotionValidator {
                    std::pair<ob::State*, double>& last_valid) const override {
     const Vec3 a = ToVec(s1), b = ToVec(s2);
     const int n = MotionSteps(a, b, step_);
-    const int bad = FirstInvalidStep(field_, rule_, a, b, n, checks_);
+    const int bad = FirstInvalidStep(map_, rule_, a, b, n, checks_);
     if (bad > n) {
       ++valid_;
       return true;
@@ -175,7 +175,7 @@ class SteppedMotionValidator : public ob::MotionValidator {
   }
 
  private:
-  const DistanceField& field_;
+  const ClearanceMap& map_;
   const ClearanceRule& rule_;
   double step_;
   std::int64_t* checks_;
@@ -192,11 +192,11 @@ double ExitParameter(const Vec3& a, const Vec3& b, const Eigen::AlignedBox3d& bo
   return std::clamp(t, 0.0, 1.0);
 }
 
-double Step(const DistanceField& field, const PlannerOptions& options) {
-  return options.motion_check_fraction * field.resolution();
+double Step(const ClearanceMap& map, const PlannerOptions& options) {
+  return options.motion_check_fraction * map.resolution();
 }
 
-std::vector<Vec3> GreedyShortcut(const std::vector<Vec3>& path, const DistanceField& field,
+std::vector<Vec3> GreedyShortcut(const std::vector<Vec3>& path, const ClearanceMap& map,
                                  const ClearanceRule& rule, const PlannerOptions& options,
                                  WorkCounts* work) {
   if (path.size() <= 2) return path;
@@ -205,7 +205,7 @@ std::vector<Vec3> GreedyShortcut(const std::vector<Vec3>& path, const DistanceFi
   while (i + 1 < path.size()) {
     // Extend the jump from vertex i while the straight segment stays free.
     std::size_t j = i + 1;
-    while (j + 1 < path.size() && SegmentIsFree(field, rule, path[i], path[j + 1], options, work)) {
+    while (j + 1 < path.size() && SegmentIsFree(map, rule, path[i], path[j + 1], options, work)) {
       ++j;
     }
     out.push_back(path[j]);
@@ -231,15 +231,15 @@ void RouteOmplLog(OmplLogSink sink, OmplLogLevel min_level) {
   g_log_configured = true;
 }
 
-ClearanceRule MakeClearanceRule(const DistanceField& field, const Vec3& p_start,
+ClearanceRule MakeClearanceRule(const ClearanceMap& map, const Vec3& p_start,
                                 const PlannerOptions& options) {
   ClearanceRule rule;
   rule.required = options.robot_radius + options.search_margin;
   rule.escape_center = p_start;
-  const double c0 = field.Distance(p_start);
+  const double c0 = map.Clearance(p_start, rule.required);
   if (c0 < rule.required) {
-    rule.escape_radius = (rule.required - std::max(c0, 0.0)) + 2.0 * field.resolution();
-    rule.escape_required = c0 - 0.5 * field.resolution();
+    rule.escape_radius = (rule.required - std::max(c0, 0.0)) + 2.0 * map.resolution();
+    rule.escape_required = c0 - 0.5 * map.resolution();
   }
   return rule;
 }
@@ -281,29 +281,29 @@ Eigen::AlignedBox3d PlanningVolume(const Vec3& start, const Vec3& goal,
   return box;
 }
 
-Eigen::AlignedBox3d SearchBounds(const DistanceField& field,
+Eigen::AlignedBox3d SearchBounds(const ClearanceMap& map,
                                  const Eigen::AlignedBox3d& flight_bounds,
                                  const PlannerOptions& options) {
-  Eigen::AlignedBox3d b = field.Box().intersection(flight_bounds);
+  Eigen::AlignedBox3d b = map.Box().intersection(flight_bounds);
   b.min().z() = std::max(b.min().z(), options.min_altitude);
   if (b.isEmpty()) return b;
   const Vec3 eps = Vec3::Constant(1e-6);
   return {b.min() + eps, b.max() - eps};
 }
 
-bool SegmentIsFree(const DistanceField& field, const ClearanceRule& rule, const Vec3& a,
+bool SegmentIsFree(const ClearanceMap& map, const ClearanceRule& rule, const Vec3& a,
                    const Vec3& b, const PlannerOptions& options, WorkCounts* work) {
-  const int n = MotionSteps(a, b, Step(field, options));
+  const int n = MotionSteps(a, b, Step(map, options));
   std::int64_t checks = 0;
-  const bool ok = FirstInvalidStep(field, rule, a, b, n, &checks) > n;
+  const bool ok = FirstInvalidStep(map, rule, a, b, n, &checks) > n;
   if (work != nullptr) work->Add(WorkUnit::kStateCheck, checks);
   return ok;
 }
 
-std::vector<Vec3> ShortcutPath(const std::vector<Vec3>& path, const DistanceField& field,
+std::vector<Vec3> ShortcutPath(const std::vector<Vec3>& path, const ClearanceMap& map,
                                const ClearanceRule& rule, const PlannerOptions& options,
                                WorkCounts* work) {
-  std::vector<Vec3> coarse = GreedyShortcut(path, field, rule, options, work);
+  std::vector<Vec3> coarse = GreedyShortcut(path, map, rule, options, work);
   // Densify so the second pass can also cut corners between the first pass' vertices.
   std::vector<Vec3> dense{coarse.front()};
   for (std::size_t i = 1; i < coarse.size(); ++i) {
@@ -313,18 +313,20 @@ std::vector<Vec3> ShortcutPath(const std::vector<Vec3>& path, const DistanceFiel
       dense.push_back(coarse[i - 1] + (coarse[i] - coarse[i - 1]) * (static_cast<double>(k) / n));
     }
   }
-  return GreedyShortcut(dense, field, rule, options, work);
+  return GreedyShortcut(dense, map, rule, options, work);
 }
 
-PathSearchResult SearchPath(const DistanceField& field, const Eigen::AlignedBox3d& bounds,
+PathSearchResult SearchPath(const ClearanceMap& map, const Eigen::AlignedBox3d& bounds,
                             const ClearanceRule& rule, const Vec3& start, const Vec3& goal,
-                            std::uint32_t seed, const PlannerOptions& options, WorkCounts* work) {
+                            std::uint32_t seed, const PlannerOptions& options, WorkCounts* work,
+                            const OverBudget& over_budget) {
   EnsureOmplLogConfigured();
   PathSearchResult result;
   std::int64_t checks = 0;
   const auto is_valid = [&](const Vec3& p) {
     ++checks;
-    return field.Distance(p) >= rule.RequiredAt(p);
+    const double required = rule.RequiredAt(p);
+    return map.IsClear(p, required);
   };
   const auto finish = [&](SearchStatus status, std::string message) {
     result.status = status;
@@ -343,7 +345,7 @@ PathSearchResult SearchPath(const DistanceField& field, const Eigen::AlignedBox3
   }
 
   // Straight line first: the common case in open space costs no search at all.
-  if (SegmentIsFree(field, rule, start, goal, options, work)) {
+  if (SegmentIsFree(map, rule, start, goal, options, work)) {
     result.path = {start, goal};
     return finish(SearchStatus::kOk, "straight line");
   }
@@ -363,9 +365,9 @@ PathSearchResult SearchPath(const DistanceField& field, const Eigen::AlignedBox3
     return std::make_shared<SeededSampler>(s, seed, &samples);
   });
   auto si = std::make_shared<ob::SpaceInformation>(space);
-  si->setStateValidityChecker(std::make_shared<ClearanceValidityChecker>(si, field, rule, &checks));
+  si->setStateValidityChecker(std::make_shared<ClearanceValidityChecker>(si, map, rule, &checks));
   si->setMotionValidator(
-      std::make_shared<SteppedMotionValidator>(si, field, rule, Step(field, options), &checks));
+      std::make_shared<SteppedMotionValidator>(si, map, rule, Step(map, options), &checks));
   si->setup();
 
   ob::ScopedState<ob::RealVectorStateSpace> s_start(space), s_goal(space);
@@ -381,10 +383,27 @@ PathSearchResult SearchPath(const DistanceField& field, const Eigen::AlignedBox3
   planner->setProblemDefinition(pdef);
   planner->setNearestNeighbors<ompl::NearestNeighborsLinear>();  // also runs setup()
 
+  // Termination on the sample count or, if a budget hook is set, on the work done so far (the
+  // counts this search has not yet added to *work included).
   const std::int64_t budget = options.max_search_iterations;
-  const ob::PlannerTerminationCondition ptc([&samples, budget] { return samples >= budget; });
+  bool over = false;
+  const ob::PlannerTerminationCondition ptc([&] {
+    if (samples >= budget) return true;
+    if (over_budget) {
+      WorkCounts now = work != nullptr ? *work : WorkCounts{};
+      now.Add(WorkUnit::kStateCheck, checks);
+      now.Add(WorkUnit::kPlannerIteration, samples);
+      over = over_budget(now);
+    }
+    return over;
+  });
   const ob::PlannerStatus status = planner->solve(ptc);
   result.iterations = static_cast<int>(samples);
+  if (over && status != ob::PlannerStatus::EXACT_SOLUTION) {
+    std::ostringstream msg;
+    msg << "RRT-Connect stopped by the work budget after " << samples << " iterations";
+    return finish(SearchStatus::kOverBudget, msg.str());
+  }
   if (status != ob::PlannerStatus::EXACT_SOLUTION) {
     std::ostringstream msg;
     msg << "RRT-Connect found no path in " << samples << " iterations (" << status.asString() << ")";
@@ -399,7 +418,7 @@ PathSearchResult SearchPath(const DistanceField& field, const Eigen::AlignedBox3
   raw.back() = goal;
 
   WorkCounts shortcut_work;
-  result.path = ShortcutPath(raw, field, rule, options, &shortcut_work);
+  result.path = ShortcutPath(raw, map, rule, options, &shortcut_work);
   checks += shortcut_work.Get(WorkUnit::kStateCheck);
   std::ostringstream msg;
   msg << "RRT-Connect: " << samples << " iterations, " << raw.size() << " states, "
@@ -407,7 +426,7 @@ PathSearchResult SearchPath(const DistanceField& field, const Eigen::AlignedBox3
   return finish(SearchStatus::kOk, msg.str());
 }
 
-std::vector<Vec3> GoalCandidates(const DistanceField& field, const Eigen::AlignedBox3d& bounds,
+std::vector<Vec3> GoalCandidates(const ClearanceMap& map, const Eigen::AlignedBox3d& bounds,
                                  const ClearanceRule& rule, const Vec3& start, const Vec3& goal,
                                  const PlannerOptions& options, bool* is_local, WorkCounts* work) {
   std::vector<Vec3> out;
@@ -416,11 +435,14 @@ std::vector<Vec3> GoalCandidates(const DistanceField& field, const Eigen::Aligne
   std::int64_t checks = 0;
   const auto is_valid = [&](const Vec3& p) {
     ++checks;
-    return bounds.contains(p) && field.Distance(p) >= rule.RequiredAt(p);
+    if (!bounds.contains(p)) return false;
+    const double required = rule.RequiredAt(p);
+    return map.IsClear(p, required);
   };
+  const double res = map.resolution();
   const auto add = [&](const Vec3& p) {
     for (const Vec3& o : out) {
-      if ((o - p).norm() < field.resolution()) return;
+      if ((o - p).norm() < res) return;
     }
     if (static_cast<int>(out.size()) < options.max_goal_candidates) out.push_back(p);
   };
@@ -437,20 +459,25 @@ std::vector<Vec3> GoalCandidates(const DistanceField& field, const Eigen::Aligne
     } else {
       // The valid cell nearest to the exit point, within the search radius.
       const double r = options.local_goal_search_radius;
-      const Eigen::Vector3i lo = field.CellOf(exit - Vec3::Constant(r)).cwiseMax(0);
-      const Eigen::Vector3i hi =
-          field.CellOf(exit + Vec3::Constant(r)).cwiseMin(field.dims() - Eigen::Vector3i::Ones());
+      const Eigen::AlignedBox3d box = map.Box();
+      const Eigen::Vector3i dims =
+          ((box.max() - box.min()) / res).array().round().cast<int>().matrix();
+      const auto cell_of = [&](const Vec3& p) -> Eigen::Vector3i {
+        return ((p - box.min()) / res).array().floor().cast<int>().matrix();
+      };
+      const Eigen::Vector3i lo = cell_of(exit - Vec3::Constant(r)).cwiseMax(0);
+      const Eigen::Vector3i hi = cell_of(exit + Vec3::Constant(r)).cwiseMin(dims - Eigen::Vector3i::Ones());
       double best = std::numeric_limits<double>::infinity();
       Vec3 best_p = exit;
       for (int z = lo.z(); z <= hi.z(); ++z) {
         for (int y = lo.y(); y <= hi.y(); ++y) {
           for (int x = lo.x(); x <= hi.x(); ++x) {
-            const Eigen::Vector3i c(x, y, z);
-            const Vec3 p = field.CenterOf(c);
+            const Vec3 p = box.min() + (Eigen::Vector3d(x, y, z).array() + 0.5).matrix() * res;
             const double d = (p - exit).norm();
             if (d > r || d >= best || !bounds.contains(p)) continue;
             ++checks;
-            if (field.CellDistance(c) >= rule.RequiredAt(p)) {
+            const double required = rule.RequiredAt(p);
+            if (map.IsClear(p, required)) {
               best = d;
               best_p = p;
             }
@@ -461,7 +488,7 @@ std::vector<Vec3> GoalCandidates(const DistanceField& field, const Eigen::Aligne
     }
     // Last resort, reachable by a straight line: the last free point from the start towards the
     // exit, if it makes real progress.
-    const double step = field.resolution();
+    const double step = res;
     const int n = static_cast<int>(std::floor((exit - s).norm() / step));
     Vec3 last = s;
     for (int i = 1; i <= n; ++i) {

@@ -1,5 +1,5 @@
 #pragma once
-// Geometric path search in 3-D over a distance field: OMPL RRT-Connect with an iteration budget
+// Geometric path search in 3-D over a clearance map (distance field or inflated occupancy): OMPL RRT-Connect with an iteration budget
 // and a per-call seed (bit-identical results), then a deterministic shortcut. Also the choice of
 // the planning volume and of a local goal when the final goal is not usable. No OMPL type
 // appears in this header.
@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "navstack/common/work.h"
+#include "navstack/planning/clearance_map.h"
 #include "navstack/planning/distance_field.h"
 #include "navstack/planning/planner_options.h"
 
@@ -39,7 +40,7 @@ struct ClearanceRule {
 /// Rule for a search from p_start with clearance robot_radius + search_margin; if p_start has less
 /// than that, an escape ball of radius (required - clearance) + 2 resolutions lets the path leave
 /// while not getting closer than (start clearance - resolution / 2).
-ClearanceRule MakeClearanceRule(const DistanceField& field, const Eigen::Vector3d& p_start,
+ClearanceRule MakeClearanceRule(const ClearanceMap& map, const Eigen::Vector3d& p_start,
                                 const PlannerOptions& options);
 
 /// The box the caller should extract from the map for a plan from `start` towards `goal`: reaching
@@ -51,19 +52,24 @@ Eigen::AlignedBox3d PlanningVolume(const Eigen::Vector3d& start, const Eigen::Ve
                                    const Eigen::AlignedBox3d& flight_bounds,
                                    const PlannerOptions& options);
 
-/// States a search may visit: the field's box intersected with flight_bounds, floor raised to
+/// States a search may visit: the map's box intersected with flight_bounds, floor raised to
 /// options.min_altitude, shrunk by 1e-6 m so clamped points stay inside. May be empty.
-Eigen::AlignedBox3d SearchBounds(const DistanceField& field,
+Eigen::AlignedBox3d SearchBounds(const ClearanceMap& map,
                                  const Eigen::AlignedBox3d& flight_bounds,
                                  const PlannerOptions& options);
 
 /// True if every point from a to b, checked every options.motion_check_fraction x resolution
 /// (b included, a excluded), meets rule. Adds one kStateCheck per point checked.
-bool SegmentIsFree(const DistanceField& field, const ClearanceRule& rule,
+bool SegmentIsFree(const ClearanceMap& map, const ClearanceRule& rule,
                    const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                    const PlannerOptions& options, WorkCounts* work);
 
-enum class SearchStatus { kOk, kNoPath, kInvalidStart, kInvalidGoal };
+enum class SearchStatus { kOk, kNoPath, kInvalidStart, kInvalidGoal, kOverBudget };
+
+/// Budget hook of a search: called with everything the plan has done so far (its WorkCounts,
+/// including the running search) once per search iteration; true stops the search. The caller
+/// prices the counts in board time, so a time limit holds on any clock.
+using OverBudget = std::function<bool(const WorkCounts&)>;
 
 struct PathSearchResult {
   SearchStatus status = SearchStatus::kNoPath;
@@ -77,18 +83,21 @@ struct PathSearchResult {
 /// first; otherwise RRT-Connect (OMPL, linear nearest-neighbour search, own seeded sampler) runs
 /// until connected or options.max_search_iterations samples, then the path is shortcut.
 /// Same inputs and seed -> bit-identical path, whatever ran before in the process.
-/// Adds kPlannerIteration per sample and kStateCheck per state checked to *work.
+/// Adds kPlannerIteration per sample and kStateCheck per state checked to *work. If over_budget
+/// is set, it is asked before every sample with *work plus the running counts; true ends the
+/// search with kOverBudget.
 /// @pre start and goal inside bounds (kInvalidStart / kInvalidGoal otherwise, also when they
 /// violate rule).
-PathSearchResult SearchPath(const DistanceField& field, const Eigen::AlignedBox3d& bounds,
+PathSearchResult SearchPath(const ClearanceMap& map, const Eigen::AlignedBox3d& bounds,
                             const ClearanceRule& rule, const Eigen::Vector3d& start,
                             const Eigen::Vector3d& goal, std::uint32_t seed,
-                            const PlannerOptions& options, WorkCounts* work);
+                            const PlannerOptions& options, WorkCounts* work,
+                            const OverBudget& over_budget = {});
 
 /// Deterministic shortcut: greedy "furthest vertex reachable by a free segment" from each kept
 /// vertex, then the same again on the path densified at options.shortcut_spacing.
 std::vector<Eigen::Vector3d> ShortcutPath(const std::vector<Eigen::Vector3d>& path,
-                                          const DistanceField& field, const ClearanceRule& rule,
+                                          const ClearanceMap& map, const ClearanceRule& rule,
                                           const PlannerOptions& options, WorkCounts* work);
 
 /// Goals to try, in order. If goal lies inside bounds and satisfies rule: {goal} and
@@ -97,7 +106,7 @@ std::vector<Eigen::Vector3d> ShortcutPath(const std::vector<Eigen::Vector3d>& pa
 /// when inside), the valid cell nearest to that point within local_goal_search_radius, and the
 /// last valid point walking back from it towards the start. Empty if none is valid.
 /// Adds kStateCheck per cell or point evaluated.
-std::vector<Eigen::Vector3d> GoalCandidates(const DistanceField& field,
+std::vector<Eigen::Vector3d> GoalCandidates(const ClearanceMap& map,
                                             const Eigen::AlignedBox3d& bounds,
                                             const ClearanceRule& rule,
                                             const Eigen::Vector3d& start,

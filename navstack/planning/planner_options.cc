@@ -20,7 +20,31 @@ void CheckRange(const char* field, double value, double lo, double hi, bool lo_o
 
 }  // namespace
 
+const char* ToString(PlannerOptimizer optimizer) {
+  switch (optimizer) {
+    case PlannerOptimizer::kEsdf: return "esdf";
+    case PlannerOptimizer::kRebound: return "rebound";
+  }
+  return "unknown";
+}
+
+bool ParsePlannerOptimizer(std::string_view name, PlannerOptimizer* out) {
+  for (PlannerOptimizer o : {PlannerOptimizer::kEsdf, PlannerOptimizer::kRebound}) {
+    if (name == ToString(o)) {
+      *out = o;
+      return true;
+    }
+  }
+  return false;
+}
+
 void PlannerOptions::Validate() const {
+  const int opt = static_cast<int>(optimizer);
+  if (opt != static_cast<int>(PlannerOptimizer::kEsdf) &&
+      opt != static_cast<int>(PlannerOptimizer::kRebound)) {
+    throw std::invalid_argument("PlannerOptions.optimizer = " + std::to_string(opt) +
+                                ": must be 0 (esdf) or 1 (rebound)");
+  }
   CheckRange("robot_radius", robot_radius, 0.0, 5.0, true);
   CheckRange("v_max", v_max, 0.0, 20.0, true);
   CheckRange("a_max", a_max, 0.0, 50.0, true);
@@ -43,6 +67,12 @@ void PlannerOptions::Validate() const {
   CheckRange("max_optimizer_iterations", max_optimizer_iterations, 1, 1e5, false);
   CheckRange("max_time_reallocations", max_time_reallocations, 0, 100, false);
   CheckRange("max_clearance_retries", max_clearance_retries, 0, 10, false);
+  CheckRange("rebound_lambda_smooth", rebound_lambda_smooth, 0.0, 1e6, false);
+  CheckRange("rebound_lambda_collision", rebound_lambda_collision, 0.0, 1e6, false);
+  CheckRange("rebound_lambda_feasibility", rebound_lambda_feasibility, 0.0, 1e6, false);
+  CheckRange("rebound_dist0", rebound_dist0, 0.0, 5.0, true);
+  CheckRange("max_rebounds", max_rebounds, 0, 1000, false);
+  CheckRange("max_rebound_restarts", max_rebound_restarts, 0, 100, false);
   CheckRange("yaw_speed_threshold", yaw_speed_threshold, 0.0, 20.0, false);
   CheckRange("yaw_rate_max", yaw_rate_max, 0.0, 100.0, true);
   CheckRange("yaw_lookahead", yaw_lookahead, 0.0, 10.0, false);

@@ -2,7 +2,20 @@
 // Tunable parameters of the local planner (search, B-spline optimisation, time allocation, yaw).
 // One flat struct so a job spec can sweep any field by name; Validate() refuses out-of-range values.
 
+#include <string_view>
+
 namespace enavi::navstack {
+
+/// The optimiser (and with it the pipeline) Plan() runs. Numeric so it can be a tunable.
+enum class PlannerOptimizer : int {
+  kEsdf = 0,     ///< "esdf": distance transform of the snapshot, RRT-Connect, ESDF clearance cost
+  kRebound = 1,  ///< "rebound": Ego-Planner's ESDF-free optimisation with A*-guided {p, v} pairs
+};
+
+/// "esdf" / "rebound".
+const char* ToString(PlannerOptimizer optimizer);
+/// Parses "esdf" or "rebound" into *out; false (and *out untouched) for any other name.
+bool ParsePlannerOptimizer(std::string_view name, PlannerOptimizer* out);
 
 /// Parameters of Plan() and its parts. Defaults fit a 0.3 m quadrotor with a 10 m depth camera
 /// flying at up to 2 m/s and 3 m/s^2 (paper Sec. VI). Ranges are enforced by Validate().
@@ -40,6 +53,19 @@ struct PlannerOptions {
   int max_optimizer_iterations = 100;  ///< L-BFGS iterations per run, [1, 100000]
   int max_time_reallocations = 4;      ///< stretch-and-refit rounds when limits are exceeded, [0, 100]
   int max_clearance_retries = 2;       ///< re-optimisations with 4x clearance weight if the result is too close, [0, 10]
+
+  // Which optimiser: kEsdf (0) or kRebound (1) (rebound_optimizer.h).
+  PlannerOptimizer optimizer = PlannerOptimizer::kEsdf;
+
+  // Rebound optimiser. Defaults from Ego-Planner's plan_manage/launch/advanced_param.xml
+  // (optimization/lambda_smooth, lambda_collision, lambda_feasibility, dist0) and
+  // bspline_optimizer.cpp (rebound_optimize: at most 20 rebounds, 3 restarts).
+  double rebound_lambda_smooth = 1.0;       ///< jerk of control points, [0, 1e6]
+  double rebound_lambda_collision = 0.5;    ///< {p, v} pair penalty below dist0, [0, 1e6]
+  double rebound_lambda_feasibility = 0.1;  ///< per-axis velocity / acceleration excess, [0, 1e6]
+  double rebound_dist0 = 0.5;               ///< [m] clearance target along v past the anchor, (0, 5]
+  int max_rebounds = 20;                    ///< L-BFGS runs cut short by a new obstacle, [0, 1000]
+  int max_rebound_restarts = 3;             ///< re-runs with 2x collision weight if the result collides, [0, 100]
 
   // Yaw: along the horizontal velocity; held below the speed threshold; rate limited.
   double yaw_speed_threshold = 0.3;  ///< [m/s], [0, 20]

@@ -98,8 +98,10 @@ void NavStack::AddEvent(std::string kind, std::string detail) {
 void NavStack::RequestReplan(const char* why) {
   // The baseline's 20 Hz timer replans anyway; a trigger would only collide with it.
   if (rates_.f_plan > 0) return;
-  // Several triggers before the job starts coalesce into one plan: it is billed to the first.
-  if (pending_trigger_.empty()) pending_trigger_ = why;
+  // The executor coalesces: a trigger while a job is released releases one more after it, and
+  // further ones join that. Each plan is billed to the first trigger it answers.
+  std::string& slot = executor_->active(TaskId::kPlanning) ? next_trigger_ : pending_trigger_;
+  if (slot.empty()) slot = why;
   executor_->Trigger(TaskId::kPlanning, options_.triggered_plan_deadline_s);
 }
 
@@ -216,6 +218,7 @@ JobOutput NavStack::PlanningJob() {
     score.straight_length = (result->goal_used_W - start.p).norm();
   }
   out.commit = [this, result, t, score, trigger] {
+    if (rates_.f_plan == 0 && pending_trigger_.empty()) pending_trigger_ = std::exchange(next_trigger_, {});
     if (strategy_) strategy_->OnPlanned(executor_->now(), result->ok(), score);
     // Latency = board time from start to finish; the next plan aims that far ahead.
     const double latency = executor_->now() - t;

@@ -83,7 +83,8 @@ class NavStack final : public Navigator {
   std::int64_t plan_failures_ = 0;
   std::int64_t plan_calls_ = 0;
   double plan_latency_estimate_ = 0.05;
-  std::string pending_trigger_;  ///< what asked for the next triggered plan
+  std::string pending_trigger_;  ///< what asked for the released triggered plan
+  std::string next_trigger_;     ///< what asked for the one the executor releases after it
   std::vector<NavEvent> events_;
 
   // E-Navi: the Strategy Controller and what it observes.

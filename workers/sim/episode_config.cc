@@ -33,6 +33,10 @@ const std::vector<Setter>& Setters() {
        [](EpisodeConfig& c, double v) { c.nav.planner.a_max = v; }},
       {{"planner.robot_radius", 0.1, 2.0, 0.3, false, "obstacle inflation radius, m"},
        [](EpisodeConfig& c, double v) { c.nav.planner.robot_radius = v; }},
+      {{"planner.optimizer", 0, 1, 0, true, "0: ESDF optimiser (fixed, enavi), 1: Ego-Planner's rebound (baseline); default: the method's"},
+       [](EpisodeConfig& c, double v) {
+         c.nav.planner.optimizer = v > 0 ? navstack::PlannerOptimizer::kRebound : navstack::PlannerOptimizer::kEsdf;
+       }},
       {{"perception.stride", 1, 64, 2, true, "depth pixel stride for mapping"},
        [](EpisodeConfig& c, double v) { c.nav.perception.stride = static_cast<int>(v); }},
       {{"perception.max_range", 1.0, 10.0, 5.0, false, "mapping range, m"},

@@ -31,6 +31,8 @@ MethodInfo EgoPlannerMethod() {
       {"ego.newest_frame_only", 0, 1, 1, true, "1: the occupancy update raycasts only the newest frame"},
   };
   m.configure = [](const MethodSetup&, NavStackOptions* o) {
+    // Ego-Planner's ESDF-free rebound optimisation (navstack/planning/README.md).
+    o->planner.optimizer = PlannerOptimizer::kRebound;
     // grid_map parameters of launch/advanced_param.xml.
     o->map.prob_hit = 0.65;
     o->map.prob_miss = 0.35;

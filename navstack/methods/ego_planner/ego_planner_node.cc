@@ -130,17 +130,21 @@ std::shared_ptr<const EgoPlannerNode::Attempt> EgoPlannerNode::PlanOnce(TaskId t
   request.seed = PlanSeed(options_.seed, plan_calls_++);
   request.grid = std::make_shared<const VoxelGrid>(
       map_->ExtractGrid(PlanningVolume(start.p, target, options_.flight_bounds, options_.planner), work));
+  // dyn_a_star.cpp: a search gives up after 0.2 s, measured from the start of this planning call.
+  if (ego_.search_time_limit > 0) {
+    const WorkCounts before = *work;
+    const double limit = ego_.search_time_limit;
+    request.over_budget = [this, task, before, t_begin, limit, call_start = executor_->JobElapsed(task, before, t_begin)](
+                              const WorkCounts& plan_work) {
+      WorkCounts so_far = before;
+      so_far += plan_work;
+      return executor_->JobElapsed(task, so_far, t_begin) - call_start > limit;
+    };
+  }
   PlannerOptions planner = options_.planner;
   planner.robot_radius += 0.5 * (std::sqrt(3.0) - 1.0) * map_->resolution();
   auto result = std::make_shared<PlanResult>(Plan(request, planner));
   *work += result->work;
-  // dyn_a_star.cpp: a search that took longer than the limit has failed.
-  if (result->ok() && ego_.search_time_limit > 0 &&
-      executor_->JobElapsed(task, *work, t_begin) > ego_.search_time_limit) {
-    result->status = PlanStatus::kNoPath;
-    result->message = "path search exceeded its " + std::to_string(ego_.search_time_limit) + " s limit";
-    result->trajectory.reset();
-  }
   attempt->result = std::move(result);
   attempt->tries = 1;
   attempt->failed_tries = attempt->result->ok() ? 0 : 1;

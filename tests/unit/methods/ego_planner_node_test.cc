@@ -2,7 +2,10 @@
 // so every plan goes straight to the local target) with a vehicle that tracks its reference
 // exactly, on the virtual clock with a cost model that makes planning take a chosen board time.
 #include <cmath>
+#include <algorithm>
+#include <map>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -14,12 +17,13 @@
 namespace enavi::navstack {
 namespace {
 
-// A job that planned (it drew planner samples or optimised) takes `plan_s`; any other 0.5 ms.
+// A job that planned (searched, or optimised) takes `plan_s`; any other 0.5 ms.
 class PlanCost final : public CostModel {
  public:
   explicit PlanCost(double plan_s) : plan_s_(plan_s) {}
   double JobSeconds(TaskId, const WorkCounts& w, double) const override {
-    const bool planned = w.Get(WorkUnit::kOptimizerEval) > 0 || w.Get(WorkUnit::kPlannerIteration) > 0;
+    const bool planned = w.Get(WorkUnit::kOptimizerEval) > 0 || w.Get(WorkUnit::kPlannerIteration) > 0 ||
+                         w.Get(WorkUnit::kAstarExpansion) > 0;
     return planned ? plan_s_ : 0.0005;
   }
   std::string mode() const override { return "model"; }
@@ -35,20 +39,40 @@ struct Flight {
   double final_x = 0;
 };
 
-Flight Fly(double plan_s, std::map<std::string, double> params, double duration = 8.0) {
+// A depth frame of a wall across the whole view at world x = wall_x, seen from p facing +x.
+DepthFramePtr WallFrame(const CameraIntrinsics& camera, const Eigen::Vector3d& p, double t, double wall_x) {
+  auto f = std::make_shared<DepthFrame>();
+  f->t = t;
+  f->image = DepthImage(camera.width, camera.height);
+  std::fill(f->image.data.begin(), f->image.data.end(), static_cast<float>(wall_x - p.x()));
+  Eigen::Matrix3d R_WC;
+  R_WC.col(0) = -Eigen::Vector3d::UnitY();  // C: x right, y down, z forward (+x in W)
+  R_WC.col(1) = -Eigen::Vector3d::UnitZ();
+  R_WC.col(2) = Eigen::Vector3d::UnitX();
+  f->X_WC.linear() = R_WC;
+  f->X_WC.translation() = p;
+  return f;
+}
+
+Flight Fly(const CostModel& cost, std::map<std::string, double> params, double duration = 8.0,
+           std::optional<double> wall_x = std::nullopt) {
   const MethodInfo& method = *FindMethod("baseline");
   NavStackOptions o;
   ConfigureMethod(method, MethodSetup{}, &o);
   for (const auto& [k, v] : params) o.params[k] = v;
   o.goal = Eigen::Vector3d(30, 0, 1.5);
   o.flight_bounds = Eigen::AlignedBox3d(Eigen::Vector3d(-5, -10, 0), Eigen::Vector3d(40, 10, 5));
-  PlanCost cost(plan_s);
   VirtualExecutor exec(1, cost, SchedulingPolicy::kFifoNonPreemptive);
   VehicleState s;
   s.p_WB = Eigen::Vector3d(0, 0, 1.5);
   auto nav = method.make(o, &exec, s);
   Flight f;
+  double next_frame = 0;
   for (double t = 0; t <= duration; t += 0.005) {
+    if (wall_x && t >= next_frame) {
+      next_frame += 1.0 / 30.0;
+      nav->OnFrame(WallFrame(o.camera, s.p_WB, t, *wall_x));
+    }
     const TrajectorySample before = nav->Reference(t);
     exec.AdvanceTo(t);
     const TrajectorySample after = nav->Reference(t);
@@ -76,7 +100,7 @@ int Count(const Flight& f, const std::string& kind, const std::string& detail = 
 }
 
 TEST(EgoPlannerNodeTest, ReplansByDistanceNotByTimer) {
-  const Flight f = Fly(0.01, {});
+  const Flight f = Fly(PlanCost(0.01), {});
   EXPECT_EQ(Count(f, "replan", "start"), 1);
   // Every thresh_replan (1.5 m) past the local start: at ~2 m/s a few per 8 s, not 20 Hz.
   const int distance = Count(f, "replan", "distance");
@@ -88,29 +112,36 @@ TEST(EgoPlannerNodeTest, ReplansByDistanceNotByTimer) {
 TEST(EgoPlannerNodeTest, ReferenceJumpsBackByTheDistanceFlownWhilePlanning) {
   // Plans take 0.1 s of board time; stamped when planning ends, the new trajectory starts where
   // the reference was when planning began: ~v x 0.1 s behind.
-  const Flight stamped = Fly(0.1, {});
+  const Flight stamped = Fly(PlanCost(0.1), {});
   ASSERT_GE(stamped.jumps.size(), 3u);
   double mean = 0;
   for (double j : stamped.jumps) mean += j / static_cast<double>(stamped.jumps.size());
   EXPECT_GT(mean, 0.1) << "cruise 2 m/s x 0.1 s = 0.2 m";
   EXPECT_LT(mean, 0.3);
   // Switched off (stamped at planning start, i.e. latency compensated): no jump.
-  const Flight compensated = Fly(0.1, {{"ego.stamp_at_plan_end", 0}});
+  const Flight compensated = Fly(PlanCost(0.1), {{"ego.stamp_at_plan_end", 0}});
   ASSERT_GE(compensated.jumps.size(), 3u);
   for (double j : compensated.jumps) EXPECT_NEAR(j, 0.0, 0.02);
   EXPECT_GT(compensated.final_x, stamped.final_x) << "losing 0.2 m per replan flies less far";
 }
 
 TEST(EgoPlannerNodeTest, SearchesOverTheirBoardTimeLimitFail) {
-  // 0.3 s of board time per plan against the 0.2 s limit: every plan fails, retried every tick.
-  const Flight limited = Fly(0.3, {}, 3.0);
-  EXPECT_EQ(Count(limited, "replan"), 0);
-  EXPECT_GT(limited.plan_failures, 5);
-  EXPECT_GT(Count(limited, "plan_failed"), 5);
-  EXPECT_NEAR(limited.final_x, 0.0, 1e-9) << "never left the start";
-  // Without the limit the same plans succeed.
-  const Flight unlimited = Fly(0.3, {{"ego.search_time_limit", 0}}, 3.0);
-  EXPECT_GE(Count(unlimited, "replan"), 1);
+  // A wall across the view 4 m ahead: no straight path, plans have to search; at 1 ms of board
+  // time per planner state check a search passes the 0.2 s limit and gives up.
+  WorkCountCostModel::Coefficients c;
+  c.ns_per_unit[static_cast<int>(WorkUnit::kStateCheck)] = 1e6;
+  const WorkCountCostModel slow_checks(c);
+  auto timeouts = [](const Flight& f) {
+    int n = 0;
+    for (const NavEvent& e : f.events) n += e.kind == "plan_failed" && e.detail.rfind("search_timeout", 0) == 0;
+    return n;
+  };
+  const Flight limited = Fly(slow_checks, {}, 6.0, 4.0);
+  EXPECT_GT(timeouts(limited), 0);
+  EXPECT_GT(limited.plan_failures, 0);
+  // Without the limit no search times out.
+  const Flight unlimited = Fly(slow_checks, {{"ego.search_time_limit", 0}}, 6.0, 4.0);
+  EXPECT_EQ(timeouts(unlimited), 0);
 }
 
 }  // namespace
