@@ -30,8 +30,9 @@ FarmClient::FarmClient(std::string url, std::string token)
 
 FarmClient::~FarmClient() = default;
 
-nlohmann::json FarmClient::Request(const std::string& method, const std::string& path,
-                                   const std::string& body, const std::string& file_name) {
+std::string FarmClient::RequestRaw(const std::string& method, const std::string& path,
+                                   const std::string& body, const std::string& file_name,
+                                   const std::string& content_type) {
   httplib::Client client(url_);
   client.set_connection_timeout(5, 0);
   client.set_read_timeout(120, 0);
@@ -40,8 +41,7 @@ nlohmann::json FarmClient::Request(const std::string& method, const std::string&
   if (!token_.empty()) headers.emplace("Authorization", "Bearer " + token_);
   if (!file_name.empty()) headers.emplace("X-Enavi-File", file_name);
   httplib::Result res = method == "GET" ? client.Get(path.c_str(), headers)
-                                        : client.Post(path.c_str(), headers, body,
-                                                      "application/yaml");
+                                        : client.Post(path.c_str(), headers, body, content_type);
   if (!res) {
     throw std::runtime_error("cannot reach the farm server at " + url_ + ": " +
                              httplib::to_string(res.error()));
@@ -54,11 +54,27 @@ nlohmann::json FarmClient::Request(const std::string& method, const std::string&
     throw std::runtime_error("farm server " + url_ + path + ": HTTP " +
                              std::to_string(res->status) + ": " + ErrorMessage(res));
   }
+  return res->body;
+}
+
+nlohmann::json FarmClient::Request(const std::string& method, const std::string& path,
+                                   const std::string& body, const std::string& file_name) {
+  const std::string reply = RequestRaw(method, path, body, file_name, "application/yaml");
   try {
-    return nlohmann::json::parse(res->body);
+    return nlohmann::json::parse(reply);
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error("farm server " + url_ + path + ": reply is not JSON: " + e.what());
   }
+}
+
+std::string FarmClient::UploadPolicy(const std::string& policy_json) {
+  const std::string reply = RequestRaw("POST", "/api/policies", policy_json, "", "application/json");
+  return nlohmann::json::parse(reply).at("hash").get<std::string>();
+}
+
+std::vector<StoredRollout> FarmClient::Rollouts(const std::string& job_id) {
+  return DecodeRolloutStream(RequestRaw("GET", "/api/jobs/" + job_id + "/rollouts", "", "", ""),
+                             url_ + "/api/jobs/" + job_id + "/rollouts");
 }
 
 FarmClient::Submitted FarmClient::Submit(const std::string& yaml, const std::string& file_name) {
@@ -71,8 +87,22 @@ JobProgress FarmClient::Status(const std::string& job_id) {
   return Request("GET", "/api/jobs/" + job_id).get<JobProgress>();
 }
 
-std::vector<JobProgress> FarmClient::Jobs() {
-  return Request("GET", "/api/jobs").get<std::vector<JobProgress>>();
+std::vector<JobProgress> FarmClient::Jobs(const std::map<std::string, std::string>& labels) {
+  // Label characters are URL-safe (api::LabelError) except '+', which a query reads as a space.
+  std::string query;
+  for (const auto& [k, v] : labels) {
+    query += query.empty() ? "?label=" : "&label=";
+    query += k;
+    query += '=';
+    for (char c : v) {
+      if (c == '+') {
+        query += "%2B";
+      } else {
+        query += c;
+      }
+    }
+  }
+  return Request("GET", "/api/jobs" + query).get<std::vector<JobProgress>>();
 }
 
 nlohmann::json FarmClient::Results(const std::string& job_id) {

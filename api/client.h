@@ -1,6 +1,7 @@
 #pragma once
 // Client library for the farm's HTTP API (routes in api/http_schema.h).
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -8,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/http_schema.h"
+#include "api/rollout_records.h"
 
 namespace enavi::api {
 
@@ -28,19 +30,26 @@ class FarmClient {
   /// @throws std::invalid_argument when the server rejects the spec (message from the server).
   Submitted Submit(const std::string& yaml, const std::string& file_name);
   JobProgress Status(const std::string& job_id);
-  std::vector<JobProgress> Jobs();
+  /// Every job, or those carrying all of `labels`.
+  std::vector<JobProgress> Jobs(const std::map<std::string, std::string>& labels = {});
   /// A list of result objects (board, scenario, method, seed, metrics) in episode order.
   nlohmann::json Results(const std::string& job_id);
   nlohmann::json Episodes(const std::string& job_id);
   JobProgress Cancel(const std::string& job_id);
   nlohmann::json Workers();
   nlohmann::json Health();
+  /// Stores an E-Navi policy (JSON text) on the server; returns "sha256:HEX" for job specs.
+  std::string UploadPolicy(const std::string& policy_json);
+  /// A collection job's stored rollouts, one per done episode, in episode order.
+  std::vector<StoredRollout> Rollouts(const std::string& job_id);
 
   const std::string& url() const { return url_; }
 
  private:
   nlohmann::json Request(const std::string& method, const std::string& path,
                          const std::string& body = "", const std::string& file_name = "");
+  std::string RequestRaw(const std::string& method, const std::string& path, const std::string& body,
+                         const std::string& file_name, const std::string& content_type);
   std::string url_;
   std::string token_;
 };

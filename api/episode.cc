@@ -19,6 +19,11 @@ nlohmann::json SpecFields(const EpisodeSpec& s) {
   if (s.goal) j["goal"] = *s.goal;
   if (!s.policy.empty()) j["policy"] = s.policy;
   if (!s.overrides.empty()) j["overrides"] = s.overrides;
+  if (!s.units.empty()) j["units"] = s.units;
+  if (s.scale != 1.0) j["scale"] = s.scale;
+  if (!s.up.empty()) j["up"] = s.up;
+  if (s.recenter) j["recenter"] = true;
+  if (!s.model_path.empty()) j["model_path"] = s.model_path;
   return j;
 }
 
@@ -41,6 +46,11 @@ void from_json(const nlohmann::json& j, EpisodeSpec& s) {
   GetIf(j, "timeout_s", s.timeout_s);
   GetIf(j, "policy", s.policy);
   GetIf(j, "overrides", s.overrides);
+  GetIf(j, "units", s.units);
+  GetIf(j, "scale", s.scale);
+  GetIf(j, "up", s.up);
+  GetIf(j, "recenter", s.recenter);
+  GetIf(j, "model_path", s.model_path);
 }
 
 nlohmann::json ResultSummaryJson(const EpisodeResult& r) {

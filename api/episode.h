@@ -47,11 +47,17 @@ struct MethodCatalog {
 };
 
 struct EpisodeSpec {
-  std::string world = "s1";  ///< scenario id (s1..s5, canyon, forest, empty) or a .yaml/.obj path
+  std::string world = "s1";  ///< scenario id (s1..s5, canyon, forest, empty), a world file, a mesh or an SDF world
   std::uint64_t seed = 1;    ///< world generator seed and episode seed (sensor noise, planner)
   std::map<std::string, std::string> world_params;  ///< generator parameters
-  std::optional<Vec3> start;  ///< required for .obj worlds
+  std::optional<Vec3> start;  ///< required for mesh and SDF worlds
   std::optional<Vec3> goal;
+  // Mesh-file worlds: how the file is placed (empty/unset: what the file declares, else m, z up).
+  std::string units;          ///< m, cm, mm, in, ft
+  double scale = 1.0;         ///< uniform factor after the unit
+  std::string up;             ///< y or z
+  bool recenter = false;      ///< horizontal centre of the bounds to x = y = 0, lowest point to z = 0
+  std::vector<std::string> model_path;  ///< SDF worlds: directories model:// URIs are looked up in
   std::string board = "host";
   std::string method = "baseline";
   std::string clock = "virtual";

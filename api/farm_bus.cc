@@ -19,6 +19,9 @@ constexpr const char* kAssignmentTopic = "enavi_v1_assignment";
 constexpr const char* kResultTopic = "enavi_v1_result";
 constexpr const char* kAckTopic = "enavi_v1_result_ack";
 constexpr const char* kEventTopic = "enavi_v1_job_event";
+constexpr const char* kPolicyTopic = "enavi_v1_policy";
+constexpr const char* kCollectTopic = "enavi_v1_collect_assignment";
+constexpr const char* kRolloutTopic = "enavi_v1_rollout_result";
 
 // QoS per topic; the reasons are in api/README.md ("Topics and QoS").
 dds::Qos StatusQos(std::chrono::milliseconds lease) {
@@ -28,6 +31,8 @@ dds::Qos AssignmentQos() { return dds::Qos().Reliable().TransientLocal().KeepLas
 dds::Qos ResultQos() { return dds::Qos().Reliable(30s).TransientLocal().KeepLast(1); }
 dds::Qos AckQos() { return dds::Qos().Reliable().Volatile().KeepAll(); }
 dds::Qos EventQos() { return dds::Qos().Reliable().Volatile().KeepLast(64); }
+// Policies: every worker, also one that joins late, needs each running job's policy.
+dds::Qos PolicyQos() { return dds::Qos().Reliable(30s).TransientLocal().KeepLast(1); }
 
 // The C structs idlc generates hold `char*`; Cyclone only reads them on write.
 char* Str(const std::string& s) { return const_cast<char*>(s.c_str()); }
@@ -144,6 +149,38 @@ Assignment FromSample(const enavi_farm_Assignment& c) {
   return a;
 }
 
+struct CollectSample {
+  enavi_farm_CollectAssignment c{};
+  std::string spec_json;
+};
+
+void ToSample(const Assignment& a, CollectSample* out) {
+  out->spec_json = nlohmann::json(a.spec).dump();
+  enavi_farm_CollectAssignment& c = out->c;
+  c.worker_id = Str(a.worker_id);
+  c.episode_id = Str(a.episode_id);
+  c.attempt = a.attempt;
+  c.job_id = Str(a.job_id);
+  c.lease_deadline_ms = a.lease_deadline_ms;
+  c.lease_ms = a.lease_ms;
+  c.spec_json = Str(out->spec_json);
+  c.policy_hash = Str(a.policy_hash);
+}
+
+Assignment FromSample(const enavi_farm_CollectAssignment& c) {
+  Assignment a;
+  a.worker_id = Str(c.worker_id);
+  a.episode_id = Str(c.episode_id);
+  a.attempt = c.attempt;
+  a.job_id = Str(c.job_id);
+  a.lease_deadline_ms = c.lease_deadline_ms;
+  a.lease_ms = c.lease_ms;
+  a.spec = nlohmann::json::parse(Str(c.spec_json)).get<EpisodeSpec>();
+  a.policy_hash = Str(c.policy_hash);
+  if (a.policy_hash.empty()) throw std::invalid_argument("collect assignment: empty policy_hash");
+  return a;
+}
+
 // ---- Result ----
 
 enavi_farm_ResultStatus ToC(ResultStatus s) {
@@ -230,6 +267,34 @@ ResultMessage FromSample(const enavi_farm_EpisodeResult& c) {
   return m;
 }
 
+// A collection result: the plain result sample nested, plus policy hash and rollout bytes.
+struct RolloutSample {
+  enavi_farm_RolloutResult c{};
+  ResultSample result;
+};
+
+void ToSample(const ResultMessage& m, RolloutSample* out) {
+  ToSample(m, &out->result);
+  out->c.episode_id = Str(m.episode_id);
+  out->c.attempt = m.attempt;
+  out->c.result = out->result.c;
+  out->c.policy_hash = Str(m.policy_hash);
+  out->c.rollout._maximum = out->c.rollout._length = static_cast<uint32_t>(m.rollout.size());
+  out->c.rollout._buffer = reinterpret_cast<uint8_t*>(const_cast<char*>(m.rollout.data()));
+  out->c.rollout._release = false;
+}
+
+ResultMessage FromSample(const enavi_farm_RolloutResult& c) {
+  ResultMessage m = FromSample(c.result);
+  m.policy_hash = Str(c.policy_hash);
+  if (c.rollout._length > kMaxRolloutBytes) {
+    throw std::invalid_argument("rollout result: " + std::to_string(c.rollout._length) +
+                                " bytes, above the limit");
+  }
+  m.rollout.assign(reinterpret_cast<const char*>(c.rollout._buffer), c.rollout._length);
+  return m;
+}
+
 // ---- Ack ----
 
 enavi_farm_AckStatus ToC(AckStatus s) {
@@ -284,6 +349,10 @@ struct Common {
         result_topic(participant, &enavi_farm_EpisodeResult_desc, kResultTopic, ResultQos()),
         ack_topic(participant, &enavi_farm_ResultAck_desc, kAckTopic, AckQos()),
         event_topic(participant, &enavi_farm_JobEvent_desc, kEventTopic, EventQos()),
+        policy_topic(participant, &enavi_farm_PolicyBlob_desc, kPolicyTopic, PolicyQos()),
+        collect_topic(participant, &enavi_farm_CollectAssignment_desc, kCollectTopic,
+                      AssignmentQos()),
+        rollout_topic(participant, &enavi_farm_RolloutResult_desc, kRolloutTopic, ResultQos()),
         publisher(participant, dds::Qos().Partition(options.partition)),
         subscriber(participant, dds::Qos().Partition(options.partition)),
         guard(participant),
@@ -292,11 +361,38 @@ struct Common {
   }
   dds::Participant participant;
   dds::Topic status_topic, assignment_topic, result_topic, ack_topic, event_topic;
+  dds::Topic policy_topic, collect_topic, rollout_topic;
   dds::Publisher publisher;
   dds::Subscriber subscriber;
   dds::GuardCondition guard;
   dds::WaitSet waitset;
 };
+
+// Spool files are JSON: rollout bytes go in as hex (spool files are local and short-lived).
+std::string HexEncode(const std::string& bytes) {
+  static const char* kDigits = "0123456789abcdef";
+  std::string out(2 * bytes.size(), '0');
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    const auto b = static_cast<unsigned char>(bytes[i]);
+    out[2 * i] = kDigits[b >> 4];
+    out[2 * i + 1] = kDigits[b & 15];
+  }
+  return out;
+}
+
+std::string HexDecode(const std::string& hex) {
+  auto nibble = [](char c) -> int {
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    throw std::invalid_argument("rollout_hex: not a hex digit");
+  };
+  if (hex.size() % 2 != 0) throw std::invalid_argument("rollout_hex: odd length");
+  std::string out(hex.size() / 2, '\0');
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    out[i] = static_cast<char>(nibble(hex[2 * i]) << 4 | nibble(hex[2 * i + 1]));
+  }
+  return out;
+}
 
 // Converts one sample, recording a conversion failure instead of throwing it out of Take().
 template <typename F>
@@ -336,6 +432,8 @@ nlohmann::json ToJson(const ResultMessage& m) {
                       {"status", ToString(m.status)}, {"error", m.error},
                       {"wall_time_s", m.wall_time_s}};
   if (m.status == ResultStatus::kOk) j["result"] = m.result;
+  if (!m.policy_hash.empty()) j["policy_hash"] = m.policy_hash;
+  if (!m.rollout.empty()) j["rollout_hex"] = HexEncode(m.rollout);
   return j;
 }
 
@@ -358,6 +456,8 @@ ResultMessage ResultMessageFromJson(const nlohmann::json& j) {
   m.error = j.value("error", std::string());
   m.wall_time_s = j.value("wall_time_s", 0.0);
   if (m.status == ResultStatus::kOk) j.at("result").get_to(m.result);
+  m.policy_hash = j.value("policy_hash", std::string());
+  if (j.contains("rollout_hex")) m.rollout = HexDecode(j.at("rollout_hex").get<std::string>());
   return m;
 }
 
@@ -372,10 +472,16 @@ struct ServerBus::Impl {
                           dds::Qos(AssignmentQos()).NoAutoDispose()),
         ack_writer(common.publisher, common.ack_topic, AckQos()),
         event_writer(common.publisher, common.event_topic, EventQos()),
+        rollout_reader(common.subscriber, common.rollout_topic, dds::Qos(ResultQos()).KeepAll()),
+        collect_writer(common.publisher, common.collect_topic,
+                       dds::Qos(AssignmentQos()).NoAutoDispose()),
+        policy_writer(common.publisher, common.policy_topic, dds::Qos(PolicyQos()).NoAutoDispose()),
         status_cond(status_reader.get()),
-        result_cond(result_reader.get()) {
+        result_cond(result_reader.get()),
+        rollout_cond(rollout_reader.get()) {
     common.waitset.Attach(status_cond.get(), 1);
     common.waitset.Attach(result_cond.get(), 2);
+    common.waitset.Attach(rollout_cond.get(), 3);
   }
   Common common;
   dds::Reader<enavi_farm_WorkerStatus> status_reader;
@@ -383,7 +489,10 @@ struct ServerBus::Impl {
   dds::Writer<enavi_farm_Assignment> assignment_writer;
   dds::Writer<enavi_farm_ResultAck> ack_writer;
   dds::Writer<enavi_farm_JobEvent> event_writer;
-  dds::ReadCondition status_cond, result_cond;
+  dds::Reader<enavi_farm_RolloutResult> rollout_reader;
+  dds::Writer<enavi_farm_CollectAssignment> collect_writer;
+  dds::Writer<enavi_farm_PolicyBlob> policy_writer;
+  dds::ReadCondition status_cond, result_cond, rollout_cond;
 };
 
 ServerBus::ServerBus(const BusOptions& options) : impl_(std::make_unique<Impl>(options)) {}
@@ -409,21 +518,49 @@ ServerBus::Inbox ServerBus::Wait(std::chrono::milliseconds timeout, std::size_t 
     if (!info.valid_data) return;  // instance unregistered by the worker after our ack
     Convert(&inbox.bad_samples, kResultTopic, [&] { inbox.results.push_back(FromSample(c)); });
   });
+  const std::size_t taken = inbox.results.size();
+  impl_->rollout_reader.Take(max_results > taken ? max_results - taken : 1,
+                             [&](const enavi_farm_RolloutResult& c, const dds::SampleInfo& info) {
+    if (!info.valid_data) return;
+    Convert(&inbox.bad_samples, kRolloutTopic, [&] { inbox.results.push_back(FromSample(c)); });
+  });
   return inbox;
 }
 
 void ServerBus::Wake() { impl_->common.guard.Trigger(); }
 
 void ServerBus::Publish(const Assignment& assignment) {
+  if (!assignment.policy_hash.empty()) {
+    CollectSample sample;
+    ToSample(assignment, &sample);
+    return impl_->collect_writer.Write(sample.c);
+  }
   AssignmentSample sample;
   ToSample(assignment, &sample);
   impl_->assignment_writer.Write(sample.c);
 }
 
 void ServerBus::Retire(const Assignment& assignment) {
-  AssignmentSample sample;
-  ToSample(assignment, &sample);
-  impl_->assignment_writer.Unregister(sample.c);
+  // By key: the instance is on one of the two assignment topics.
+  AssignmentSample plain;
+  ToSample(assignment, &plain);
+  CollectSample collect;
+  ToSample(assignment, &collect);
+  try {
+    impl_->assignment_writer.Unregister(plain.c);
+  } catch (const dds::DdsError&) {
+    impl_->collect_writer.Unregister(collect.c);
+  }
+}
+
+void ServerBus::Publish(const PolicyBlob& policy) {
+  const enavi_farm_PolicyBlob sample{Str(policy.hash), Str(policy.json)};
+  impl_->policy_writer.Write(sample);
+}
+
+void ServerBus::Retire(const PolicyBlob& policy) {
+  const enavi_farm_PolicyBlob sample{Str(policy.hash), Str(std::string())};
+  impl_->policy_writer.Unregister(sample);
 }
 
 void ServerBus::Publish(const ResultAck& ack) {
@@ -452,12 +589,20 @@ struct WorkerBus::Impl {
         status_writer(common.publisher, common.status_topic,
                       StatusQos(options.liveliness_lease).NoAutoDispose()),
         result_writer(common.publisher, common.result_topic, dds::Qos(ResultQos()).NoAutoDispose()),
+        collect_reader(common.subscriber, common.collect_topic, AssignmentQos()),
+        policy_reader(common.subscriber, common.policy_topic, PolicyQos()),
+        rollout_writer(common.publisher, common.rollout_topic,
+                       dds::Qos(ResultQos()).NoAutoDispose()),
         assignment_cond(assignment_reader.get()),
         ack_cond(ack_reader.get()),
-        event_cond(event_reader.get()) {
+        event_cond(event_reader.get()),
+        collect_cond(collect_reader.get()),
+        policy_cond(policy_reader.get()) {
     common.waitset.Attach(assignment_cond.get(), 1);
     common.waitset.Attach(ack_cond.get(), 2);
     common.waitset.Attach(event_cond.get(), 3);
+    common.waitset.Attach(collect_cond.get(), 4);
+    common.waitset.Attach(policy_cond.get(), 5);
   }
   std::string worker_id;
   Common common;
@@ -466,7 +611,10 @@ struct WorkerBus::Impl {
   dds::Reader<enavi_farm_JobEvent> event_reader;
   dds::Writer<enavi_farm_WorkerStatus> status_writer;
   dds::Writer<enavi_farm_EpisodeResult> result_writer;
-  dds::ReadCondition assignment_cond, ack_cond, event_cond;
+  dds::Reader<enavi_farm_CollectAssignment> collect_reader;
+  dds::Reader<enavi_farm_PolicyBlob> policy_reader;
+  dds::Writer<enavi_farm_RolloutResult> rollout_writer;
+  dds::ReadCondition assignment_cond, ack_cond, event_cond, collect_cond, policy_cond;
 };
 
 WorkerBus::WorkerBus(const BusOptions& options, std::string worker_id)
@@ -483,6 +631,17 @@ WorkerBus::Inbox WorkerBus::Wait(std::chrono::milliseconds timeout) {
     if (!info.valid_data || Str(c.worker_id) != me) return;
     Convert(&inbox.bad_samples, kAssignmentTopic,
             [&] { inbox.assignments.push_back(FromSample(c)); });
+  });
+  impl_->collect_reader.Take(SIZE_MAX, [&](const enavi_farm_CollectAssignment& c,
+                                           const dds::SampleInfo& info) {
+    if (!info.valid_data || Str(c.worker_id) != me) return;
+    Convert(&inbox.bad_samples, kCollectTopic,
+            [&] { inbox.assignments.push_back(FromSample(c)); });
+  });
+  impl_->policy_reader.Take(SIZE_MAX, [&](const enavi_farm_PolicyBlob& c,
+                                          const dds::SampleInfo& info) {
+    if (!info.valid_data) return;
+    inbox.policies.push_back({Str(c.hash), Str(c.policy_json)});
   });
   impl_->ack_reader.Take(SIZE_MAX, [&](const enavi_farm_ResultAck& c, const dds::SampleInfo& info) {
     if (!info.valid_data || Str(c.worker_id) != me) return;
@@ -512,6 +671,15 @@ void WorkerBus::DisposeStatus() {
 }
 
 void WorkerBus::Publish(const ResultMessage& result) {
+  if (!result.rollout.empty()) {
+    if (result.rollout.size() > kMaxRolloutBytes) {
+      throw std::invalid_argument("rollout of " + std::to_string(result.rollout.size()) +
+                                  " bytes is above the bus limit");
+    }
+    RolloutSample sample;
+    ToSample(result, &sample);
+    return impl_->rollout_writer.Write(sample.c);
+  }
   ResultSample sample;
   ToSample(result, &sample);
   impl_->result_writer.Write(sample.c);
@@ -523,6 +691,11 @@ void WorkerBus::Retire(const ResultMessage& result) {
   key.episode_id = result.episode_id;
   key.attempt = result.attempt;
   key.status = ResultStatus::kRejected;
+  if (!result.rollout.empty()) {
+    RolloutSample sample;
+    ToSample(key, &sample);
+    return impl_->rollout_writer.Unregister(sample.c);
+  }
   ResultSample sample;
   ToSample(key, &sample);
   impl_->result_writer.Unregister(sample.c);

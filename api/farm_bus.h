@@ -50,10 +50,15 @@ class ServerBus {
   void Wake();
 
   void Publish(const Assignment& assignment);
-  /// Drops an assignment instance from the durable history (its attempt is over).
+  /// Drops an assignment instance (plain or collection) from the durable history (its attempt is
+  /// over). @throws when neither topic holds it.
   void Retire(const Assignment& assignment);
   void Publish(const ResultAck& ack);
   void Publish(const JobEvent& event);
+  /// Publishes a collection job's policy (durable: workers that join later get it too).
+  void Publish(const PolicyBlob& policy);
+  /// Drops a policy from the durable history (no running job uses it).
+  void Retire(const PolicyBlob& policy);
 
   /// Worker status writers currently matched (diagnostics, tests).
   std::size_t MatchedWorkers() const;
@@ -75,6 +80,7 @@ class WorkerBus {
     std::vector<Assignment> assignments;  ///< addressed to this worker
     std::vector<ResultAck> acks;          ///< addressed to this worker
     std::vector<JobEvent> events;
+    std::vector<PolicyBlob> policies;     ///< policies of collection jobs (verify the hash)
     std::vector<std::string> bad_samples;
   };
   Inbox Wait(std::chrono::milliseconds timeout);
@@ -83,6 +89,8 @@ class WorkerBus {
   void Publish(const WorkerStatus& status);
   /// Graceful leave: the server sees the worker gone at once instead of after the lease.
   void DisposeStatus();
+  /// A result with a rollout goes out on the rollout topic, in the same sample.
+  /// @throws std::invalid_argument for a rollout above kMaxRolloutBytes.
   void Publish(const ResultMessage& result);
   /// Drops an acknowledged result from the durable history.
   void Retire(const ResultMessage& result);

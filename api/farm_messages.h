@@ -46,7 +46,18 @@ struct Assignment {
   std::int64_t lease_deadline_ms = 0;  ///< server wall clock (Unix ms)
   std::int64_t lease_ms = 0;           ///< lease length, renewed by heartbeats
   EpisodeSpec spec;
+  /// Collection jobs: fly with the policy of this content hash (PolicyBlob) and send the rollout.
+  std::string policy_hash;
 };
+
+/// A policy file distributed by content hash (SHA-256 hex of `json`).
+struct PolicyBlob {
+  std::string hash;
+  std::string json;
+};
+
+/// A rollout travels in one sample, so one episode's experience stays bounded on the bus.
+inline constexpr std::size_t kMaxRolloutBytes = std::size_t{4} << 20;
 
 enum class ResultStatus { kOk, kError, kRejected };
 const char* ToString(ResultStatus s);
@@ -61,6 +72,10 @@ struct ResultMessage {
   std::string error;        ///< kError / kRejected: the reason
   double wall_time_s = 0;   ///< host wall time of the episode process
   EpisodeResult result;     ///< kOk: the full record, series and events included
+  /// Collection jobs: the policy the episode flew and its rollout (navstack::rl::EncodeRollout,
+  /// binary); sent on the rollout topic together with the result.
+  std::string policy_hash;
+  std::string rollout;
 };
 
 enum class AckStatus { kStored, kDuplicate, kDiscarded, kUnknown, kRecorded };

@@ -25,7 +25,8 @@ void to_json(nlohmann::json& j, const JobProgress& p) {
        {"done", p.done},       {"failed", p.failed},     {"cancelled", p.cancelled},
        {"created_ms", p.created_ms}, {"started_ms", p.started_ms},
        {"finished_ms", p.finished_ms}, {"now_ms", p.now_ms}, {"errors", p.errors},
-       {"rate_per_s", p.rate_per_s()}, {"eta_s", p.eta_s()}};
+       {"rate_per_s", p.rate_per_s()}, {"eta_s", p.eta_s()},
+       {"labels", p.labels},   {"provenance", p.provenance}};
 }
 
 void from_json(const nlohmann::json& j, JobProgress& p) {
@@ -44,6 +45,8 @@ void from_json(const nlohmann::json& j, JobProgress& p) {
   p.finished_ms = j.value("finished_ms", std::int64_t{0});
   p.now_ms = j.value("now_ms", std::int64_t{0});
   p.errors = j.value("errors", std::vector<std::string>{});
+  p.labels = j.value("labels", std::map<std::string, std::string>{});
+  p.provenance = j.value("provenance", std::map<std::string, std::string>{});
 }
 
 }  // namespace enavi::api

@@ -4,7 +4,7 @@
 //
 //   POST /api/jobs                 body: job spec YAML; header X-Enavi-File: name for errors
 //                                  -> 201 {"job_id", "name", "episodes"}; 400 {"error"}
-//   GET  /api/jobs                 -> [JobProgress]
+//   GET  /api/jobs[?label=k=v]     -> [JobProgress]  (every label filter must match)
 //   GET  /api/jobs/{id}            -> JobProgress                    404 {"error"}
 //   GET  /api/jobs/{id}/results    -> [result object]  (board, scenario, method, seed, metrics)
 //   GET  /api/jobs/{id}/episodes   -> [{"id", "state", "attempts", "last_error", ...}]
@@ -13,9 +13,13 @@
 //   GET  /api/workers              -> [{"worker_id", "host", "slots", "free_slots", ...}]
 //   GET  /api/health               -> {"ok": true, "protocol": 1, "stats": {results_received,
 //                                      results_stored, duplicates, assignments, leases_lost}}
-// State-changing requests (POST) carry "Authorization: Bearer TOKEN" when the server has a token.
+//   GET  /api/jobs/{id}/summary | failures | results?offset=&limit=, /api/compare, /api/trend,
+//        /api/episodes/{id}/topdown.png, /api/info, /: the dashboard (docs/dashboard.md)
+// With a token, state-changing requests (POST) carry "Authorization: Bearer TOKEN"; off
+// loopback every request does (or the dashboard's cookie).
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -39,6 +43,8 @@ struct JobProgress {
   std::int64_t finished_ms = 0;  ///< 0 while running
   std::int64_t now_ms = 0;       ///< when this was produced
   std::vector<std::string> errors;  ///< recent reasons episodes failed ("EPISODE: reason")
+  std::map<std::string, std::string> labels;      ///< the job spec's labels
+  std::map<std::string, std::string> provenance;  ///< the server build and inputs at submission
 
   int finished() const { return done + failed + cancelled; }
   bool terminal() const { return state != "running"; }

@@ -1,7 +1,9 @@
 #include "api/job_spec.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -144,11 +146,13 @@ std::vector<std::string> Choices(const Context& ctx, const YAML::Node& n, const 
 }
 
 // Resolves a file named in the spec against the allowed roots; returns its canonical path.
+// With `directory`, names a directory instead (any extension).
 std::string ResolveFile(const Context& ctx, const YAML::Node& n, const std::string& field,
-                        const std::string& value, std::initializer_list<const char*> extensions) {
+                        const std::string& value, std::initializer_list<const char*> extensions,
+                        bool directory = false) {
   const fs::path given(value);
   const std::string ext = given.extension().string();
-  if (!Contains(extensions, ext)) {
+  if (!directory && !Contains(extensions, ext)) {
     ctx.Fail(n, field,
              "'" + value + "' has extension '" + ext + "', expected one of " +
                  Join(extensions));
@@ -164,8 +168,20 @@ std::string ResolveFile(const Context& ctx, const YAML::Node& n, const std::stri
     for (const auto& r : ctx.roots()) roots.push_back(r.string());
     ctx.Fail(n, field, "'" + value + "' is outside the allowed roots (" + Join(roots) + ")");
   }
-  if (!fs::is_regular_file(resolved)) ctx.Fail(n, field, "'" + value + "': no such file");
+  if (directory ? !fs::is_directory(resolved) : !fs::is_regular_file(resolved)) {
+    ctx.Fail(n, field, "'" + value + (directory ? "': no such directory" : "': no such file"));
+  }
   return resolved.string();
+}
+
+// A policy by content hash, or a file under the allowed roots.
+std::string Policy(const Context& ctx, const YAML::Node& n, const std::string& field) {
+  const std::string value = Scalar(ctx, n, field);
+  if (value.rfind(kPolicyHashPrefix, 0) == 0) {
+    if (!IsPolicyHashRef(value)) ctx.Fail(n, field, "expected sha256: and 64 lower-case hex digits");
+    return value;
+  }
+  return ResolveFile(ctx, n, field, value, {".json", ".bin", ".pt"});
 }
 
 Vec3 Point(const Context& ctx, const YAML::Node& n, const std::string& field) {
@@ -231,14 +247,58 @@ std::map<std::string, double> Tunables(const Context& ctx, const YAML::Node& n,
   return out;
 }
 
+// World files a scenario may name: the farm's own, the mesh formats of worlds::kMeshFormats
+// and Gazebo SDF (tests/unit/worlds/import_test.cc checks that every mesh format and unit is accepted).
+constexpr std::initializer_list<const char*> kWorldFileExtensions = {
+    ".yaml", ".yml", ".obj", ".gltf", ".glb", ".dae", ".stl", ".ply", ".fbx", ".sdf", ".world"};
+// Mesh placement units (worlds::kLengthUnits) and up axes.
+constexpr std::array<const char*, 5> kUnits = {"m", "cm", "mm", "in", "ft"};
+constexpr std::array<const char*, 2> kUpAxes = {"y", "z"};
+
+std::map<std::string, std::string> Labels(const Context& ctx, const YAML::Node& n) {
+  std::map<std::string, std::string> labels = StringMap(ctx, n, "labels");
+  if (labels.size() > kMaxLabels) {
+    ctx.Fail(n, "labels", std::to_string(labels.size()) + " labels, at most " +
+                              std::to_string(kMaxLabels));
+  }
+  for (const auto& kv : n) {
+    const std::string key = kv.first.as<std::string>();
+    const std::string error = LabelError(key, labels.at(key));
+    if (!error.empty()) ctx.Fail(kv.first, "labels." + key, error);
+  }
+  return labels;
+}
+
 ScenarioEntry Scenario(const Context& ctx, const YAML::Node& n) {
   ScenarioEntry entry;
   if (n.IsMap()) {
-    CheckKeys(ctx, n, "scenarios", {"world", "start", "goal", "params"});
+    CheckKeys(ctx, n, "scenarios",
+              {"world", "start", "goal", "params", "units", "scale", "up", "recenter", "model_path"});
     if (!n["world"]) ctx.Fail(n, "scenarios.world", "missing");
     if (n["start"]) entry.start = Point(ctx, n["start"], "scenarios.start");
     if (n["goal"]) entry.goal = Point(ctx, n["goal"], "scenarios.goal");
     if (n["params"]) entry.params = StringMap(ctx, n["params"], "scenarios.params");
+    if (n["units"]) {
+      entry.units = Scalar(ctx, n["units"], "scenarios.units");
+      if (!Contains(kUnits, entry.units))
+        ctx.Fail(n["units"], "scenarios.units", "unknown unit '" + entry.units + "' (known: " + Join(kUnits) + ")");
+    }
+    if (n["scale"]) entry.scale = Number(ctx, n["scale"], "scenarios.scale", 1e-6, 1000.0);
+    if (n["up"]) {
+      entry.up = Scalar(ctx, n["up"], "scenarios.up");
+      if (!Contains(kUpAxes, entry.up)) ctx.Fail(n["up"], "scenarios.up", "expected y or z (got '" + entry.up + "')");
+    }
+    if (n["recenter"]) {
+      const std::string v = Scalar(ctx, n["recenter"], "scenarios.recenter");
+      if (v != "true" && v != "false") ctx.Fail(n["recenter"], "scenarios.recenter", "expected true or false");
+      entry.recenter = v == "true";
+    }
+    if (n["model_path"]) {
+      for (const auto& item : Items(ctx, n["model_path"], "scenarios.model_path")) {
+        entry.model_path.push_back(
+            ResolveFile(ctx, item, "scenarios.model_path", Scalar(ctx, item, "scenarios.model_path"), {}, true));
+      }
+    }
   } else if (!n.IsScalar()) {
     ctx.Fail(n, "scenarios", "expected a scenario id, a world file or {world: ...}");
   }
@@ -248,14 +308,19 @@ ScenarioEntry Scenario(const Context& ctx, const YAML::Node& n) {
   if (Contains(kScenarios, world)) {
     entry.world = world;
   } else if (world.find('/') != std::string::npos || world.find('.') != std::string::npos) {
-    entry.world = ResolveFile(ctx, world_node, "scenarios", world, {".yaml", ".yml", ".obj"});
-    if (fs::path(world).extension() == ".obj" && (!entry.start || !entry.goal)) {
-      ctx.Fail(world_node, "scenarios", "'" + world + "' is an OBJ mesh: give start and goal");
+    entry.world = ResolveFile(ctx, world_node, "scenarios", world, kWorldFileExtensions);
+    const std::string ext = fs::path(world).extension().string();
+    const bool own = ext == ".yaml" || ext == ".yml";
+    if (!own && (!entry.start || !entry.goal)) {
+      ctx.Fail(world_node, "scenarios", "'" + world + "' is a mesh or SDF world: give start and goal");
+    }
+    if (own && (!entry.units.empty() || entry.scale != 1.0 || !entry.up.empty() || entry.recenter)) {
+      ctx.Fail(world_node, "scenarios", "units, scale, up and recenter apply to mesh files (a world file places its meshes)");
     }
   } else {
     ctx.Fail(world_node, "scenarios",
              "unknown scenario '" + world + "' (known: " + Join(kScenarios) +
-                 ", or a .yaml/.obj world file)");
+                 ", or a world file: " + Join(kWorldFileExtensions) + ")");
   }
   return entry;
 }
@@ -314,12 +379,29 @@ EpisodeOverride Override(const Context& ctx, const YAML::Node& n, const std::vec
   if (n["timeout_s"]) o.timeout_s = Number(ctx, n["timeout_s"], f + ".timeout_s", 0, kMaxTimeoutS);
   if (n["dilation"]) o.dilation = Number(ctx, n["dilation"], f + ".dilation", 0.01, kMaxDilation);
   if (n["policy"]) {
-    o.policy = ResolveFile(ctx, n["policy"], f + ".policy",
-                           Scalar(ctx, n["policy"], f + ".policy"), {".json", ".bin", ".pt"});
+    o.policy = Policy(ctx, n["policy"], f + ".policy");
   }
   if (n["overrides"]) o.overrides = Tunables(ctx, n["overrides"], f + ".overrides", o.methods.empty() ? job_methods : o.methods);
   if (n["world_params"]) o.world_params = StringMap(ctx, n["world_params"], f + ".world_params");
   return o;
+}
+
+EpisodePick Pick(const Context& ctx, const YAML::Node& n) {
+  const std::string f = "episodes";
+  if (!n.IsMap()) ctx.Fail(n, f, "expected {board: B, scenario: S, seed: N}");
+  CheckKeys(ctx, n, f, {"board", "scenario", "seed"});
+  for (const char* required : {"board", "scenario", "seed"}) {
+    if (!n[required]) ctx.Fail(n, f + "." + required, "missing (required)");
+  }
+  EpisodePick p;
+  p.board = Choices(ctx, n["board"], f + ".board", kBoards, "board").front();
+  p.scenario = Scenario(ctx, n["scenario"]);
+  const std::int64_t seed = Integer(ctx, n["seed"], f + ".seed");
+  if (seed < 0 || seed > (std::int64_t{1} << 53)) {
+    ctx.Fail(n["seed"], f + ".seed", "seed " + std::to_string(seed) + " outside [0, 2^53]");
+  }
+  p.seed = static_cast<std::uint64_t>(seed);
+  return p;
 }
 
 bool Matches(const EpisodeOverride& o, const EpisodeSpec& e) {
@@ -348,9 +430,18 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   if (!root.IsMap()) ctx.Fail(root, "job", "expected a YAML map of name, boards, scenarios, ...");
   CheckKeys(ctx, root, "",
             {"name", "boards", "scenarios", "methods", "seeds", "clock", "cost", "dilation",
-             "timeout_s", "policy", "world_params", "overrides", "episode_overrides"});
-  for (const char* required : {"boards", "scenarios", "methods", "seeds"}) {
-    if (!root[required]) ctx.Fail(root, required, "missing (required)");
+             "timeout_s", "policy", "world_params", "overrides", "episode_overrides", "episodes",
+             "collect", "sample", "labels"});
+  // Either the matrix or an explicit episode list.
+  if (root["episodes"]) {
+    for (const char* matrix : {"boards", "scenarios", "seeds"}) {
+      if (root[matrix]) ctx.Fail(root[matrix], matrix, "not with episodes: (give one or the other)");
+    }
+    if (!root["methods"]) ctx.Fail(root, "methods", "missing (required)");
+  } else {
+    for (const char* required : {"boards", "scenarios", "methods", "seeds"}) {
+      if (!root[required]) ctx.Fail(root, required, "missing (required)");
+    }
   }
 
   JobSpec job;
@@ -360,27 +451,57 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   } else {
     job.name = fs::path(file_name).stem().string();
   }
-  job.boards = Choices(ctx, root["boards"], "boards", kBoards, "board");
   job.methods = Choices(ctx, root["methods"], "methods", MethodNames(ctx), "method");
-  for (const auto& item : Items(ctx, root["scenarios"], "scenarios")) {
-    ScenarioEntry entry = Scenario(ctx, item);
-    for (const auto& other : job.scenarios) {
-      if (other.world == entry.world) ctx.Fail(item, "scenarios", "'" + entry.world + "' listed twice");
+  if (const YAML::Node list = root["episodes"]) {
+    if (!list.IsSequence() || list.size() == 0) ctx.Fail(list, "episodes", "expected a non-empty list");
+    if (list.size() > options.max_episodes) {
+      ctx.Fail(list, "episodes",
+               std::to_string(list.size()) + " episodes, above the limit " +
+                   std::to_string(options.max_episodes));
     }
-    job.scenarios.push_back(std::move(entry));
+    for (const auto& item : list) job.episodes.push_back(Pick(ctx, item));
+  } else {
+    job.boards = Choices(ctx, root["boards"], "boards", kBoards, "board");
+    for (const auto& item : Items(ctx, root["scenarios"], "scenarios")) {
+      ScenarioEntry entry = Scenario(ctx, item);
+      for (const auto& other : job.scenarios) {
+        if (other.world == entry.world) ctx.Fail(item, "scenarios", "'" + entry.world + "' listed twice");
+      }
+      job.scenarios.push_back(std::move(entry));
+    }
+    if (job.scenarios.empty()) ctx.Fail(root["scenarios"], "scenarios", "empty list");
+    job.seeds = Seeds(ctx, root["seeds"]);
   }
-  if (job.scenarios.empty()) ctx.Fail(root["scenarios"], "scenarios", "empty list");
-  job.seeds = Seeds(ctx, root["seeds"]);
   if (root["clock"]) job.clock = Choices(ctx, root["clock"], "clock", kClocks, "clock").front();
   if (root["cost"]) job.cost = Choices(ctx, root["cost"], "cost", kCostModes, "cost mode").front();
   if (root["dilation"]) job.dilation = Number(ctx, root["dilation"], "dilation", 0.01, kMaxDilation);
   if (root["timeout_s"]) job.timeout_s = Number(ctx, root["timeout_s"], "timeout_s", 0, kMaxTimeoutS);
   if (root["policy"]) {
-    job.policy = ResolveFile(ctx, root["policy"], "policy", Scalar(ctx, root["policy"], "policy"),
-                             {".json", ".bin", ".pt"});
+    job.policy = Policy(ctx, root["policy"], "policy");
+  }
+  if (root["collect"]) {
+    if (Scalar(ctx, root["collect"], "collect") != "rollouts") {
+      ctx.Fail(root["collect"], "collect", "the only collection is 'rollouts'");
+    }
+    job.collect = CollectSpec{};
+    if (job.methods != std::vector<std::string>{"enavi"}) {
+      ctx.Fail(root["methods"], "methods", "a collection job flies [enavi] only (rollouts are E-Navi's)");
+    }
+    if (job.clock != "virtual") {
+      ctx.Fail(root["clock"], "clock", "rollouts are recorded on the virtual clock only");
+    }
+    if (job.policy.empty()) ctx.Fail(root, "policy", "a collection job names its policy");
+    if (root["sample"]) {
+      const std::string v = Scalar(ctx, root["sample"], "sample");
+      if (v != "true" && v != "false") ctx.Fail(root["sample"], "sample", "expected true or false");
+      job.collect->sample = v == "true";
+    }
+  } else if (root["sample"]) {
+    ctx.Fail(root["sample"], "sample", "only with collect: rollouts");
   }
   if (root["world_params"]) job.world_params = StringMap(ctx, root["world_params"], "world_params");
   if (root["overrides"]) job.overrides = Tunables(ctx, root["overrides"], "overrides", job.methods);
+  if (root["labels"]) job.labels = Labels(ctx, root["labels"]);
   if (const YAML::Node list = root["episode_overrides"]) {
     if (!list.IsSequence()) ctx.Fail(list, "episode_overrides", "expected a list");
     for (const auto& item : list) job.episode_overrides.push_back(Override(ctx, item, job.methods));
@@ -388,7 +509,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
 
   // Each factor is bounded above, so the product cannot overflow before this check.
   const std::size_t size = job.MatrixSize();
-  if (size > options.max_episodes) {
+  if (job.episodes.empty() && size > options.max_episodes) {
     ctx.Fail(root["seeds"], "matrix",
              std::to_string(job.boards.size()) + " boards x " +
                  std::to_string(job.scenarios.size()) + " scenarios x " +
@@ -407,13 +528,31 @@ JobSpec LoadJobSpec(const std::filesystem::path& path, const JobSpecOptions& opt
   return ParseJobSpec(text.str(), path.string(), options);
 }
 
+bool IsPolicyHashRef(const std::string& policy) {
+  const std::string prefix = kPolicyHashPrefix;
+  if (policy.size() != prefix.size() + 64 || policy.rfind(prefix, 0) != 0) return false;
+  return std::all_of(policy.begin() + static_cast<std::ptrdiff_t>(prefix.size()), policy.end(),
+                     [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
+}
+
 std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
   std::vector<EpisodeSpec> episodes;
   episodes.reserve(job.MatrixSize());
-  for (const auto& board : job.boards) {
-    for (const auto& scenario : job.scenarios) {
+  // The matrix as a list of (board, scenario, seed), or the explicit list.
+  std::vector<EpisodePick> picks = job.episodes;
+  if (picks.empty()) {
+    for (const auto& board : job.boards) {
+      for (const auto& scenario : job.scenarios) picks.push_back({board, scenario, 0});
+    }
+  }
+  for (const auto& pick : picks) {
+    const std::string& board = pick.board;
+    const ScenarioEntry& scenario = pick.scenario;
+    {
       for (const auto& method : job.methods) {
-        for (const std::uint64_t seed : job.seeds) {
+        const std::vector<std::uint64_t> seeds =
+            job.episodes.empty() ? job.seeds : std::vector<std::uint64_t>{pick.seed};
+        for (const std::uint64_t seed : seeds) {
           EpisodeSpec e;
           e.world = scenario.world;
           e.seed = seed;
@@ -421,6 +560,11 @@ std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
           for (const auto& [k, v] : scenario.params) e.world_params[k] = v;
           e.start = scenario.start;
           e.goal = scenario.goal;
+          e.units = scenario.units;
+          e.scale = scenario.scale;
+          e.up = scenario.up;
+          e.recenter = scenario.recenter;
+          e.model_path = scenario.model_path;
           e.board = board;
           e.method = method;
           e.clock = job.clock;
@@ -437,12 +581,43 @@ std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
             for (const auto& [k, v] : o.overrides) e.overrides[k] = v;
             for (const auto& [k, v] : o.world_params) e.world_params[k] = v;
           }
+          // Collection: the strategy controller samples its actions (a named tunable).
+          if (job.collect) e.overrides["strategy.explore"] = job.collect->sample ? 1.0 : 0.0;
           episodes.push_back(std::move(e));
         }
       }
     }
   }
   return episodes;
+}
+
+std::string LabelError(const std::string& key, const std::string& value) {
+  auto in = [](const std::string& text, const char* extra) {
+    return std::all_of(text.begin(), text.end(), [extra](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || std::strchr(extra, c) != nullptr;
+    });
+  };
+  if (key.empty() || key.size() > 63) return "label keys have 1..63 characters";
+  const bool key_ok = in(key, "_.-") &&
+                      std::none_of(key.begin(), key.end(), [](char c) { return std::isupper(static_cast<unsigned char>(c)); }) &&
+                      std::isalnum(static_cast<unsigned char>(key.front()));
+  if (!key_ok) return "label keys are lower-case letters, digits and _ . - (starting with a letter or digit)";
+  if (value.empty() || value.size() > 128) return "label values have 1..128 characters";
+  if (!in(value, "_.:/@+-")) return "label values are letters, digits and _ . : / @ + -";
+  return "";
+}
+
+std::pair<std::string, std::string> ParseLabelFilter(const std::string& text,
+                                                     const std::string& field) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) {
+    throw std::invalid_argument(field + ": '" + text + "': expected key=value");
+  }
+  std::string key = text.substr(0, eq), value = text.substr(eq + 1);
+  if (const std::string error = LabelError(key, value); !error.empty()) {
+    throw std::invalid_argument(field + ": '" + text + "': " + error);
+  }
+  return {std::move(key), std::move(value)};
 }
 
 std::string ScenarioOf(const std::string& world) {

@@ -8,6 +8,8 @@
 //     - s1
 //     - worlds/hall.yaml
 //     - {world: meshes/yard.obj, start: [0, 0, 1], goal: [30, 0, 1], params: {k: v}}
+//     - {world: meshes/block.glb, units: mm, up: z, recenter: true, start: [0, 0, 5], goal: [40, 0, 5]}
+//     - {world: gazebo/yard.world, model_path: [gazebo/models], start: [0, 0, 2], goal: [20, 0, 2]}
 //   methods: [baseline, fixed, enavi]  # the registered methods
 //   seeds: 3                      # a count (1..N) or a list [1, 7, 9]
 //   clock: virtual                # virtual | emulated
@@ -17,10 +19,18 @@
 //   policy: policies/enavi.json   # E-Navi policy file under an allowed root; default: shipped
 //   world_params: {density: "0.3"}
 //   overrides: {planner.v_max: 1.5}  # tunables of every listed method, checked here
+//   labels: {branch: main, suite: nightly}   # free key/value tags, queryable (see LabelError)
 //   episode_overrides:            # later entries win
 //     - match: {board: tx2, method: [enavi], scenario: s1, seed: 2}
 //       timeout_s: 120
 //       overrides: {strategy.f_adapt: 10}
+//   collect: rollouts             # RL collection job: each episode's rollout is stored too
+//   sample: true                  # collection: sample the policy's actions (false: greedy)
+//
+// Instead of the boards x scenarios x seeds matrix, `episodes:` may list the episodes one by one
+// (each is flown with every method): [{board: tx2, scenario: s1, seed: 104}, ...].
+// A collection job needs methods [enavi], the virtual clock and a policy: a file, or
+// `sha256:HEX` for a policy uploaded to the server (POST /api/policies).
 
 #include <array>
 #include <cstddef>
@@ -30,6 +40,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "api/episode.h"
@@ -46,6 +57,8 @@ inline constexpr std::int64_t kMaxSeedCount = 1000;
 inline constexpr double kMaxTimeoutS = 3600.0;
 /// Largest emulated-clock dilation (1 sim second = dilation wall seconds).
 inline constexpr double kMaxDilation = 100.0;
+/// A job carries at most this many labels.
+inline constexpr std::size_t kMaxLabels = 32;
 
 /// Bad job spec: the message reads "FILE:LINE: field: reason".
 class JobSpecError : public std::invalid_argument {
@@ -67,6 +80,10 @@ struct ScenarioEntry {
   std::string world;  ///< scenario id, or the canonical path of a world file
   std::optional<Vec3> start, goal;
   std::map<std::string, std::string> params;
+  std::string units, up;  ///< mesh files: placement (EpisodeSpec::units, up, scale, recenter)
+  double scale = 1.0;
+  bool recenter = false;
+  std::vector<std::string> model_path;  ///< SDF worlds: canonical model directories
 };
 
 /// Settings applied to the episodes a `match` selects (empty match lists: any).
@@ -78,6 +95,23 @@ struct EpisodeOverride {
   std::map<std::string, double> overrides;
   std::map<std::string, std::string> world_params;
 };
+
+/// One episode of an explicit `episodes:` list.
+struct EpisodePick {
+  std::string board;
+  ScenarioEntry scenario;
+  std::uint64_t seed = 1;
+};
+
+/// What a collection job (`collect: rollouts`) asks for.
+struct CollectSpec {
+  bool sample = false;  ///< sample the policy's actions (training); false: greedy
+};
+
+/// Prefix of a policy named by content hash instead of a file: "sha256:" + 64 hex digits.
+inline constexpr const char* kPolicyHashPrefix = "sha256:";
+/// True for "sha256:" followed by 64 lower-case hex digits.
+bool IsPolicyHashRef(const std::string& policy);
 
 struct JobSpec {
   std::string name;
@@ -93,8 +127,12 @@ struct JobSpec {
   std::map<std::string, std::string> world_params;
   std::map<std::string, double> overrides;
   std::vector<EpisodeOverride> episode_overrides;
+  std::vector<EpisodePick> episodes;  ///< explicit list instead of the matrix (when non-empty)
+  std::optional<CollectSpec> collect;
+  std::map<std::string, std::string> labels;  ///< free tags (branch, commit, suite, ...)
 
   std::size_t MatrixSize() const {
+    if (!episodes.empty()) return episodes.size() * methods.size();
     return boards.size() * scenarios.size() * methods.size() * seeds.size();
   }
 };
@@ -110,6 +148,16 @@ JobSpec LoadJobSpec(const std::filesystem::path& path, const JobSpecOptions& opt
 /// The episodes of a job, in a fixed order: boards, then scenarios, then methods, then seeds,
 /// each in the order the spec lists them. Same spec -> same list.
 std::vector<EpisodeSpec> ExpandJob(const JobSpec& job);
+
+/// Why `key: value` is not a valid label, or "" when it is. Keys: 1..63 characters of
+/// [a-z0-9_.-], starting with a letter or digit; values: 1..128 characters of [A-Za-z0-9_.:/@+-].
+/// The charset keeps labels safe in URLs, shell commands and HTML without quoting surprises.
+std::string LabelError(const std::string& key, const std::string& value);
+
+/// Parses a "key=value" label filter (`enavi status --label`, `GET /api/jobs?label=`).
+/// @throws std::invalid_argument naming `field` and the reason.
+std::pair<std::string, std::string> ParseLabelFilter(const std::string& text,
+                                                     const std::string& field);
 
 /// Scenario id of a world string as it appears in EpisodeSpec::world ("custom" for files).
 std::string ScenarioOf(const std::string& world);

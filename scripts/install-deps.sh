@@ -10,9 +10,13 @@ packages=(
   libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev liblbfgs-dev
   libboost-program-options-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libsqlite3-dev sqlite3
-  libcpp-httplib-dev libpng-dev libcairo2-dev fonts-dejavu-core
+  libcpp-httplib-dev libssl-dev libpng-dev libcairo2-dev fonts-dejavu-core
+  libassimp-dev libsdformat-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libssl-dev
+  python3-dev pybind11-dev python3-numpy python3-torch
   iproute2 procps util-linux
+  chromium chromium-driver python3-selenium libxml2-utils
 )
 
 missing=()

@@ -136,9 +136,11 @@ Eigen::Affine3d MeshObjectPose(const MeshObject& mesh) {
   T(1, 0) = s * mesh.scale;
   T(1, 1) = c * mesh.scale;
   T(2, 2) = mesh.scale;
-  T(0, 3) = mesh.position.x();
-  T(1, 3) = mesh.position.y();
-  T(2, 3) = mesh.position.z();
+  // The anchor offset is part of the rigid map: p_W = position + Rz(yaw) * scale * (offset + p).
+  const Eigen::Vector3d& o = mesh.offset;
+  T(0, 3) = mesh.position.x() + (T(0, 0) * o.x() + T(0, 1) * o.y());
+  T(1, 3) = mesh.position.y() + (T(1, 0) * o.x() + T(1, 1) * o.y());
+  T(2, 3) = mesh.position.z() + T(2, 2) * o.z();
   Eigen::Affine3d X;
   X.matrix() = T;
   return X;

@@ -44,8 +44,8 @@ struct ForwardRef {
 
 }  // namespace
 
-TriangleMesh ParseObj(std::string_view text, const std::string& file_name) {
-  TriangleMesh mesh;
+ImportedMesh ParseObj(std::string_view text, const std::string& file_name) {
+  ImportedMesh mesh;
   std::vector<ForwardRef> forward_refs;
   std::vector<int> corners;
   int line_no = 0;
@@ -71,8 +71,8 @@ TriangleMesh ParseObj(std::string_view text, const std::string& file_name) {
       double xyz[3] = {0.0, 0.0, 0.0};
       for (int k = 0; k < 3; ++k) {
         if (!ParseFiniteDouble(tokens[k + 1], &xyz[k])) fail("v", "not a finite number: " + Quoted(tokens[k + 1]));
-        if (std::abs(xyz[k]) > kMaxCoordinate) {
-          fail("v", "coordinate " + std::string(tokens[k + 1]) + " is out of range (|x| <= 100000)");
+        if (std::abs(xyz[k]) > kMaxFileCoordinate) {
+          fail("v", "coordinate " + std::string(tokens[k + 1]) + " is out of range (|x| <= 1e12 in the file's units)");
         }
       }
       for (std::size_t k = 4; k < tokens.size(); ++k) {
@@ -82,7 +82,7 @@ TriangleMesh ParseObj(std::string_view text, const std::string& file_name) {
       if (mesh.vertices.size() >= 3 * kMaxTriangles) {
         fail("v", "too many vertices (limit " + std::to_string(3 * kMaxTriangles) + ")");
       }
-      mesh.vertices.emplace_back(static_cast<float>(xyz[0]), static_cast<float>(xyz[1]), static_cast<float>(xyz[2]));
+      mesh.vertices.emplace_back(xyz[0], xyz[1], xyz[2]);
     } else if (kw == "f") {
       if (tokens.size() < 4) {
         fail("f", "a face needs at least 3 vertices (got " + std::to_string(tokens.size() - 1) + ")");
@@ -152,7 +152,7 @@ TriangleMesh ParseObj(std::string_view text, const std::string& file_name) {
   return mesh;
 }
 
-std::string ReadInputFile(const std::filesystem::path& path) {
+std::uintmax_t CheckInputFile(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw WorldError(name, 0, "file", "not found or not a regular file");
@@ -161,6 +161,12 @@ std::string ReadInputFile(const std::filesystem::path& path) {
   if (size > kMaxFileBytes) {
     throw WorldError(name, 0, "file", "too large (" + std::to_string(size) + " bytes; limit 256 MiB)");
   }
+  return size;
+}
+
+std::string ReadInputFile(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  const std::uintmax_t size = CheckInputFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw WorldError(name, 0, "file", "cannot open for reading");
   std::string text(size, '\0');
@@ -169,36 +175,8 @@ std::string ReadInputFile(const std::filesystem::path& path) {
   return text;
 }
 
-TriangleMesh LoadObjFile(const std::filesystem::path& path) {
+ImportedMesh LoadObjFile(const std::filesystem::path& path) {
   return ParseObj(ReadInputFile(path), path.string());
-}
-
-World WorldFromObj(const std::filesystem::path& path, const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
-                   double padding) {
-  MeshObject object;
-  object.path = path.filename().string();
-  object.mesh = LoadObjFile(path);
-  const Eigen::AlignedBox3f mesh_bounds = object.mesh.Bounds();
-
-  World world;
-  world.bounds = Eigen::AlignedBox3d(mesh_bounds.min().cast<double>(), mesh_bounds.max().cast<double>());
-  world.bounds.extend(start);
-  world.bounds.extend(goal);
-  const Eigen::Vector3d pad = Eigen::Vector3d::Constant(padding);
-  world.bounds = Eigen::AlignedBox3d(world.bounds.min() - pad, world.bounds.max() + pad);
-  const Eigen::Vector3d extent = world.bounds.sizes();
-  if (extent.maxCoeff() > kMaxExtent) {
-    throw WorldError(path.string(), 0, "bounds",
-                     "mesh, start and goal span " + std::to_string(static_cast<long long>(extent.maxCoeff())) +
-                         " m (limit 2000 m per axis)");
-  }
-  world.ground.enabled = false;  // an OBJ scene brings its own ground, if it has one
-  world.start = start;
-  world.goal = goal;
-  world.objects.emplace_back(std::move(object));
-  world.metadata.name = path.stem().string();
-  world.metadata.scenario = "custom";
-  return world;
 }
 
 }  // namespace enavi::worlds

@@ -28,7 +28,7 @@ TriangleMesh ObjectMesh(const Object& object);
 /// mesh for mesh objects).
 Eigen::AlignedBox3d ObjectBounds(const Object& object);
 
-/// Placement of a mesh object: p_W = position + Rz(yaw) * (scale * p_object).
+/// Placement of a mesh object: p_W = position + Rz(yaw) * (scale * (offset + p_object)).
 /// Uses detmath, so it is the same transform on every machine.
 Eigen::Affine3d MeshObjectPose(const MeshObject& mesh);
 

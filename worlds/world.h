@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -69,13 +70,22 @@ struct Ellipsoid {
   Eigen::Vector3d radii = Eigen::Vector3d::Ones();
 };
 
-/// Triangle mesh loaded from a Wavefront OBJ file, placed by position, yaw and uniform scale.
+/// Up axis of a mesh file: y-up files (glTF, most DAE exports) are turned so their +y is world +z.
+enum class UpAxis { kY, kZ };
+
+/// Triangle mesh loaded from a file (OBJ, glTF/GLB, DAE, STL, PLY, FBX), placed by position, yaw
+/// and uniform scale: p_W = position + Rz(yaw) * (scale * (offset + p_mesh)).
 struct MeshObject {
-  std::string path;  ///< as written in the world file (resolved relative to it)
+  std::string path;  ///< as written in the world file (resolved relative to it); empty: geometry
+                     ///< with no file of its own (an SDF primitive or a posed SDF mesh, world frame)
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   double yaw = 0.0;
   double scale = 1.0;
-  TriangleMesh mesh;  ///< in the object's own frame, as loaded
+  std::string units;          ///< the file's length unit as given; empty: the file's own, else metres
+  std::optional<UpAxis> up;   ///< as given; nullopt: the file's own, else z
+  bool recenter = false;      ///< as given: the mesh's anchor moves to `position`
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< m, the anchor (zero when recentred)
+  TriangleMesh mesh;  ///< metres, z up, relative to the anchor (so floats keep their precision)
 };
 
 using Object = std::variant<Box, Cylinder, Ellipsoid, MeshObject>;
@@ -92,6 +102,7 @@ struct WorldMetadata {
   std::uint64_t seed = 0;
   int generator_version = 0;
   std::map<std::string, std::string> params;  ///< generator parameters, sorted for stable output
+  std::string import_note;  ///< what an importer left out (SDF lights, plugins, ...); not in world files
 };
 
 /// A static world: built once, shared read-only by every episode flown in it.

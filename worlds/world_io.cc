@@ -17,6 +17,7 @@
 #include "worlds/detmath.h"
 #include "worlds/number_text.h"
 #include "worlds/obj_import.h"
+#include "worlds/placement.h"
 #include "worlds/primitives.h"
 
 namespace enavi::worlds {
@@ -34,7 +35,8 @@ struct ParseContext {
   std::string file;
   std::filesystem::path base_dir;
   std::map<std::string, int> lines;  // field -> line, for errors found after parsing
-  std::map<std::string, TriangleMesh> meshes;  // OBJ files loaded so far, by relative path
+  std::map<std::string, ImportedMesh> meshes;  // mesh files loaded so far, by relative path
+  MeshLoader load_mesh;
   std::size_t triangles = 0;
   std::size_t max_objects = kMaxObjects;
   std::size_t max_triangles = kMaxTriangles;
@@ -221,22 +223,37 @@ Object ReadObject(ParseContext* ctx, const YAML::Node& node, const std::string& 
     CountTriangles(ctx, node, field, TriangleCount(e));
     return e;
   }
-  const MapView m(*ctx, kind.Get("mesh"), kind.Field("mesh"), {"file", "position", "yaw", "scale"});
-  MeshObject mesh;
-  mesh.path = ReadString(*ctx, m.Get("file"), m.Field("file"));
+  const MapView m(*ctx, kind.Get("mesh"), kind.Field("mesh"),
+                  {"file", "position", "yaw", "scale", "units", "up", "recenter"});
+  const std::string path = ReadString(*ctx, m.Get("file"), m.Field("file"));
   const std::filesystem::path full = ResolveMeshPath(*ctx, m.Get("file"), m.Field("file"));
+  MeshPlacement placement;
+  if (m.Has("units")) {
+    placement.units = ReadString(*ctx, m.Get("units"), m.Field("units"));
+    if (!UnitMetres(placement.units)) {
+      Fail(*ctx, m.Get("units"), m.Field("units"), "unknown unit '" + Shown(placement.units) + "' (known: " + UnitNames() + ")");
+    }
+  }
+  if (m.Has("up")) {
+    placement.up = ParseUpAxis(ReadString(*ctx, m.Get("up"), m.Field("up")));
+    if (!placement.up) Fail(*ctx, m.Get("up"), m.Field("up"), "expected y or z");
+  }
+  if (m.Has("recenter")) {
+    const YAML::Node& n = m.Get("recenter");
+    if (!n.IsScalar() || (n.Scalar() != "true" && n.Scalar() != "false")) {
+      Fail(*ctx, n, m.Field("recenter"), "expected true or false");
+    }
+    placement.recenter = n.Scalar() == "true";
+  }
+  if (m.Has("scale")) placement.scale = ReadRange(*ctx, m.Get("scale"), m.Field("scale"), 0.0, kMaxScale, true);
+  auto cached = ctx->meshes.find(path);
+  if (cached == ctx->meshes.end()) cached = ctx->meshes.emplace(path, ctx->load_mesh(full)).first;
+  MeshObject mesh = PlaceMesh(cached->second, placement, path, full.string());
   mesh.position = ReadPoint(*ctx, m.Get("position"), m.Field("position"));
   if (m.Has("yaw")) mesh.yaw = ReadRange(*ctx, m.Get("yaw"), m.Field("yaw"), -kMaxYaw, kMaxYaw, false);
-  if (m.Has("scale")) mesh.scale = ReadRange(*ctx, m.Get("scale"), m.Field("scale"), 0.0, kMaxScale, true);
-  auto cached = ctx->meshes.find(mesh.path);
-  if (cached == ctx->meshes.end()) cached = ctx->meshes.emplace(mesh.path, LoadObjFile(full)).first;
-  mesh.mesh = cached->second;
   CountTriangles(ctx, node, field, mesh.mesh.triangle_count());
   // The placed mesh must stay within the coordinate limits too.
-  const Eigen::AlignedBox3d placed = ObjectBounds(mesh);
-  if (placed.min().cwiseAbs().maxCoeff() > kMaxCoordinate || placed.max().cwiseAbs().maxCoeff() > kMaxCoordinate) {
-    Fail(*ctx, node, field, "the placed mesh reaches beyond +-100000 m");
-  }
+  CheckPlacedRange(mesh, ctx->file, LineOf(node), field);
   return mesh;
 }
 
@@ -390,6 +407,12 @@ World ParseWorld(std::string_view yaml, const std::string& file_name, const std:
   ctx.base_dir = base_dir.empty() ? std::filesystem::path(".") : base_dir;
   ctx.max_objects = options.max_objects;
   ctx.max_triangles = options.max_triangles;
+  ctx.load_mesh = options.load_mesh ? options.load_mesh : [](const std::filesystem::path& p) {
+    if (p.extension() != ".obj") {
+      throw WorldError(p.string(), 0, "file", "only .obj meshes can be read here (other formats need enavi::world_import)");
+    }
+    return LoadObjFile(p);
+  };
   World world;
   try {
     std::vector<YAML::Node> docs = YAML::LoadAll(std::string(yaml));
@@ -449,8 +472,16 @@ std::string WorldToYaml(const World& world) {
       *out += "  - ellipsoid: {center: " + Vec(e.center) + ", radii: " + Vec(e.radii) + "}\n";
     }
     void operator()(const MeshObject& m) const {
+      if (m.path.empty()) {
+        throw std::invalid_argument("a mesh with no file of its own (imported from SDF) cannot be written to a "
+                                    "world file; `enavi world convert` writes it as an OBJ first");
+      }
       *out += "  - mesh: {file: " + Quote(m.path) + ", position: " + Vec(m.position) + ", yaw: " + Num(m.yaw) +
-              ", scale: " + Num(m.scale) + "}\n";
+              ", scale: " + Num(m.scale);
+      if (!m.units.empty()) *out += ", units: " + Quote(m.units);
+      if (m.up) *out += std::string(", up: ") + Quote(UpAxisName(*m.up));
+      if (m.recenter) *out += ", recenter: true";
+      *out += "}\n";
     }
   };
   for (const auto& o : world.objects) std::visit(Writer{&out}, o);

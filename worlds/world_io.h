@@ -14,6 +14,11 @@
 //     - cylinder: {base: [x, y, z], radius: r, height: h}
 //     - ellipsoid: {center: [x, y, z], radii: [rx, ry, rz]}
 //     - mesh: {file: "chair.obj", position: [x, y, z], yaw: 0.0, scale: 1.0}
+//     - mesh: {file: "block.glb", position: [0, 0, 0], units: "mm", up: "z", recenter: true}
+//
+// A mesh's `units` (m, cm, mm, in, ft) and `up` (y, z) default to what the file declares (DAE,
+// glTF, FBX), else metres and z; `recenter` puts its anchor (horizontal centre of the bounds,
+// lowest point) at `position`; `scale` multiplies after the unit.
 //
 // Mesh paths are relative to the world file and must stay inside its directory tree.
 // Limits: file <= 256 MiB, bounds <= 2 km per axis, <= kMaxObjects objects, <= 5 M triangles,
@@ -29,6 +34,7 @@
 #include <Eigen/Core>
 
 #include "worlds/obj_import.h"
+#include "worlds/placement.h"
 #include "worlds/validate.h"
 #include "worlds/world.h"
 
@@ -45,6 +51,7 @@ struct WorldFileOptions {
   ValidationOptions validation;
   std::size_t max_objects = kMaxObjects;      ///< limits (lower them to sandbox untrusted input)
   std::size_t max_triangles = kMaxTriangles;
+  MeshLoader load_mesh;  ///< reads mesh files; empty: .obj only (ResolveWorld passes every format)
 };
 
 /// Loads a world file: size check, YAML parse, schema (unknown keys, types, ranges, limits),

@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "navstack/rl/decision_hook.h"
+
 namespace enavi::navstack::rl {
 
 FrequencyAdapter::FrequencyAdapter(PolicyFile policy, const ConstraintOptions& constraints,
@@ -45,9 +47,18 @@ FrequencyDecision FrequencyAdapter::Decide(const ConstraintInputs& constraints,
   d.reaction_infeasible = feasible.reaction_infeasible;
 
   const bool recording = record != nullptr;
-  const PolicyOutput out =
+  PolicyOutput out =
       policy_.net.Act(obs_, feasible.mask, mode, rng, &ws_, /*want_log_prob=*/recording,
                       /*want_value=*/recording);
+  // A sampled decision may be taken outside the stack (decision_hook.h); the network's own
+  // numbers stay in the record, its action does not count.
+  if (DecisionHook* hook = CurrentDecisionHook(); hook != nullptr && mode == ActMode::kSample) {
+    const int action = hook->Choose(obs_, feasible.mask);
+    if (action < 0 || action >= grid().size() || !feasible.mask[static_cast<std::size_t>(action)]) {
+      throw std::invalid_argument("decision hook: action " + std::to_string(action) + " is not feasible");
+    }
+    out.action = action;
+  }
   d.action = out.action;
   d.f = grid().At(out.action);
   d.log_prob = out.log_prob;

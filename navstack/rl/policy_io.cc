@@ -228,7 +228,19 @@ PolicyFile LoadPolicyFile(const std::string& path) {
 
 PolicyFile LoadFrequencyPolicy(const std::string& path) {
   PolicyFile p = LoadPolicyFile(path);
-  const std::string source = "policy file '" + path + "'";
+  CheckFrequencyPolicy(p, "policy file '" + path + "'");
+  return p;
+}
+
+PolicyFile FrequencyPolicyFromText(const std::string& text, const std::string& source) {
+  PolicyFile p = PolicyFromJson(detail::ParseJson(text, source), source);
+  CheckFrequencyPolicy(p, source);
+  return p;
+}
+
+std::string CanonicalPolicyText(const PolicyFile& policy) { return PolicyToJson(policy).dump(); }
+
+void CheckFrequencyPolicy(const PolicyFile& p, const std::string& source) {
   if (!p.action_grid) {
     throw std::invalid_argument(source + ": action_grid: required for the frequency adapter");
   }
@@ -237,7 +249,6 @@ PolicyFile LoadFrequencyPolicy(const std::string& path) {
                                 "policy state (kPolicyStateDim = " +
                                 std::to_string(kPolicyStateDim) + " features, see policy_state.h)");
   }
-  return p;
 }
 
 }  // namespace enavi::navstack::rl

@@ -63,5 +63,12 @@ PolicyFile LoadPolicyFile(const std::string& path);
 /// LoadPolicyFile plus the E-Navi contract: an action grid is present and the features are
 /// exactly PolicyStateFeatureNames().
 PolicyFile LoadFrequencyPolicy(const std::string& path);
+/// The E-Navi contract above. @throws std::invalid_argument naming `source`.
+void CheckFrequencyPolicy(const PolicyFile& policy, const std::string& source);
+/// PolicyFromJson of `text` plus the E-Navi contract.
+PolicyFile FrequencyPolicyFromText(const std::string& text, const std::string& source);
+/// The canonical bytes of a policy (compact JSON): what the farm distributes and hashes, so
+/// the same network always has the same content hash.
+std::string CanonicalPolicyText(const PolicyFile& policy);
 
 }  // namespace enavi::navstack::rl

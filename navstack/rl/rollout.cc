@@ -1,5 +1,7 @@
 #include "navstack/rl/rollout.h"
 
+#include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 #include "navstack/rl/json_read.h"
@@ -125,6 +127,140 @@ std::string SerializeRollout(const Rollout& rollout) { return RolloutToJson(roll
 
 Rollout DeserializeRollout(const std::string& text, const std::string& source) {
   return RolloutFromJson(detail::ParseJson(text, source), source);
+}
+
+namespace {
+
+constexpr char kBinaryMagic[4] = {'E', 'N', 'R', '1'};
+
+// Host byte order: every platform the farm runs on (x86-64, aarch64) is little-endian.
+template <typename T>
+void Put(std::string* out, T v) {
+  out->append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+
+class BlobReader {
+ public:
+  BlobReader(std::string_view bytes, const std::string& source) : bytes_(bytes), source_(source) {}
+  template <typename T>
+  T Get(const char* field) {
+    T v;
+    Need(sizeof v, field);
+    std::memcpy(&v, bytes_.data() + at_, sizeof v);
+    at_ += sizeof v;
+    return v;
+  }
+  double Finite(const char* field) {
+    const double v = Get<double>(field);
+    if (!std::isfinite(v)) Fail(field, "not a finite number");
+    return v;
+  }
+  std::string_view Bytes(std::size_t n, const char* field) {
+    Need(n, field);
+    const std::string_view v = bytes_.substr(at_, n);
+    at_ += n;
+    return v;
+  }
+  std::size_t left() const { return bytes_.size() - at_; }
+  [[noreturn]] void Fail(const std::string& field, const std::string& why) const {
+    throw std::invalid_argument(source_ + ": rollout " + field + ": " + why);
+  }
+
+ private:
+  void Need(std::size_t n, const char* field) const {
+    if (n > bytes_.size() - at_) Fail(field, "truncated");
+  }
+  std::string_view bytes_;
+  const std::string& source_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace
+
+std::string EncodeRollout(const Rollout& rollout) {
+  const std::uint32_t obs_dim = rollout.steps.empty() ? 0 : static_cast<std::uint32_t>(rollout.steps.front().obs.size());
+  const std::uint32_t num_actions = rollout.steps.empty() ? 0 : static_cast<std::uint32_t>(rollout.steps.front().mask.size());
+  const std::size_t mask_bytes = (num_actions + 7) / 8;
+  std::string out(kBinaryMagic, 4);
+  out.reserve(64 + rollout.steps.size() * (obs_dim * 8 + mask_bytes + 29));
+  Put(&out, obs_dim);
+  Put(&out, num_actions);
+  Put(&out, static_cast<std::uint32_t>(rollout.steps.size()));
+  Put(&out, rollout.bootstrap_value);
+  Put(&out, static_cast<std::int64_t>(rollout.policy_iteration));
+  Put(&out, static_cast<std::uint32_t>(rollout.id.size()));
+  out += rollout.id;
+  Put(&out, static_cast<std::uint32_t>(rollout.info.size()));
+  for (const auto& [k, v] : rollout.info) {
+    Put(&out, static_cast<std::uint32_t>(k.size()));
+    out += k;
+    Put(&out, v);
+  }
+  for (const RolloutStep& s : rollout.steps) {
+    if (s.obs.size() != obs_dim || s.mask.size() != num_actions) {
+      throw std::logic_error("EncodeRollout: steps of different shapes");
+    }
+    out.append(reinterpret_cast<const char*>(s.obs.data()), obs_dim * sizeof(double));
+    Put(&out, static_cast<std::int32_t>(s.action));
+    std::string mask(mask_bytes, '\0');
+    for (std::size_t i = 0; i < num_actions; ++i) {
+      if (s.mask[i]) mask[i / 8] = static_cast<char>(mask[i / 8] | (1 << (i % 8)));
+    }
+    out += mask;
+    Put(&out, s.log_prob);
+    Put(&out, s.value);
+    Put(&out, s.reward);
+    Put(&out, static_cast<std::uint8_t>(s.done ? 1 : 0));
+  }
+  return out;
+}
+
+Rollout DecodeRollout(std::string_view bytes, const std::string& source) {
+  BlobReader r(bytes, source);
+  if (r.Bytes(4, "magic") != std::string_view(kBinaryMagic, 4)) r.Fail("magic", "not an ENR1 rollout");
+  const auto obs_dim = r.Get<std::uint32_t>("obs_dim");
+  const auto num_actions = r.Get<std::uint32_t>("num_actions");
+  const auto steps = r.Get<std::uint32_t>("steps");
+  if (steps > 0 && (obs_dim < 1 || num_actions < 1)) r.Fail("obs_dim", "must be >= 1 when there are steps");
+  if (obs_dim > 4096 || num_actions > 65536) r.Fail("obs_dim", "implausible shape");
+  const std::size_t mask_bytes = (num_actions + 7) / 8;
+  const std::size_t step_bytes = obs_dim * 8 + 4 + mask_bytes + 3 * 8 + 1;
+  Rollout out;
+  out.bootstrap_value = r.Finite("bootstrap_value");
+  out.policy_iteration = r.Get<std::int64_t>("policy_iteration");
+  const auto id_len = r.Get<std::uint32_t>("id");
+  out.id = std::string(r.Bytes(id_len, "id"));
+  const auto info_count = r.Get<std::uint32_t>("info");
+  for (std::uint32_t i = 0; i < info_count; ++i) {
+    const auto key_len = r.Get<std::uint32_t>("info");
+    const std::string key(r.Bytes(key_len, "info"));
+    out.info[key] = r.Finite("info");
+  }
+  if (static_cast<std::size_t>(steps) * step_bytes != r.left()) {
+    r.Fail("steps", std::to_string(steps) + " steps need " + std::to_string(steps * step_bytes) +
+                        " bytes, " + std::to_string(r.left()) + " left");
+  }
+  out.steps.resize(steps);
+  for (std::uint32_t t = 0; t < steps; ++t) {
+    RolloutStep& s = out.steps[t];
+    s.obs.resize(obs_dim);
+    for (std::uint32_t k = 0; k < obs_dim; ++k) s.obs[k] = r.Finite("obs");
+    s.action = r.Get<std::int32_t>("action");
+    const std::string_view mask = r.Bytes(mask_bytes, "mask");
+    s.mask.resize(num_actions);
+    for (std::size_t i = 0; i < num_actions; ++i) s.mask[i] = (mask[i / 8] >> (i % 8)) & 1;
+    if (s.action < 0 || static_cast<std::uint32_t>(s.action) >= num_actions || !s.mask[static_cast<std::size_t>(s.action)]) {
+      r.Fail("steps[" + std::to_string(t) + "].action", "action " + std::to_string(s.action) + " is outside the mask");
+    }
+    s.log_prob = r.Finite("log_prob");
+    if (s.log_prob > 0.0) r.Fail("steps[" + std::to_string(t) + "].log_prob", "a log-probability must be <= 0");
+    s.value = r.Finite("value");
+    s.reward = r.Finite("reward");
+    const auto done = r.Get<std::uint8_t>("done");
+    if (done > 1) r.Fail("steps[" + std::to_string(t) + "].done", "must be 0 or 1");
+    s.done = done == 1;
+  }
+  return out;
 }
 
 }  // namespace enavi::navstack::rl

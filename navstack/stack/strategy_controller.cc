@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "navstack/rl/decision_hook.h"
+
 namespace enavi::navstack {
 namespace {
 
@@ -62,7 +64,10 @@ double StrategyController::Reward(const StrategyInputs& in, bool collided, bool 
 StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eigen::Vector3d& goal_W) {
   StrategyDecision d;
   // The previous action's reward is known now: what its epoch cost and achieved.
-  if (options_.record && !rollout_.steps.empty()) rollout_.steps.back().reward = Reward(in, false, false);
+  if (options_.record && !rollout_.steps.empty()) {
+    rollout_.steps.back().reward = Reward(in, false, false);
+    if (rl::DecisionHook* hook = rl::CurrentDecisionHook()) hook->Reward(rollout_.steps.back().reward);
+  }
 
   const ConstraintInputs constraints = ToConstraints(in);
   rl::RolloutStep step;
@@ -108,6 +113,7 @@ void StrategyController::Finish(const StrategyInputs& last, bool collided, bool 
   rl::RolloutStep& tail = rollout_.steps.back();
   tail.reward = Reward(last, collided, reached_goal);
   tail.done = collided || reached_goal;
+  if (rl::DecisionHook* hook = rl::CurrentDecisionHook()) hook->Reward(tail.reward);
   if (!tail.done) {
     // Time-out: not a terminal; bootstrap from the critic's value of the final state.
     rl::RolloutStep probe;

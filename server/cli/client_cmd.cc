@@ -50,9 +50,13 @@ void RunSubmit(const SubmitFlags& f) {
     for (const auto& r : f.world_roots) options.allowed_roots.emplace_back(r);
     options.catalog = sim::MethodCatalog();
     const api::JobSpec job = api::ParseJobSpec(ReadFile(f.file), f.file, options);
-    std::cout << f.file << ": valid; " << job.MatrixSize() << " episodes (" << job.boards.size()
-              << " boards x " << job.scenarios.size() << " scenarios x " << job.methods.size()
-              << " methods x " << job.seeds.size() << " seeds)\n";
+    std::cout << f.file << ": valid; " << job.MatrixSize() << " episodes (";
+    if (job.episodes.empty()) {
+      std::cout << job.boards.size() << " boards x " << job.scenarios.size() << " scenarios x "
+                << job.methods.size() << " methods x " << job.seeds.size() << " seeds)\n";
+    } else {
+      std::cout << job.episodes.size() << " listed x " << job.methods.size() << " methods)\n";
+    }
     return;
   }
   api::FarmClient client(f.client.server, f.client.token);
@@ -65,17 +69,31 @@ struct StatusFlags {
   ClientFlags client;
   std::string job;
   bool watch = false;
+  std::vector<std::string> labels;
 };
+
+std::string LabelText(const std::map<std::string, std::string>& labels) {
+  std::string out;
+  for (const auto& [k, v] : labels) out += (out.empty() ? "" : " ") + k + "=" + v;
+  return out;
+}
 
 void RunStatus(const StatusFlags& f) {
   api::FarmClient client(f.client.server, f.client.token);
   const bool tty = isatty(STDOUT_FILENO) == 1;
   if (f.job.empty()) {
-    const auto jobs = client.Jobs();
-    if (jobs.empty()) std::cout << "no jobs\n";
-    for (const auto& p : jobs) std::cout << server::ProgressLine(p, false) << "  " << p.name << "\n";
+    std::map<std::string, std::string> filter;
+    for (const auto& l : f.labels) filter.insert(api::ParseLabelFilter(l, "--label"));
+    const auto jobs = client.Jobs(filter);
+    if (jobs.empty()) std::cout << (filter.empty() ? "no jobs\n" : "no jobs with these labels\n");
+    for (const auto& p : jobs) {
+      std::cout << server::ProgressLine(p, false) << "  " << p.name;
+      if (!p.labels.empty()) std::cout << "  [" << LabelText(p.labels) << "]";
+      std::cout << "\n";
+    }
     return;
   }
+  if (!f.labels.empty()) throw std::invalid_argument("--label: filters the job list; give no JOB with it");
   auto last_plain = std::chrono::steady_clock::time_point{};
   while (true) {
     const api::JobProgress p = client.Status(f.job);
@@ -141,6 +159,7 @@ void RegisterClientCommands(CLI::App& app) {
     CLI::App* sub = app.add_subcommand("status", "Progress of a job (or list all jobs)");
     sub->add_option("job", f->job, "job id");
     sub->add_flag("-w,--watch", f->watch, "follow until the job finishes");
+    sub->add_option("--label", f->labels, "list only jobs with this label KEY=VALUE (repeatable: all must match)");
     AddClientFlags(sub, &f->client);
     sub->callback([f] { RunStatus(*f); });
   }

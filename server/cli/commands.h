@@ -3,6 +3,9 @@
 // Handlers throw std::invalid_argument for bad input (exit 2) and anything else for failures
 // (exit 1); main() maps them.
 
+#include <string>
+#include <vector>
+
 #include <CLI/CLI.hpp>
 
 namespace enavi::cli {
@@ -11,8 +14,20 @@ namespace enavi::cli {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitBadInput = 2;
+/// `enavi compare`: the candidate regressed (a CI job gates on this).
+inline constexpr int kExitRegression = 3;
 
-/// `enavi world gen|check|show` (server/cli/world_cmd.cc).
+/// Thrown by a handler to end with a specific exit status after printing its output.
+struct ExitStatus {
+  int code = kExitOk;
+};
+
+/// --units, --scale, --up, --recenter (mesh worlds) and --model-path (SDF worlds), shared by
+/// `enavi fly` and `enavi world` (server/cli/world_cmd.cc).
+void AddPlacementOptions(CLI::App* app, std::string* units, double* scale, std::string* up, bool* recenter,
+                         std::vector<std::string>* model_path);
+
+/// `enavi world gen|check|show|convert` (server/cli/world_cmd.cc).
 void RegisterWorldCommands(CLI::App& app);
 /// `enavi fly` (server/cli/fly_cmd.cc).
 void RegisterFlyCommand(CLI::App& app);
@@ -27,5 +42,11 @@ void RegisterServeCommand(CLI::App& app);
 void RegisterWorkerCommand(CLI::App& app);
 void RegisterClientCommands(CLI::App& app);  // submit, status, results, cancel
 void RegisterEvalCommand(CLI::App& app);
+/// `enavi dataset export` (server/cli/dataset_cmd.cc).
+void RegisterDatasetCommands(CLI::App& app);
+/// `enavi compare` (server/cli/compare_cmd.cc).
+void RegisterCompareCommand(CLI::App& app);
+/// `enavi dashboard` (server/cli/dashboard_cmd.cc).
+void RegisterDashboardCommand(CLI::App& app);
 
 }  // namespace enavi::cli

@@ -1,7 +1,10 @@
 // enavi eval: the embedded farm (server + local workers + SQLite), table at the end.
 #include <unistd.h>
 
+#include <atomic>
+#include <future>
 #include <iostream>
+#include <tuple>
 #include <memory>
 
 #include <spdlog/spdlog.h>
@@ -24,6 +27,8 @@ struct EvalFlags {
   double episode_timeout_s = 3600;
   bool json = false;
   bool verbose = false;
+  bool dashboard = false;
+  std::string http = "127.0.0.1:0";
 };
 
 void RunEvalCommand(EvalFlags f, const CLI::App& root) {
@@ -40,15 +45,39 @@ void RunEvalCommand(EvalFlags f, const CLI::App& root) {
   o.episode_timeout = std::chrono::seconds(static_cast<std::int64_t>(f.episode_timeout_s));
   o.progress_bar = isatty(STDERR_FILENO) == 1;
 
+  auto print = [&f](const server::EvalReport& report) {
+    if (f.json) {
+      std::cout << report.results.dump(2) << "\n";
+    } else {
+      std::cout << server::PaperTable(report.results);
+    }
+    std::cout.flush();
+  };
   // Ctrl-C: leave at once. The workers die with this process (PR_SET_PDEATHSIG) and their
-  // episodes with them; a --db keeps whatever was stored.
-  signals.Watch([](int) { std::_Exit(130); });
-  const server::EvalReport report = server::RunEval(o, std::cerr);
-  if (f.json) {
-    std::cout << report.results.dump(2) << "\n";
-  } else {
-    std::cout << server::PaperTable(report.results);
+  // episodes with them; a --db keeps whatever was stored. Once the job is done and only the
+  // dashboard serves, Ctrl-C ends the eval normally.
+  std::atomic<bool> serving_done_job{false}, stop_requested{false};
+  std::promise<void> stop;
+  signals.Watch([&](int) {
+    if (!serving_done_job || stop_requested.exchange(true)) std::_Exit(130);
+    stop.set_value();
+  });
+  bool printed = false;
+  if (f.dashboard) {
+    server::HttpOptions http;
+    std::tie(http.host, http.port) = ParseHostPort(f.http, "--http");
+    http.job_spec = o.job_spec;
+    o.dashboard = http;
+    o.while_serving = [&](const server::EvalReport& report) {
+      print(report);
+      printed = true;
+      std::cerr << "job done; the dashboard keeps serving until Ctrl-C\n";
+      serving_done_job = true;
+      stop.get_future().wait();
+    };
   }
+  const server::EvalReport report = server::RunEval(o, std::cerr);
+  if (!printed) print(report);
   if (!f.db.empty()) {
     std::cerr << report.results.size() << " results stored in " << f.db << " (job "
               << report.job_id << ")\n";
@@ -92,6 +121,10 @@ void RegisterEvalCommand(CLI::App& app) {
       ->group("");
   sub->add_option("--domain", f->domain, "DDS domain (default: derived from the pid)")
       ->check(CLI::Range(0, 232));
+  sub->add_flag("--dashboard", f->dashboard,
+                "serve the dashboard (printed URL) while the job runs, and after it until Ctrl-C");
+  sub->add_option("--http", f->http, "dashboard address HOST:PORT (loopback; port 0: any)")
+      ->capture_default_str();
   sub->add_flag("--json", f->json, "print the result objects as JSON instead of the table");
   sub->add_flag("-v,--verbose", f->verbose, "server log on stderr");
   sub->callback([f, &app] { RunEvalCommand(*f, app); });

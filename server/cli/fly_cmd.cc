@@ -68,6 +68,10 @@ void CheckSpecFields(const nlohmann::json& j, const std::string& file) {
   every.world_params = {{"k", "v"}};
   every.policy = "p";
   every.overrides = {{"k", 0.0}};
+  every.units = every.up = "m";
+  every.scale = 2.0;
+  every.recenter = true;
+  every.model_path = {"d"};
   const nlohmann::json known = every;
   for (const auto& item : j.items()) {
     if (known.contains(item.key())) continue;
@@ -124,10 +128,7 @@ void Run(FlyArgs args) {
       std::fflush(stderr);
     };
   }
-  worlds::WorldRequest request{spec.world, spec.seed, spec.world_params, std::nullopt, std::nullopt};
-  if (spec.start) request.start = Eigen::Vector3d((*spec.start)[0], (*spec.start)[1], (*spec.start)[2]);
-  if (spec.goal) request.goal = Eigen::Vector3d((*spec.goal)[0], (*spec.goal)[1], (*spec.goal)[2]);
-  const auto world = sim::PrepareWorld(worlds::ResolveWorld(request));
+  const auto world = sim::PrepareWorld(worlds::ResolveWorld(sim::WorldRequestOf(spec)));
   const api::EpisodeResult result = sim::RunEpisode(spec, *world, options);
   if (tty) std::fprintf(stderr, "\n");
 
@@ -162,7 +163,7 @@ void Run(FlyArgs args) {
 void RegisterFlyCommand(CLI::App& app) {
   auto args = std::make_shared<FlyArgs>();
   CLI::App* fly = app.add_subcommand("fly", "Fly one episode locally (no server) and print or write its results");
-  fly->add_option("--world", args->spec.world, "s1..s5, canyon, forest, empty, FILE.yaml or FILE.obj")->capture_default_str();
+  fly->add_option("--world", args->spec.world, "s1..s5, canyon, forest, empty, FILE.yaml, a mesh (.obj .gltf .glb .dae .stl .ply .fbx) or a Gazebo world (.sdf .world)")->capture_default_str();
   fly->add_option("--seed", args->spec.seed, "world and episode seed")
       ->capture_default_str()
       ->check(CLI::Validator(
@@ -171,9 +172,11 @@ void RegisterFlyCommand(CLI::App& app) {
             return text.find('-') == std::string::npos ? std::string() : "must be >= 0 (got " + text + ")";
           },
           ""));
-  fly->add_option("--start", args->start, "start x,y,z (required for .obj worlds)");
-  fly->add_option("--goal", args->goal, "goal x,y,z (required for .obj worlds)");
+  fly->add_option("--start", args->start, "start x,y,z (required for mesh and SDF worlds)");
+  fly->add_option("--goal", args->goal, "goal x,y,z (required for mesh and SDF worlds)");
   fly->add_option("--param", args->params, "world generator parameter k=v (repeatable)");
+  AddPlacementOptions(fly, &args->spec.units, &args->spec.scale, &args->spec.up, &args->spec.recenter,
+                      &args->spec.model_path);
   fly->add_option("--board", args->spec.board, "onboard computer to emulate")
       ->capture_default_str()
       ->check(CLI::IsMember(board::KnownBoards()));

@@ -20,8 +20,13 @@ int main(int argc, char** argv) {
   RegisterWorkerCommand(app);
   RegisterClientCommands(app);
   RegisterEvalCommand(app);
+  RegisterDatasetCommands(app);
+  RegisterCompareCommand(app);
+  RegisterDashboardCommand(app);
   try {
     app.parse(argc, argv);
+  } catch (const ExitStatus& e) {
+    return e.code;
   } catch (const CLI::ParseError& e) {
     // CLI11 prints help on --help (exit 0) and usage errors (bad flags) with its own code;
     // we map every usage error to the bad-input code.

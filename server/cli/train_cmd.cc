@@ -4,8 +4,11 @@
 #include <cstdio>
 #include <memory>
 
+#include <spdlog/spdlog.h>
+
 #include "server/cli/commands.h"
 #include "server/train/trainer.h"
+#include "workers/sim/episode_config.h"
 
 namespace enavi::cli {
 
@@ -14,13 +17,19 @@ void RegisterTrainCommand(CLI::App& app) {
   auto out = std::make_shared<std::string>("policy.json");
   auto work = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
-      "train", "Train E-Navi's frequency adapter with PPO from episodes flown in parallel worker processes");
+      "train", "Train E-Navi's frequency adapter with PPO from rollouts collected on the farm");
   cmd->add_option("--boards", o->boards, "boards to train on")->delimiter(',')->capture_default_str();
   cmd->add_option("--scenarios", o->scenarios, "scenarios to train in")->delimiter(',')->capture_default_str();
   cmd->add_option("--iterations", o->iterations, "PPO iterations")->capture_default_str();
   cmd->add_option("--episodes-per-iter", o->episodes_per_iteration, "episodes flown per iteration")
       ->capture_default_str();
-  cmd->add_option("--workers", o->workers, "parallel episode processes")->capture_default_str();
+  cmd->add_option("--server", o->server,
+                  "farm server URL (each iteration is a collection job there); default: a private local farm")
+      ->envname("ENAVI_SERVER");
+  cmd->add_option("--token", o->token, "the farm's token")->envname("ENAVI_TOKEN");
+  cmd->add_option("--workers", o->workers, "private local farm: worker processes")->capture_default_str();
+  auto verbose = std::make_shared<bool>(false);
+  cmd->add_flag("--verbose", *verbose, "log the private farm's scheduling");
   cmd->add_option("--seed", o->seed, "training seed (policy init, minibatches, training-world seeds)")
       ->capture_default_str();
   cmd->add_option("--out", *out, "where the trained policy is written")->capture_default_str();
@@ -29,10 +38,12 @@ void RegisterTrainCommand(CLI::App& app) {
   cmd->add_flag("--resume", o->resume, "continue from the work dir's checkpoint");
   cmd->add_option("--learning-rate", o->ppo.learning_rate, "Adam step size")->capture_default_str();
   cmd->add_option("--entropy-coef", o->ppo.entropy_coef, "entropy bonus weight")->capture_default_str();
-  cmd->callback([o, out, work] {
+  cmd->callback([o, out, work, verbose] {
+    if (!*verbose) spdlog::set_level(spdlog::level::warn);
     o->out = *out;
     o->work_dir = *work;
     o->progress = true;
+    o->catalog = sim::MethodCatalog();
     const auto log = train::Train(*o);
     const auto& last = log.back();
     std::printf("trained %lld iterations: policy %s (mean return %.2f, success %.0f%%, nav cpu %.1f%%)\n",

@@ -2,6 +2,7 @@
 // bird's-eye PNG. Thin handlers: parse flags, call enavi::worlds / enavi::report, print.
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
@@ -18,6 +19,7 @@
 #include "worlds/number_text.h"
 #include "worlds/resolve.h"
 #include "worlds/validate.h"
+#include "worlds/world_convert.h"
 #include "worlds/world_io.h"
 
 namespace enavi::cli {
@@ -51,10 +53,16 @@ std::map<std::string, std::string> ParseParams(const std::vector<std::string>& i
   return params;
 }
 
+std::string Vec(const Eigen::Vector3d& v) {
+  return "[" + worlds::FormatFixed(v.x(), 2, false) + ", " + worlds::FormatFixed(v.y(), 2, false) + ", " +
+         worlds::FormatFixed(v.z(), 2, false) + "]";
+}
+
 std::string Summary(const worlds::World& w) {
   return w.metadata.name + " (" + w.metadata.scenario + "), " + std::to_string(w.objects.size()) + " objects, " +
          std::to_string(worlds::BuildWorldMesh(w).triangle_count()) + " triangles, start-goal " +
-         worlds::FormatFixed((w.goal - w.start).norm(), 1) + " m";
+         worlds::FormatFixed((w.goal - w.start).norm(), 1) + " m, bounds " + Vec(w.bounds.min()) + " to " +
+         Vec(w.bounds.max()) + (w.metadata.import_note.empty() ? "" : "; " + w.metadata.import_note);
 }
 
 struct WorldFlags {
@@ -63,6 +71,10 @@ struct WorldFlags {
   std::uint64_t seed = 1;
   std::vector<std::string> params;
   std::string start, goal;
+  std::string units, up;
+  double scale = 1.0;
+  bool recenter = false;
+  std::vector<std::string> model_path;
   std::string out;
   int width = 1000, height = 0;
 
@@ -73,14 +85,50 @@ struct WorldFlags {
     r.params = ParseParams(params);
     r.start = ParsePoint("--start", start);
     r.goal = ParsePoint("--goal", goal);
+    r.placement = worlds::ParsePlacement(units, scale, up, recenter);
+    r.model_path.assign(model_path.begin(), model_path.end());
     return r;
   }
 };
 
+// Bad input on stderr as exactly FILE:LINE: FIELD: REASON (no "error: " prefix), exit 2.
+template <typename F>
+void ExitTwoOnBadInput(F&& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    std::fflush(stdout);
+    std::fflush(stderr);
+    std::exit(kExitBadInput);
+  }
+}
+
+const char* kWorldHelp = "World file (.yaml), mesh (.obj .gltf .glb .dae .stl .ply .fbx) or Gazebo world (.sdf .world)";
+
+}  // namespace
+
+void AddPlacementOptions(CLI::App* app, std::string* units, double* scale, std::string* up, bool* recenter,
+                         std::vector<std::string>* model_path) {
+  std::vector<std::string> unit_names;
+  for (const auto& u : worlds::kLengthUnits) unit_names.emplace_back(u.name);
+  app->add_option("--units", *units, "mesh worlds: the file's length unit (default: what the file declares, else m)")
+      ->check(CLI::IsMember(unit_names));
+  app->add_option("--scale", *scale, "mesh worlds: uniform scale after the unit")->check(CLI::Range(1e-6, 1000.0));
+  app->add_option("--up", *up, "mesh worlds: the file's up axis (default: what the file declares, else z)")
+      ->check(CLI::IsMember({"y", "z"}));
+  app->add_flag("--recenter", *recenter,
+                "mesh worlds: move the horizontal centre of the bounds to x = y = 0 and the lowest point to z = 0");
+  app->add_option("--model-path", *model_path,
+                  "SDF worlds: directory of Gazebo models for model:// URIs (repeatable; then GAZEBO_MODEL_PATH)");
+}
+
+namespace {
+
 }  // namespace
 
 void RegisterWorldCommands(CLI::App& app) {
-  CLI::App* world = app.add_subcommand("world", "Worlds: generate (seeded), validate, bird's-eye PNG");
+  CLI::App* world = app.add_subcommand("world", "Worlds: generate (seeded), validate, bird's-eye PNG, convert");
   world->require_subcommand(1);
   auto flags = std::make_shared<WorldFlags>();
 
@@ -108,28 +156,40 @@ void RegisterWorldCommands(CLI::App& app) {
   CLI::App* check = world->add_subcommand(
       "check", "Validate a world file (.yaml, or .obj with --start/--goal): exit 0 if valid, else 2 with "
                "FILE:LINE: FIELD: REASON on stderr");
-  check->add_option("file", flags->target, "World file (.yaml or .obj)")->required();
-  check->add_option("--start", flags->start, "Start x,y,z (overrides the file; required for .obj)");
-  check->add_option("--goal", flags->goal, "Goal x,y,z (overrides the file; required for .obj)");
+  check->add_option("file", flags->target, kWorldHelp)->required();
+  check->add_option("--start", flags->start, "Start x,y,z (overrides the file; required for mesh and SDF worlds)");
+  check->add_option("--goal", flags->goal, "Goal x,y,z (overrides the file; required for mesh and SDF worlds)");
+  AddPlacementOptions(check, &flags->units, &flags->scale, &flags->up, &flags->recenter, &flags->model_path);
   check->callback([flags] {
-    try {
+    ExitTwoOnBadInput([&] {
       const worlds::World w = worlds::ResolveWorld(flags->Request(flags->target));
       std::printf("%s: ok: %s\n", flags->target.c_str(), Summary(w).c_str());
-    } catch (const std::invalid_argument& e) {
-      // Exactly the error line on stderr (no "error: " prefix), then the bad-input code.
-      std::fprintf(stderr, "%s\n", e.what());
-      std::fflush(stdout);
-      std::fflush(stderr);
-      std::exit(kExitBadInput);
-    }
+    });
+  });
+
+  CLI::App* convert = world->add_subcommand(
+      "convert", "Write any world the farm reads as its own world file (.yaml): meshes referenced with their "
+                 "placement, SDF geometry as OBJ beside it");
+  convert->add_option("world", flags->target, kWorldHelp)->required();
+  convert->add_option("--start", flags->start, "Start x,y,z (required for mesh and SDF worlds)");
+  convert->add_option("--goal", flags->goal, "Goal x,y,z (required for mesh and SDF worlds)");
+  AddPlacementOptions(convert, &flags->units, &flags->scale, &flags->up, &flags->recenter, &flags->model_path);
+  convert->add_option("--out", flags->out, "Output world file (.yaml)")->required();
+  convert->callback([flags] {
+    ExitTwoOnBadInput([&] {
+      const worlds::World w = worlds::ResolveWorld(flags->Request(flags->target));
+      worlds::ConvertWorld(w, std::filesystem::path(flags->target).parent_path(), flags->out);
+      std::printf("wrote %s: %s\n", flags->out.c_str(), Summary(w).c_str());
+    });
   });
 
   CLI::App* show = world->add_subcommand("show", "Draw a bird's-eye PNG of a world file or a generated scenario");
-  show->add_option("world", flags->target, "World file (.yaml, .obj) or scenario id (" + ids + ")")->required();
+  show->add_option("world", flags->target, std::string(kWorldHelp) + ", or scenario id (" + ids + ")")->required();
   show->add_option("--seed", flags->seed, "Generator seed (scenario ids only)")->capture_default_str();
   show->add_option("--param", flags->params, param_help);
-  show->add_option("--start", flags->start, "Start x,y,z (required for .obj)");
-  show->add_option("--goal", flags->goal, "Goal x,y,z (required for .obj)");
+  show->add_option("--start", flags->start, "Start x,y,z (required for mesh and SDF worlds)");
+  show->add_option("--goal", flags->goal, "Goal x,y,z (required for mesh and SDF worlds)");
+  AddPlacementOptions(show, &flags->units, &flags->scale, &flags->up, &flags->recenter, &flags->model_path);
   show->add_option("--out", flags->out, "Output PNG")->required();
   show->add_option("--width", flags->width, "Image width in px")->check(CLI::Range(200, 8000))->capture_default_str();
   show->add_option("--height", flags->height, "Image height in px (0: from the world's aspect ratio)")

@@ -1,25 +1,18 @@
 #include "server/eval/eval.h"
 
-#include <signal.h>
-#include <unistd.h>
-
-#include <fstream>
-#include <random>
 #include <sstream>
 #include <thread>
 
 #include <spdlog/spdlog.h>
 
-#include "api/dds_config.h"
+#include "server/eval/local_farm.h"
+#include "server/http/http_api.h"
 #include "server/eval/tables.h"
 #include "server/scheduler/farm_server.h"
 #include "server/store/store.h"
-#include "workers/worker/process.h"
 
 namespace enavi::server {
 namespace {
-
-namespace fs = std::filesystem;
 
 std::string YamlList(const std::vector<std::string>& items) {
   std::string out = "[";
@@ -27,34 +20,6 @@ std::string YamlList(const std::vector<std::string>& items) {
     out += (i ? ", " : "") + std::string("\"") + items[i] + "\"";
   }
   return out + "]";
-}
-
-// A private directory for the temporary database, spools and logs; removed on destruction
-// unless asked to keep it.
-class TempDir {
- public:
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "enavi-eval-XXXXXX").string();
-    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("cannot create a temp dir");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    if (!keep_) fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-  void Keep() { keep_ = true; }
-
- private:
-  fs::path path_;
-  bool keep_ = false;
-};
-
-std::string LogTail(const fs::path& file) {
-  std::ifstream in(file);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (text.size() > 1500) text = "..." + text.substr(text.size() - 1500);
-  return text;
 }
 
 }  // namespace
@@ -72,65 +37,30 @@ std::string EvalJobYaml(const EvalOptions& o) {
 }
 
 EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
-  if (options.workers < 1 || options.workers > 64) {
-    throw std::invalid_argument("--workers: " + std::to_string(options.workers) + " outside [1, 64]");
-  }
-  if (options.slots < 1 || options.slots > 64) {
-    throw std::invalid_argument("--slots: " + std::to_string(options.slots) + " outside [1, 64]");
-  }
   // Validate the matrix exactly as a submitted job; errors name the line of the flag.
   const std::string yaml = EvalJobYaml(options);
   const api::JobSpec job = api::ParseJobSpec(yaml, "enavi eval flags", options.job_spec);
-  const auto episodes = api::ExpandJob(job);
 
-  const fs::path enavi = options.enavi.empty() ? worker::SelfExecutable() : options.enavi;
-
-  TempDir tmp;
-  const fs::path db = options.db.empty() ? tmp.path() / "eval.db" : options.db;
-
-  // Private farm: loopback only, a domain derived from the pid and a partition nobody else uses.
-  std::random_device rd;
-  api::BusOptions bus;
-  bus.domain_id = options.domain.value_or(1 + static_cast<std::uint32_t>(getpid()) % 200);
-  {
-    std::ostringstream partition;
-    partition << "eval-" << getpid() << "-" << std::hex << rd();
-    bus.partition = partition.str();
-  }
-  api::DdsNetwork network;
-  network.loopback = true;
-  bus.config_xml = api::CycloneConfigXml(network);
-
-  Store store(db);
-  FarmServerOptions server_options;
-  server_options.bus = bus;
-  FarmServer farm(&store, server_options);
-  farm.Start();
-
-  // Workers: separate processes running `enavi worker`, as on a cluster.
-  std::vector<worker::ChildProcess> workers;
-  std::vector<fs::path> logs;
-  for (int i = 0; i < options.workers; ++i) {
-    const fs::path dir = tmp.path() / ("worker-" + std::to_string(i));
-    fs::create_directories(dir);
-    worker::SpawnOptions spawn;
-    spawn.argv = {enavi.string(), "worker", "--domain", std::to_string(bus.domain_id),
-                  "--partition", bus.partition, "--loopback", "--slots",
-                  std::to_string(options.slots), "--id",
-                  "eval-" + std::to_string(getpid()) + "-w" + std::to_string(i), "--spool",
-                  (dir / "spool").string(), "--work-dir", (dir / "work").string(),
-                  "--episode-timeout", std::to_string(options.episode_timeout.count())};
-    if (!options.episode_command.empty()) {
-      spawn.argv.insert(spawn.argv.end(), {"--episode-cmd", options.episode_command});
-    }
-    spawn.stdout_file = dir / "worker.log";
-    spawn.stderr_file = dir / "worker.log";
-    logs.push_back(dir / "worker.log");
-    workers.push_back(worker::ChildProcess::Spawn(spawn));
+  LocalFarmOptions farm_options;
+  farm_options.db = options.db;
+  farm_options.workers = options.workers;
+  farm_options.slots = options.slots;
+  farm_options.episode_command = options.episode_command;
+  farm_options.episode_timeout = options.episode_timeout;
+  farm_options.enavi = options.enavi;
+  farm_options.domain = options.domain;
+  LocalFarm local(farm_options);
+  Store& store = local.store();
+  FarmServer& farm = local.farm();
+  std::unique_ptr<HttpApi> http;
+  if (options.dashboard) {
+    http = std::make_unique<HttpApi>(&farm, *options.dashboard);
+    http->Start();
+    progress_out << "dashboard: " << http->url() << "/\n" << std::flush;
   }
 
   EvalReport report;
-  report.job_id = farm.Submit(job.name, yaml, episodes);
+  report.job_id = farm.Submit(job, yaml);
   auto last_print = std::chrono::steady_clock::time_point{};
   while (true) {
     report.progress = *store.Progress(report.job_id, NowMs());
@@ -147,24 +77,16 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
       last_print = now;
     }
     if (report.progress.terminal()) break;
-    int alive = 0;
-    for (auto& w : workers) alive += w.Poll() ? 0 : 1;
-    if (alive == 0) {
-      tmp.Keep();
-      throw std::runtime_error("every eval worker exited; last log lines of " + logs.front().string() +
-                               ":\n" + LogTail(logs.front()));
-    }
+    local.CheckWorkers();
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
   if (options.progress_bar) progress_out << "\n";
 
-  // Graceful stop: workers drain (nothing runs now) and leave; then the server.
-  for (auto& w : workers) w.Signal(SIGTERM);
-  for (auto& w : workers) {
-    if (!w.Wait(std::chrono::seconds(15))) w.Terminate(std::chrono::seconds(1));
-  }
-  farm.Stop();
   report.results = store.Results(report.job_id);
+  // The dashboard serves the finished job (workers idle) until the caller lets go.
+  if (http && options.while_serving) options.while_serving(report);
+  if (http) http->Stop();
+  local.Stop();
   return report;
 }
 

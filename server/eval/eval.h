@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -15,8 +16,11 @@
 
 #include "api/http_schema.h"
 #include "api/job_spec.h"
+#include "server/http/http_api.h"
 
 namespace enavi::server {
+
+struct EvalReport;
 
 struct EvalOptions {
   std::vector<std::string> boards = {"tx2"};
@@ -36,6 +40,11 @@ struct EvalOptions {
   std::optional<std::uint32_t> domain;  ///< empty: derived from the process id
   api::JobSpecOptions job_spec;
   bool progress_bar = false;     ///< redraw a bar in place (terminal); else only the last line
+  /// Serve the HTTP API and dashboard here while the job runs (`enavi eval --dashboard`).
+  std::optional<HttpOptions> dashboard;
+  /// With `dashboard`: called once the job is done and its results are read, while the
+  /// dashboard still serves them; RunEval returns when it does (e.g. after Ctrl-C).
+  std::function<void(const EvalReport&)> while_serving;
   std::chrono::milliseconds progress_period{500};
 };
 

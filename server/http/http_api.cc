@@ -2,7 +2,14 @@
 
 #include <arpa/inet.h>
 
+#include <algorithm>
+#include <map>
+#include <regex>
 #include <stdexcept>
+
+// Before httplib.h: it pulls in <resolv.h>, whose `_res` macro breaks Eigen's parameter names.
+#include "server/report/flight_report.h"
+#include "worlds/resolve.h"
 
 #include <httplib.h>
 #include <nlohmann/json.hpp>
@@ -10,6 +17,9 @@
 
 #include "api/farm_messages.h"
 #include "api/http_schema.h"
+#include "server/scheduler/collection.h"
+#include "api/provenance.h"
+#include "server/compare/compare.h"
 
 namespace enavi::server {
 namespace {
@@ -45,7 +55,113 @@ nlohmann::json WorkerJson(const WorkerView& w) {
           {"version", w.status.version}};
 }
 
+// "host:port", "[v6]:port" or "host" -> host.
+std::string HostName(const std::string& host_header) {
+  if (!host_header.empty() && host_header.front() == '[') {
+    const auto end = host_header.find(']');
+    return end == std::string::npos ? host_header : host_header.substr(1, end - 1);
+  }
+  const auto colon = host_header.find(':');
+  return colon == std::string::npos ? host_header : host_header.substr(0, colon);
+}
+
+// "http://host:port" -> "host:port".
+std::string OriginHost(const std::string& origin) {
+  const auto scheme = origin.find("://");
+  return scheme == std::string::npos ? origin : origin.substr(scheme + 3);
+}
+
+std::string CookieValue(const std::string& cookies, const std::string& name) {
+  std::size_t at = 0;
+  while (at < cookies.size()) {
+    const auto end = std::min(cookies.find(';', at), cookies.size());
+    std::string item = cookies.substr(at, end - at);
+    item.erase(0, item.find_first_not_of(' '));
+    if (item.rfind(name + "=", 0) == 0) return item.substr(name.size() + 1);
+    at = end + 1;
+  }
+  return "";
+}
+
+int ParseInt(const std::string& text, const std::string& field, std::int64_t lo, std::int64_t hi) {
+  std::size_t used = 0;
+  long long v = 0;
+  try {
+    v = std::stoll(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || v < lo || v > hi) {
+    throw std::invalid_argument(field + ": '" + text + "': expected an integer in [" +
+                                std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  }
+  return static_cast<int>(v);
+}
+
+// Every value of query parameter `name`, split at the first '=' only (httplib's parser cuts
+// "label=k=v" at the second '='), URL-decoded.
+std::vector<std::string> QueryValues(const httplib::Request& req, const std::string& name) {
+  std::vector<std::string> out;
+  const auto q = req.target.find('?');
+  if (q == std::string::npos) return out;
+  const std::string query = req.target.substr(q + 1);
+  std::size_t at = 0;
+  while (at <= query.size()) {
+    const auto end = std::min(query.find('&', at), query.size());
+    const std::string item = query.substr(at, end - at);
+    if (item.rfind(name + "=", 0) == 0) {
+      out.push_back(httplib::detail::decode_url(item.substr(name.size() + 1), true));
+    }
+    at = end + 1;
+  }
+  return out;
+}
+
+Page PageOf(const httplib::Request& req) {
+  Page p;
+  if (req.has_param("offset")) p.offset = ParseInt(req.get_param_value("offset"), "offset", 0, 1 << 30);
+  if (req.has_param("limit")) p.limit = ParseInt(req.get_param_value("limit"), "limit", 1, 1000);
+  return p;
+}
+
 }  // namespace
+
+// Generated from server/dashboard/* by cmake/EmbedFiles.cmake.
+const std::map<std::string, std::string>& DashboardAssets();
+
+AccessDecision CheckAccess(const HttpOptions& options, const AccessRequest& r) {
+  AccessDecision d;
+  const bool loopback = IsLoopbackHost(options.host);
+  // Bound to loopback, only loopback names may be in Host: a DNS-rebound name that resolves to
+  // 127.0.0.1 must not let another site's scripts read the farm.
+  if (loopback && !IsLoopbackHost(HostName(r.host))) {
+    d.status = 403;
+    d.message = "Host '" + r.host + "' is not a loopback name";
+    return d;
+  }
+  const bool write = r.method != "GET" && r.method != "HEAD";
+  // A page from another origin must not change state (CSRF): a cross-site form POST carries
+  // its Origin; the CLI sends none.
+  if (write && !r.origin.empty() && HostName(OriginHost(r.origin)) != HostName(r.host)) {
+    d.status = 403;
+    d.message = "cross-origin request refused";
+    return d;
+  }
+  if (options.token.empty() || (!write && loopback)) return d;
+  if (!r.token_param.empty() && SameToken(r.token_param, options.token)) {
+    d.set_cookie = true;
+    return d;
+  }
+  const std::string prefix = "Bearer ";
+  const bool header_ok = r.authorization.rfind(prefix, 0) == 0 &&
+                         SameToken(r.authorization.substr(prefix.size()), options.token);
+  if (!header_ok && !SameToken(CookieValue(r.cookie, kTokenCookie), options.token)) {
+    d.status = 401;
+    d.message = write ? "this farm server needs its token: pass --token (Authorization: Bearer)"
+                      : "this farm server needs its token: open /?token=TOKEN or send Authorization: Bearer";
+  }
+  return d;
+}
 
 bool IsLoopbackHost(const std::string& host) {
   if (host == "localhost" || host == "::1") return true;
@@ -57,12 +173,18 @@ bool IsLoopbackHost(const std::string& host) {
 }
 
 HttpApi::HttpApi(FarmServer* farm, HttpOptions options)
-    : farm_(farm), options_(std::move(options)), server_(std::make_unique<httplib::Server>()) {
+    : HttpApi(&farm->store(), farm, std::move(options)) {}
+
+HttpApi::HttpApi(Store* store, HttpOptions options) : HttpApi(store, nullptr, std::move(options)) {}
+
+HttpApi::HttpApi(Store* store, FarmServer* farm, HttpOptions options)
+    : store_(store), farm_(farm), options_(std::move(options)),
+      server_(std::make_unique<httplib::Server>()) {
   if (!IsLoopbackHost(options_.host) && options_.token.empty()) {
     throw std::invalid_argument("--token: required when --http binds a non-loopback address ('" +
                                 options_.host + "')");
   }
-  server_->set_payload_max_length(options_.max_body_bytes);
+  server_->set_payload_max_length(std::max(options_.max_body_bytes, options_.max_policy_bytes));
   Routes();
 }
 
@@ -93,18 +215,34 @@ void HttpApi::Stop() {
 
 void HttpApi::Routes() {
   httplib::Server& s = *server_;
-  Store& store = farm_->store();
+  Store& store = *store_;
+  using Handled = httplib::Server::HandlerResponse;
 
-  // Every POST changes state: check the token first.
+  // Access: see the header. Checked before any route, so no handler can forget it.
+  // Access rules (CheckAccess) before any route, so no handler can forget them.
   s.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-    if (req.method != "POST" || options_.token.empty()) return httplib::Server::HandlerResponse::Unhandled;
-    const std::string auth = req.get_header_value("Authorization");
-    const std::string prefix = "Bearer ";
-    if (auth.rfind(prefix, 0) != 0 || !SameToken(auth.substr(prefix.size()), options_.token)) {
-      Error(res, 401, "this farm server needs its token: pass --token (Authorization: Bearer)");
-      return httplib::Server::HandlerResponse::Handled;
+    AccessRequest a;
+    a.method = req.method;
+    a.host = req.get_header_value("Host");
+    a.origin = req.get_header_value("Origin");
+    a.authorization = req.get_header_value("Authorization");
+    a.cookie = req.get_header_value("Cookie");
+    if (req.has_param("token")) a.token_param = req.get_param_value("token");
+    const AccessDecision d = CheckAccess(options_, a);
+    if (d.set_cookie) {
+      // Opening /?token=T once keeps the token in a cookie for the dashboard's requests.
+      res.set_header("Set-Cookie", std::string(kTokenCookie) + "=" + options_.token +
+                                       "; Path=/; HttpOnly; SameSite=Strict");
+      if (req.path == "/") {
+        res.set_redirect("/");
+        return Handled::Handled;
+      }
     }
-    return httplib::Server::HandlerResponse::Unhandled;
+    if (d.status != 0) {
+      Error(res, d.status, d.message);
+      return Handled::Handled;
+    }
+    return Handled::Unhandled;
   });
 
   s.set_exception_handler([](const httplib::Request& req, httplib::Response& res,
@@ -120,6 +258,7 @@ void HttpApi::Routes() {
   });
 
   s.Get("/api/health", [this](const httplib::Request&, httplib::Response& res) {
+    if (!farm_) return Reply(res, 200, {{"ok", true}, {"protocol", api::kFarmProtocolVersion}, {"read_only", true}});
     const FarmServerStats st = farm_->stats();
     Reply(res, 200,
           {{"ok", true},
@@ -130,18 +269,56 @@ void HttpApi::Routes() {
              {"leases_lost", st.leases_lost}}}});
   });
 
-  s.Post("/api/jobs", [this](const httplib::Request& req, httplib::Response& res) {
-    const std::string file = req.has_header("X-Enavi-File") ? req.get_header_value("X-Enavi-File")
-                                                            : std::string("job.yaml");
-    // Validation failures are bad input: 400 with the FILE:LINE: field: reason message.
-    const api::JobSpec job = api::ParseJobSpec(req.body, file, options_.job_spec);
-    const auto episodes = api::ExpandJob(job);
-    const std::string id = farm_->Submit(job.name, req.body, episodes);
-    Reply(res, 201, {{"job_id", id}, {"name", job.name}, {"episodes", episodes.size()}});
+  s.Post(".*", [this, &store](const httplib::Request& req, httplib::Response& res) {
+    if (!farm_) return Error(res, 405, "read-only dashboard: this server accepts no changes");
+    if (req.body.size() > options_.max_body_bytes) {
+      return Error(res, 413, "request body of " + std::to_string(req.body.size()) + " bytes, above " +
+                                 std::to_string(options_.max_body_bytes));
+    }
+    if (req.path == "/api/jobs") {
+      const std::string file = req.has_header("X-Enavi-File") ? req.get_header_value("X-Enavi-File")
+                                                              : std::string("job.yaml");
+      // Validation failures are bad input: 400 with the FILE:LINE: field: reason message.
+      const api::JobSpec job = api::ParseJobSpec(req.body, file, options_.job_spec);
+      const std::string id = farm_->Submit(job, req.body);
+      const auto progress = store.Progress(id, NowMs());
+      return Reply(res, 201, {{"job_id", id}, {"name", job.name}, {"episodes", progress ? progress->total : 0}});
+    }
+    // A policy for collection jobs, by content hash: {"hash": "sha256:HEX"}.
+    if (req.path == "/api/policies") {
+      const std::string hash = StorePolicy(&store, req.body, "uploaded policy");
+      return Reply(res, 201, {{"hash", api::kPolicyHashPrefix + hash}});
+    }
+    static const std::regex kCancel(R"(/api/jobs/([A-Za-z0-9_-]+)/cancel)");
+    std::smatch m;
+    if (std::regex_match(req.path, m, kCancel)) {
+      if (!farm_->Cancel(m[1])) return Error(res, 404, "no job '" + std::string(m[1]) + "'");
+      return Reply(res, 200, *farm_->store().Progress(m[1], NowMs()));
+    }
+    Error(res, 404, "no route POST " + req.path);
   });
 
-  s.Get("/api/jobs", [&store](const httplib::Request&, httplib::Response& res) {
-    Reply(res, 200, store.ListJobs(NowMs()));
+  // A collection job's rollouts, exactly one per done episode (api/rollout_records.h stream).
+  s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/rollouts)", [&store](const httplib::Request& req,
+                                                           httplib::Response& res) {
+    if (!store.Progress(req.matches[1], NowMs())) {
+      return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
+    }
+    if (!store.Collection(req.matches[1])) {
+      return Error(res, 400, "job '" + std::string(req.matches[1]) + "' is not a collection job (collect: rollouts)");
+    }
+    res.status = 200;
+    res.set_content(api::EncodeRolloutStream(store.Rollouts(req.matches[1])), "application/octet-stream");
+  });
+
+  s.Get("/api/jobs", [&store](const httplib::Request& req, httplib::Response& res) {
+    std::map<std::string, std::string> labels;
+    for (const std::string& filter : QueryValues(req, "label")) {
+      auto [k, v] = api::ParseLabelFilter(filter, "label");
+      if (labels.count(k) && labels[k] != v) return Reply(res, 200, nlohmann::json::array());
+      labels[k] = v;
+    }
+    Reply(res, 200, store.ListJobs(NowMs(), labels));
   });
 
   s.Get(R"(/api/jobs/([A-Za-z0-9_-]+))", [&store](const httplib::Request& req,
@@ -156,7 +333,27 @@ void HttpApi::Routes() {
     if (!store.Progress(req.matches[1], NowMs())) {
       return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
     }
+    // Paged when asked (the dashboard); the whole list otherwise (scripts, `enavi results`).
+    if (req.has_param("offset") || req.has_param("limit")) {
+      return Reply(res, 200, store.ResultsPage(req.matches[1], PageOf(req)));
+    }
     Reply(res, 200, store.Results(req.matches[1]));
+  });
+
+  s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/summary)", [&store](const httplib::Request& req,
+                                                          httplib::Response& res) {
+    if (!store.Progress(req.matches[1], NowMs())) {
+      return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
+    }
+    Reply(res, 200, store.JobSummary(req.matches[1], PageOf(req)));
+  });
+
+  s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/failures)", [&store](const httplib::Request& req,
+                                                           httplib::Response& res) {
+    if (!store.Progress(req.matches[1], NowMs())) {
+      return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
+    }
+    Reply(res, 200, store.JobFailures(req.matches[1], PageOf(req)));
   });
 
   s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/episodes)", [&store](const httplib::Request& req,
@@ -174,14 +371,6 @@ void HttpApi::Routes() {
     Reply(res, 200, list);
   });
 
-  s.Post(R"(/api/jobs/([A-Za-z0-9_-]+)/cancel)", [this, &store](const httplib::Request& req,
-                                                                httplib::Response& res) {
-    if (!farm_->Cancel(req.matches[1])) {
-      return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
-    }
-    Reply(res, 200, *store.Progress(req.matches[1], NowMs()));
-  });
-
   s.Get(R"(/api/episodes/([A-Za-z0-9_-]+)/result)", [&store](const httplib::Request& req,
                                                              httplib::Response& res) {
     const auto r = store.FullResult(req.matches[1]);
@@ -189,11 +378,85 @@ void HttpApi::Routes() {
     Reply(res, 200, *r);
   });
 
-  s.Get("/api/workers", [this](const httplib::Request&, httplib::Response& res) {
+  s.Get(R"(/api/episodes/([A-Za-z0-9_-]+)/topdown.png)", [&store](const httplib::Request& req,
+                                                                  httplib::Response& res) {
+    const auto r = store.FullResult(req.matches[1]);
+    if (!r) return Error(res, 404, "no result for episode '" + std::string(req.matches[1]) + "'");
+    const int width = req.has_param("width") ? ParseInt(req.get_param_value("width"), "width", 300, 2000) : 900;
+    worlds::WorldRequest w;
+    w.world = r->spec.world;
+    w.seed = r->spec.seed;
+    w.params = r->spec.world_params;
+    if (r->spec.start) w.start = Eigen::Vector3d((*r->spec.start)[0], (*r->spec.start)[1], (*r->spec.start)[2]);
+    if (r->spec.goal) w.goal = Eigen::Vector3d((*r->spec.goal)[0], (*r->spec.goal)[1], (*r->spec.goal)[2]);
+    const std::vector<std::uint8_t> png = report::FlightTopDownPng(*r, worlds::ResolveWorld(w), width);
+    res.set_content(std::string(png.begin(), png.end()), "image/png");
+  });
+
+  s.Get("/api/compare", [&store](const httplib::Request& req, httplib::Response& res) {
+    const std::string base = req.get_param_value("base"), candidate = req.get_param_value("candidate");
+    for (const auto& [name, id] : {std::pair{"base", base}, {"candidate", candidate}}) {
+      if (id.empty()) return Error(res, 400, std::string(name) + ": missing (a job id)");
+      if (!store.Progress(id, NowMs())) return Error(res, 404, std::string(name) + ": no job '" + id + "'");
+    }
+    CompareOptions options;
+    if (req.has_param("mode")) options.mode = req.get_param_value("mode");
+    Reply(res, 200, CompareJson(Compare(store.Results(base), store.Results(candidate), options, base, candidate)));
+  });
+
+  s.Get("/api/trend", [&store](const httplib::Request& req, httplib::Response& res) {
+    const auto labels = QueryValues(req, "label");
+    if (labels.size() != 1) return Error(res, 400, "label: give exactly one key=value");
+    const auto [key, value] = api::ParseLabelFilter(labels.front(), "label");
+    const std::string metric = req.has_param("metric") ? req.get_param_value("metric") : "flight_time_s";
+    Reply(res, 200, store.Trend(key, value, metric, PageOf(req)));
+  });
+
+  s.Get("/api/workers", [this, &store](const httplib::Request&, httplib::Response& res) {
     nlohmann::json list = nlohmann::json::array();
-    for (const auto& w : farm_->Workers()) list.push_back(WorkerJson(w));
+    if (farm_) {
+      for (const auto& w : farm_->Workers()) list.push_back(WorkerJson(w));
+    } else {
+      // A finished database: the workers it saw, none of them known to be alive.
+      for (auto w : store.KnownWorkers()) {
+        w["alive"] = false;
+        list.push_back(std::move(w));
+      }
+    }
     Reply(res, 200, list);
   });
+
+  s.Get("/api/info", [this](const httplib::Request&, httplib::Response& res) {
+    nlohmann::json rules = nlohmann::json::object();
+    for (const auto& [name, rule] : DefaultMetricRules()) {
+      rules[name] = {{"direction", DirectionName(rule.direction)}, {"abs", rule.abs},
+                     {"rel", rule.rel}, {"success_only", rule.success_only}};
+    }
+    Reply(res, 200, {{"read_only", farm_ == nullptr}, {"enavi_version", api::BuildVersion()},
+                     {"git_commit", api::BuildCommit()}, {"metric_rules", rules}});
+  });
+
+  DashboardRoutes();
+}
+
+void HttpApi::DashboardRoutes() {
+  // The pages: one HTML shell, the script and the style sheet, all embedded in the binary.
+  auto asset = [](const std::string& name, const char* type) {
+    return [name, type](const httplib::Request&, httplib::Response& res) {
+      const auto& files = DashboardAssets();
+      const auto it = files.find(name);
+      if (it == files.end()) return Error(res, 404, "no dashboard asset " + name);
+      res.set_header("Cache-Control", "no-cache");
+      res.set_header("X-Content-Type-Options", "nosniff");
+      // Nothing but our own script and images: an injected tag could not load or run anything.
+      res.set_header("Content-Security-Policy",
+                     "default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'");
+      res.set_content(it->second, type);
+    };
+  };
+  server_->Get("/", asset("index.html", "text/html; charset=utf-8"));
+  server_->Get("/static/app.js", asset("app.js", "text/javascript; charset=utf-8"));
+  server_->Get("/static/style.css", asset("style.css", "text/css; charset=utf-8"));
 }
 
 }  // namespace enavi::server

@@ -1,7 +1,9 @@
 #pragma once
-// The farm's HTTP API (routes in api/http_schema.h), served with cpp-httplib. Binds loopback by
-// default; bound anywhere else it refuses to start without a token, and every state-changing
-// request must carry it.
+// The farm's HTTP API (routes in api/http_schema.h) and the dashboard's pages (server/dashboard),
+// served with cpp-httplib. Binds loopback by default; bound anywhere else it refuses to start
+// without a token, and then every request must carry it (header or cookie). With a token, every
+// state-changing request needs it wherever the server is bound. Without a farm (a read-only
+// store: `enavi dashboard --db FILE`) it serves the read routes only.
 
 #include <memory>
 #include <string>
@@ -22,8 +24,30 @@ struct HttpOptions {
   /// Required on state-changing requests when non-empty ("Authorization: Bearer TOKEN").
   std::string token;
   api::JobSpecOptions job_spec;  ///< allowed roots and limits for submitted jobs
-  std::size_t max_body_bytes = 1 << 20;
+  std::size_t max_body_bytes = 1 << 20;     ///< job specs
+  std::size_t max_policy_bytes = 32 << 20;  ///< POST /api/policies (a policy file is ~2 MB)
 };
+
+/// Cookie that carries the token for the dashboard's pages (set by opening /?token=TOKEN).
+inline constexpr const char* kTokenCookie = "enavi_token";
+
+/// The headers access depends on.
+struct AccessRequest {
+  std::string method;  ///< GET, POST, ...
+  std::string host, origin, authorization, cookie;
+  std::string token_param;  ///< ?token=
+};
+
+struct AccessDecision {
+  int status = 0;  ///< 0: allowed; else the HTTP status to refuse with
+  std::string message;
+  bool set_cookie = false;  ///< the ?token= was right: keep it in the token cookie
+};
+
+/// The access rules: on a loopback address the Host must be a loopback name (DNS rebinding);
+/// a state-changing request with an Origin must come from the same host (CSRF); with a token,
+/// writes always need it and, off loopback, every request (Bearer header, cookie or ?token=).
+AccessDecision CheckAccess(const HttpOptions& options, const AccessRequest& request);
 
 /// True for 127.0.0.0/8, ::1 and "localhost".
 bool IsLoopbackHost(const std::string& host);
@@ -32,6 +56,8 @@ class HttpApi {
  public:
   /// @throws std::invalid_argument when `options.host` is not loopback and there is no token.
   HttpApi(FarmServer* farm, HttpOptions options);
+  /// Read-only: the dashboard and GET routes over `store`; every POST answers 405.
+  HttpApi(Store* store, HttpOptions options);
   ~HttpApi();
   HttpApi(const HttpApi&) = delete;
   HttpApi& operator=(const HttpApi&) = delete;
@@ -44,8 +70,11 @@ class HttpApi {
   std::string url() const;
 
  private:
+  HttpApi(Store* store, FarmServer* farm, HttpOptions options);
   void Routes();
-  FarmServer* farm_;
+  void DashboardRoutes();
+  Store* store_;
+  FarmServer* farm_;  // null: read-only
   HttpOptions options_;
   std::unique_ptr<httplib::Server> server_;
   std::thread thread_;

@@ -234,6 +234,24 @@ void Canvas::SavePng(const std::string& path) const {
   }
 }
 
+std::vector<std::uint8_t> Canvas::PngBytes() const {
+  cairo_surface_t* s = Surface(surface_);
+  cairo_surface_flush(s);
+  std::vector<std::uint8_t> out;
+  const cairo_status_t status = cairo_surface_write_to_png_stream(
+      s,
+      [](void* closure, const unsigned char* data, unsigned int length) {
+        auto* bytes = static_cast<std::vector<std::uint8_t>*>(closure);
+        bytes->insert(bytes->end(), data, data + length);
+        return CAIRO_STATUS_SUCCESS;
+      },
+      &out);
+  if (status != CAIRO_STATUS_SUCCESS) {
+    throw std::runtime_error(std::string("cannot encode PNG: ") + cairo_status_to_string(status));
+  }
+  return out;
+}
+
 Rgb PngImage::Pixel(int x, int y) const {
   if (x < 0 || y < 0 || x >= width || y >= height) {
     throw std::out_of_range("pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") outside the image");

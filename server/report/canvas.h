@@ -68,6 +68,8 @@ class Canvas {
 
   /// Writes a PNG; throws std::runtime_error naming `path` on failure.
   void SavePng(const std::string& path) const;
+  /// The PNG file's bytes (for serving over HTTP).
+  std::vector<std::uint8_t> PngBytes() const;
 
  private:
   void Release();

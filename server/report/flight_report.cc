@@ -26,21 +26,43 @@ std::string TimeSeriesCsv(const api::TimeSeries& s) {
   return out;
 }
 
+namespace {
+
+std::string Caption(const api::EpisodeResult& result) {
+  return result.spec.method + " on " + result.spec.board + ", " + result.scenario + " seed " +
+         std::to_string(result.spec.seed) + ": " + result.end_reason;
+}
+
+// Bird's-eye view: the flown path coloured by eci (the paper's Fig. of trajectories).
+void DrawFlight(const api::EpisodeResult& result, TopDownView* top) {
+  std::vector<Eigen::Vector2d> xy;
+  for (const auto& p : result.series.position) xy.emplace_back(p[0], p[1]);
+  if (xy.size() >= 2) top->DrawPath(xy, result.series.eci, 0.0, 1.0, "eci");
+  if (result.collision_point)
+    top->DrawMarker({(*result.collision_point)[0], (*result.collision_point)[1]}, Rgb{0.85, 0.1, 0.1}, "collision");
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> FlightTopDownPng(const api::EpisodeResult& result, const worlds::World& world,
+                                           int width) {
+  TopDownOptions options;
+  options.title = Caption(result);
+  options.width = width;
+  TopDownView top(world, options);
+  DrawFlight(result, &top);
+  return top.canvas().PngBytes();
+}
+
 void WriteFlightPlots(const api::EpisodeResult& result, const worlds::World& world, const std::string& dir) {
   const api::TimeSeries& s = result.series;
   const std::filesystem::path out(dir);
-  const std::string what = result.spec.method + " on " + result.spec.board + ", " + result.scenario + " seed " +
-                           std::to_string(result.spec.seed) + ": " + result.end_reason;
+  const std::string what = Caption(result);
 
-  // Bird's-eye view: the flown path coloured by eci (the paper's Fig. of trajectories).
   TopDownOptions top_options;
   top_options.title = what;
   TopDownView top(world, top_options);
-  std::vector<Eigen::Vector2d> xy;
-  for (const auto& p : s.position) xy.emplace_back(p[0], p[1]);
-  if (xy.size() >= 2) top.DrawPath(xy, s.eci, 0.0, 1.0, "eci");
-  if (result.collision_point)
-    top.DrawMarker({(*result.collision_point)[0], (*result.collision_point)[1]}, Rgb{0.85, 0.1, 0.1}, "collision");
+  DrawFlight(result, &top);
   top.SavePng((out / "flight_topdown.png").string());
 
   // Speed and navigation workload over time (the paper's velocity and utilisation figures).

@@ -2,7 +2,9 @@
 // What `enavi fly --out DIR` writes next to result.json: the time series as CSV and the flight
 // as pictures (bird's-eye path coloured by eci, speed over time, and for E-Navi the adaptation).
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "api/episode.h"
 #include "worlds/world.h"
@@ -14,6 +16,11 @@ std::string TimeSeriesCsv(const api::TimeSeries& series);
 
 /// Writes DIR/flight_topdown.png, DIR/speed.png and DIR/adaptation.png. Throws
 /// std::runtime_error naming the file if one cannot be written.
+/// The bird's-eye view of a flight (path coloured by eci, collision marked) as PNG bytes,
+/// `width` px wide: the dashboard's episode picture.
+std::vector<std::uint8_t> FlightTopDownPng(const api::EpisodeResult& result, const worlds::World& world,
+                                           int width = 1000);
+
 void WriteFlightPlots(const api::EpisodeResult& result, const worlds::World& world, const std::string& dir);
 
 }  // namespace enavi::report

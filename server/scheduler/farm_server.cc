@@ -4,6 +4,10 @@
 
 #include <spdlog/spdlog.h>
 
+#include "api/provenance.h"
+#include "navstack/rl/rollout.h"
+#include "server/scheduler/collection.h"
+
 namespace enavi::server {
 
 std::int64_t NowMs() {
@@ -23,6 +27,8 @@ void FarmServer::Start() {
   // Leases that ran out while no server was watching go back to pending now; leases still
   // running are kept for their workers' heartbeats to renew.
   HandleReleased(store_->ExpireLeases(NowMs()), NowMs());
+  // Workers need the policies of every running collection job.
+  for (const auto& [hash, json] : store_->ActivePolicies()) bus_->Publish(api::PolicyBlob{hash, json});
   stop_ = false;
   thread_ = std::thread([this] { Loop(); });
 }
@@ -33,10 +39,30 @@ void FarmServer::Stop() {
   if (thread_.joinable()) thread_.join();
 }
 
+std::string FarmServer::Submit(const api::JobSpec& job, const std::string& spec_yaml) {
+  JobMeta meta;
+  meta.labels = job.labels;
+  meta.provenance["enavi_version"] = api::BuildVersion();
+  meta.provenance["git_commit"] = api::BuildCommit();
+  meta.provenance["clock"] = job.clock;
+  meta.provenance["cost"] = job.cost;
+  if (!job.policy.empty()) {
+    meta.provenance["policy"] = job.policy;
+    const bool by_hash = job.policy.rfind(api::kPolicyHashPrefix, 0) == 0;
+    meta.provenance["policy_sha256"] =
+        by_hash ? job.policy.substr(std::string(api::kPolicyHashPrefix).size()) : api::Sha256File(job.policy);
+  }
+  std::vector<api::EpisodeSpec> episodes = api::ExpandJob(job);
+  const std::optional<CollectionInfo> collect = PrepareCollection(store_, job, &episodes);
+  return Submit(job.name, spec_yaml, episodes, meta, collect);
+}
+
 std::string FarmServer::Submit(const std::string& name, const std::string& spec_yaml,
-                               const std::vector<api::EpisodeSpec>& episodes) {
+                               const std::vector<api::EpisodeSpec>& episodes, const JobMeta& meta,
+                               const std::optional<CollectionInfo>& collect) {
   const std::int64_t now = NowMs();
-  std::string job_id = store_->CreateJob(name, spec_yaml, episodes, now);
+  if (collect) PublishPolicy(collect->policy_hash);
+  std::string job_id = store_->CreateJob(name, spec_yaml, episodes, now, meta, collect);
   spdlog::info("job {} '{}': {} episodes", job_id, name, episodes.size());
   PublishEvents({{job_id, "submitted", "", name}}, now);
   bus_->Wake();
@@ -49,6 +75,7 @@ bool FarmServer::Cancel(const std::string& job_id) {
   if (!revoked) return false;
   for (const auto& r : *revoked) RetireAssignment(r.worker, r.episode_id, r.attempt);
   spdlog::info("job {} cancelled ({} running episodes revoked)", job_id, revoked->size());
+  RetirePolicyOf(job_id);
   // Workers stop the job's running episodes when they see this.
   PublishEvents({{job_id, "cancelled", "", "job cancelled"}}, now);
   return true;
@@ -143,6 +170,7 @@ void FarmServer::HandleStatuses(const std::vector<api::WorkerStatus>& statuses,
       }
     }
     if (is_new) {
+      store_->RecordWorker(s, now_ms);
       spdlog::info("worker {} on {} (pid {}): {} slots", s.worker_id, s.host, s.pid, s.slots);
     }
   }
@@ -179,8 +207,48 @@ void FarmServer::HandleReleased(const std::vector<ReleasedLease>& released, std:
   }
 }
 
-void FarmServer::HandleResults(const std::vector<api::ResultMessage>& results,
+void FarmServer::PublishPolicy(const std::string& hash) {
+  const auto json = store_->Policy(hash);
+  if (!json) throw std::invalid_argument("policy sha256:" + hash + ": not stored on this server");
+  bus_->Publish(api::PolicyBlob{hash, *json});
+}
+
+// A finished collection job's policy leaves the durable history unless a running job flies it,
+// so late-joining workers are not sent every policy a long training ever used.
+void FarmServer::RetirePolicyOf(const std::string& job_id) {
+  const std::string hash = CollectionHash(job_id);
+  if (hash.empty() || store_->ActivePolicies().count(hash)) return;
+  try {
+    bus_->Retire(api::PolicyBlob{hash, ""});
+  } catch (const std::exception&) {
+    // Not in this server's history (published before a restart).
+  }
+}
+
+std::string FarmServer::CollectionHash(const std::string& job_id) {
+  {
+    std::lock_guard lock(mutex_);
+    if (auto it = collect_hash_.find(job_id); it != collect_hash_.end()) return it->second;
+  }
+  const auto c = store_->Collection(job_id);
+  std::lock_guard lock(mutex_);
+  return collect_hash_[job_id] = c ? c->policy_hash : std::string();
+}
+
+void FarmServer::HandleResults(const std::vector<api::ResultMessage>& input,
                                std::int64_t now_ms) {
+  // A rollout that does not decode is the episode's error, not data.
+  std::vector<api::ResultMessage> results = input;
+  for (api::ResultMessage& m : results) {
+    if (m.rollout.empty()) continue;
+    try {
+      navstack::rl::DecodeRollout(m.rollout, "rollout of " + m.episode_id);
+    } catch (const std::exception& e) {
+      m.status = api::ResultStatus::kError;
+      m.error = e.what();
+      m.rollout.clear();
+    }
+  }
   // One transaction for the whole batch, then the acks: a result is acknowledged only once it
   // is durable.
   const std::vector<IngestOutcome> outcomes = store_->Ingest(results, now_ms);
@@ -242,7 +310,7 @@ void FarmServer::Assign(std::int64_t now_ms) {
         store_->LeaseEpisodes(id, free, {status.boards, status.clocks}, deadline, now_ms);
     for (const Lease& l : leases) {
       bus_->Publish(api::Assignment{id, l.episode_id, l.attempt, l.job_id, l.deadline_ms,
-                                    options_.lease.count(), l.spec});
+                                    options_.lease.count(), l.spec, CollectionHash(l.job_id)});
     }
     if (!leases.empty()) {
       std::lock_guard lock(mutex_);
@@ -272,6 +340,7 @@ void FarmServer::PublishEvents(const std::vector<PendingEvent>& events, std::int
     }
     spdlog::info("job {} finished: {} done, {} failed of {}", job_id, p.done, p.failed, p.total);
     bus_->Publish(api::JobEvent{job_id, "finished", "", p.done, p.failed, p.total, "", now_ms});
+    RetirePolicyOf(job_id);
   }
 }
 

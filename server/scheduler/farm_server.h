@@ -9,12 +9,14 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "api/farm_bus.h"
+#include "api/job_spec.h"
 #include "server/store/store.h"
 
 namespace enavi::server {
@@ -60,8 +62,13 @@ class FarmServer {
   void Stop();
 
   /// Stores a job and starts scheduling it; returns the job id.
+  /// A collection job's policy must be in the store (Store::PutPolicy) first.
   std::string Submit(const std::string& name, const std::string& spec_yaml,
-                     const std::vector<api::EpisodeSpec>& episodes);
+                     const std::vector<api::EpisodeSpec>& episodes, const JobMeta& meta = {},
+                     const std::optional<CollectionInfo>& collect = std::nullopt);
+  /// Expands a validated job spec and stores it with its labels and provenance (this server's
+  /// build, the policy's sha256) and, for a collection job, its policy; returns the job id.
+  std::string Submit(const api::JobSpec& job, const std::string& spec_yaml);
   /// Cancels a job and tells workers to stop its episodes. False: no such job.
   bool Cancel(const std::string& job_id);
 
@@ -82,6 +89,9 @@ class FarmServer {
   };
   void PublishEvents(const std::vector<PendingEvent>& events, std::int64_t now_ms);
   void RetireAssignment(const std::string& worker_id, const std::string& episode_id, int attempt);
+  std::string CollectionHash(const std::string& job_id);
+  void PublishPolicy(const std::string& hash);
+  void RetirePolicyOf(const std::string& job_id);
 
   struct Worker {
     api::WorkerStatus status;
@@ -98,6 +108,7 @@ class FarmServer {
   std::map<std::string, Worker> workers_;
   FarmServerStats stats_;
   std::set<std::string> finished_announced_;
+  std::map<std::string, std::string> collect_hash_;  // job -> policy hash ("" : not collecting)
   std::atomic<bool> stop_{false};
   std::thread thread_;
   std::chrono::steady_clock::time_point last_periodic_;

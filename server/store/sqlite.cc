@@ -83,16 +83,17 @@ std::vector<std::uint8_t> Statement::Blob(int column) const {
                       : std::vector<std::uint8_t>(p, p + sqlite3_column_bytes(stmt_, column));
 }
 
-Database::Database(const std::filesystem::path& path, int busy_timeout_ms) {
-  const int rc = sqlite3_open_v2(path.c_str(), &db_,
-                                 SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX,
-                                 nullptr);
+Database::Database(const std::filesystem::path& path, int busy_timeout_ms, bool read_only) {
+  const int flags = (read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE) |
+                    SQLITE_OPEN_NOMUTEX;
+  const int rc = sqlite3_open_v2(path.c_str(), &db_, flags, nullptr);
   if (rc != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : sqlite3_errstr(rc);
     sqlite3_close(db_);
     throw StoreError("sqlite: cannot open '" + path.string() + "': " + msg);
   }
   sqlite3_busy_timeout(db_, busy_timeout_ms);
+  if (read_only) return;
   // WAL: readers do not block the writer; FULL: a committed result survives power loss.
   Exec("PRAGMA journal_mode=WAL");
   Exec("PRAGMA synchronous=FULL");

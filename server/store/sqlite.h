@@ -59,8 +59,9 @@ class Statement {
 
 class Database {
  public:
-  /// Opens (creating) the database file with WAL journaling, synchronous=FULL and a busy timeout.
-  Database(const std::filesystem::path& path, int busy_timeout_ms);
+  /// Opens (creating) the database file with WAL journaling, synchronous=FULL and a busy timeout;
+  /// `read_only`: opens an existing file without write access (nothing is created or changed).
+  Database(const std::filesystem::path& path, int busy_timeout_ms, bool read_only = false);
   ~Database();
   Database(const Database&) = delete;
   Database& operator=(const Database&) = delete;

@@ -1,12 +1,15 @@
 #include "server/store/store.h"
 
+#include <cmath>
 #include <cstring>
+#include <tuple>
 #include <iomanip>
 #include <random>
 #include <set>
 #include <sstream>
 
 #include "api/job_spec.h"
+#include "api/result_metrics.h"
 #include "server/store/sqlite.h"
 
 namespace enavi::server {
@@ -76,6 +79,72 @@ CREATE TABLE IF NOT EXISTS results (
 CREATE INDEX IF NOT EXISTS results_by_job ON results(job_id, board, scenario, method, seed);
 )sql";
 
+// Collection jobs (RL rollouts): added tables only, so an existing database gains them on open.
+// A rollout row is written in the transaction that stores its episode's result, keyed by episode:
+// exactly one per done episode.
+constexpr const char* kCollectSchema = R"sql(
+CREATE TABLE IF NOT EXISTS policies (
+  hash       TEXT PRIMARY KEY,
+  json       TEXT NOT NULL,
+  created_ms INTEGER NOT NULL
+);
+CREATE TABLE IF NOT EXISTS collect_jobs (
+  job_id      TEXT PRIMARY KEY REFERENCES jobs(id),
+  policy_hash TEXT NOT NULL REFERENCES policies(hash),
+  sample      INTEGER NOT NULL
+);
+CREATE TABLE IF NOT EXISTS rollouts (
+  episode_id  TEXT PRIMARY KEY REFERENCES episodes(id),
+  job_id      TEXT NOT NULL,
+  attempt     INTEGER NOT NULL,
+  policy_hash TEXT NOT NULL,
+  steps       INTEGER NOT NULL,
+  data        BLOB NOT NULL
+);
+CREATE INDEX IF NOT EXISTS rollouts_by_job ON rollouts(job_id);
+)sql";
+
+// Additions since schema version 1, all additive so an existing database opens unchanged:
+// labels (queryable), the workers seen (host, version, calibration: provenance of results).
+// Columns added to existing tables are in Store::Migrate.
+constexpr const char* kSchemaAdditions = R"sql(
+CREATE TABLE IF NOT EXISTS job_labels (
+  job_id TEXT NOT NULL REFERENCES jobs(id),
+  key    TEXT NOT NULL,
+  value  TEXT NOT NULL,
+  PRIMARY KEY (job_id, key)
+);
+CREATE INDEX IF NOT EXISTS job_labels_by_value ON job_labels(key, value, job_id);
+CREATE INDEX IF NOT EXISTS results_unsuccessful ON results(job_id) WHERE success = 0;
+CREATE TABLE IF NOT EXISTS workers (
+  worker_id      TEXT PRIMARY KEY,
+  host           TEXT NOT NULL,
+  version        TEXT NOT NULL,
+  calibration_id TEXT NOT NULL,
+  slots          INTEGER NOT NULL,
+  boards         TEXT NOT NULL,
+  first_seen_ms  INTEGER NOT NULL,
+  last_seen_ms   INTEGER NOT NULL
+);
+)sql";
+
+// Adds one result's metrics (?6, metrics_json) to its cell's running sums; ?5 = success.
+constexpr const char* kAddCellMetrics = R"sql(
+INSERT INTO cell_metrics (job_id, board, scenario, method, name, n, sum, sum_sq, min, max,
+                          n_ok, sum_ok, sum_sq_ok, min_ok, max_ok)
+SELECT ?1, ?2, ?3, ?4, m.key, 1, m.value, m.value * m.value, m.value, m.value,
+       ?5, ?5 * m.value, ?5 * m.value * m.value, CASE WHEN ?5 THEN m.value END,
+       CASE WHEN ?5 THEN m.value END
+FROM json_each(?6) m WHERE m.type IN ('integer', 'real', 'true', 'false')
+ON CONFLICT (job_id, board, scenario, method, name) DO UPDATE SET
+  n = n + 1, sum = sum + excluded.sum, sum_sq = sum_sq + excluded.sum_sq,
+  min = MIN(min, excluded.min), max = MAX(max, excluded.max),
+  n_ok = n_ok + excluded.n_ok, sum_ok = sum_ok + excluded.sum_ok,
+  sum_sq_ok = sum_sq_ok + excluded.sum_sq_ok,
+  min_ok = COALESCE(MIN(min_ok, excluded.min_ok), min_ok, excluded.min_ok),
+  max_ok = COALESCE(MAX(max_ok, excluded.max_ok), max_ok, excluded.max_ok)
+)sql";
+
 std::string NewJobId() {
   std::random_device rd;  // ids only: never affects a result
   std::ostringstream os;
@@ -88,6 +157,13 @@ std::string EpisodeId(const std::string& job_id, std::size_t index) {
   std::ostringstream os;
   os << job_id << "-" << std::setfill('0') << std::setw(5) << index;
   return os.str();
+}
+
+// Step count from a rollout blob's header ("ENR1", obs_dim, num_actions, steps: u32 each).
+std::uint32_t RolloutSteps(const std::string& blob) {
+  std::uint32_t steps = 0;
+  if (blob.size() >= 16) std::memcpy(&steps, blob.data() + 12, sizeof steps);
+  return steps;
 }
 
 bool Accepts(const std::vector<std::string>& list, const std::string& value) {
@@ -166,8 +242,12 @@ api::TimeSeries UnpackSeries(const std::vector<std::uint8_t>& blob) {
 }
 
 Store::Store(const std::filesystem::path& path, StoreOptions options)
-    : options_(options), db_(std::make_unique<Database>(path, options.busy_timeout_ms)) {
+    : options_(options) {
   if (options_.max_attempts < 1) throw std::invalid_argument("max_attempts: must be >= 1");
+  if (options_.read_only && !std::filesystem::is_regular_file(path)) {
+    throw StoreError("database '" + path.string() + "': no such file");
+  }
+  db_ = std::make_unique<Database>(path, options.busy_timeout_ms, options_.read_only);
   Statement& version = db_->Prepare("PRAGMA user_version");
   version.Step();
   const std::int64_t found = version.Int(0);
@@ -177,15 +257,73 @@ Store::Store(const std::filesystem::path& path, StoreOptions options)
                      std::to_string(found) + ", newer than this build's " +
                      std::to_string(kStoreSchemaVersion));
   }
+  if (options_.read_only) {
+    if (!HasColumn("jobs", "id")) {
+      throw StoreError("database '" + path.string() + "' is not an enavi farm database");
+    }
+    return;
+  }
   Transaction tx(*db_);
   db_->Exec(kSchema);
+  db_->Exec(kCollectSchema);
+  db_->Exec(kSchemaAdditions);
+  Migrate();
   db_->Exec("PRAGMA user_version = " + std::to_string(kStoreSchemaVersion));
   tx.Commit();
   db_->Exec("PRAGMA wal_autocheckpoint = 0");
   checkpointer_ = std::thread([this, path] { CheckpointLoop(path); });
 }
 
+bool Store::HasColumn(const std::string& table, const std::string& column) {
+  Statement& q = db_->Prepare("SELECT 1 FROM pragma_table_info(?) WHERE name = ?");
+  q.Bind(1, table).Bind(2, column);
+  const bool found = q.Step();
+  q.Reset();
+  return found;
+}
+
+void Store::Migrate() {
+  if (!HasColumn("jobs", "provenance_json")) {
+    db_->Exec("ALTER TABLE jobs ADD COLUMN provenance_json TEXT NOT NULL DEFAULT '{}'");
+  }
+  // The flat metrics of each result, so aggregates read ~1 kB per row instead of the record
+  // with its notes and events. Rows stored before the column existed are filled in here.
+  if (!HasColumn("results", "metrics_json")) {
+    db_->Exec("ALTER TABLE results ADD COLUMN metrics_json TEXT");
+  }
+  std::vector<std::pair<std::string, std::string>> missing;
+  Statement& old = db_->Prepare("SELECT episode_id, result_json FROM results WHERE metrics_json IS NULL");
+  while (old.Step()) {
+    missing.emplace_back(old.Text(0),
+                         nlohmann::json(api::ResultMetrics(nlohmann::json::parse(old.Text(1)))).dump());
+  }
+  old.Reset();
+  Statement& fill = db_->Prepare("UPDATE results SET metrics_json = ? WHERE episode_id = ?");
+  for (const auto& [id, metrics] : missing) fill.Reset().Bind(1, metrics).Bind(2, id).Run();
+  // Per cell and metric running sums, kept by every ingest (kAddCellMetrics), so a job page
+  // reads ~1 row per cell and metric instead of every result. Built from the results once.
+  if (!HasColumn("cell_metrics", "n")) {
+    db_->Exec(R"sql(
+CREATE TABLE cell_metrics (
+  job_id TEXT NOT NULL, board TEXT NOT NULL, scenario TEXT NOT NULL, method TEXT NOT NULL,
+  name TEXT NOT NULL,
+  n INTEGER NOT NULL, sum REAL NOT NULL, sum_sq REAL NOT NULL, min REAL NOT NULL, max REAL NOT NULL,
+  n_ok INTEGER NOT NULL, sum_ok REAL NOT NULL, sum_sq_ok REAL NOT NULL, min_ok REAL, max_ok REAL,
+  PRIMARY KEY (job_id, board, scenario, method, name)
+);
+INSERT INTO cell_metrics
+SELECT r.job_id, r.board, r.scenario, r.method, m.key, COUNT(*), SUM(m.value), SUM(m.value * m.value),
+       MIN(m.value), MAX(m.value), SUM(r.success), SUM(r.success * m.value),
+       SUM(r.success * m.value * m.value), MIN(CASE WHEN r.success THEN m.value END),
+       MAX(CASE WHEN r.success THEN m.value END)
+FROM results r, json_each(r.metrics_json) m WHERE m.type IN ('integer', 'real', 'true', 'false')
+GROUP BY r.job_id, r.board, r.scenario, r.method, m.key;
+)sql");
+  }
+}
+
 Store::~Store() {
+  if (options_.read_only) return;
   {
     std::lock_guard lock(checkpoint_mutex_);
     stop_checkpoints_ = true;
@@ -221,7 +359,8 @@ void Store::CheckpointLoop(std::filesystem::path path) {
 // ---------------------------------------------------------------- jobs
 
 std::string Store::CreateJob(const std::string& name, const std::string& spec_yaml,
-                             const std::vector<api::EpisodeSpec>& episodes, std::int64_t now_ms) {
+                             const std::vector<api::EpisodeSpec>& episodes, std::int64_t now_ms,
+                             const JobMeta& meta, const std::optional<CollectionInfo>& collect) {
   if (episodes.empty()) throw std::invalid_argument("job '" + name + "': no episodes");
   std::lock_guard lock(mutex_);
   Transaction tx(*db_);
@@ -230,6 +369,10 @@ std::string Store::CreateJob(const std::string& name, const std::string& spec_ya
                "VALUES (?, ?, ?, 'running', ?, ?)")
       .Bind(1, job_id).Bind(2, name).Bind(3, spec_yaml)
       .Bind(4, static_cast<std::int64_t>(episodes.size())).Bind(5, now_ms).Run();
+  db_->Prepare("UPDATE jobs SET provenance_json = ? WHERE id = ?")
+      .Bind(1, nlohmann::json(meta.provenance).dump()).Bind(2, job_id).Run();
+  Statement& label = db_->Prepare("INSERT INTO job_labels (job_id, key, value) VALUES (?, ?, ?)");
+  for (const auto& [key, value] : meta.labels) label.Reset().Bind(1, job_id).Bind(2, key).Bind(3, value).Run();
   Statement& insert = db_->Prepare(
       "INSERT INTO episodes (id, job_id, idx, spec_json, board, world, method, seed, clock, "
       "state, updated_ms) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, 'pending', ?)");
@@ -239,6 +382,10 @@ std::string Store::CreateJob(const std::string& name, const std::string& spec_ya
         .Bind(1, EpisodeId(job_id, i)).Bind(2, job_id).Bind(3, static_cast<std::int64_t>(i))
         .Bind(4, nlohmann::json(e).dump()).Bind(5, e.board).Bind(6, e.world).Bind(7, e.method)
         .Bind(8, static_cast<std::int64_t>(e.seed)).Bind(9, e.clock).Bind(10, now_ms).Run();
+  }
+  if (collect) {
+    db_->Prepare("INSERT INTO collect_jobs (job_id, policy_hash, sample) VALUES (?, ?, ?)")
+        .Bind(1, job_id).Bind(2, collect->policy_hash).Bind(3, collect->sample ? 1 : 0).Run();
   }
   tx.Commit();
   return job_id;
@@ -259,6 +406,19 @@ api::JobProgress Store::ProgressLocked(const std::string& job_id, std::int64_t n
   p.finished_ms = job.IsNull(6) ? 0 : job.Int(6);
   p.now_ms = now_ms;
   job.Reset();
+  if (HasColumn("jobs", "provenance_json")) {
+    Statement& prov = db_->Prepare("SELECT provenance_json FROM jobs WHERE id = ?");
+    prov.Bind(1, job_id);
+    if (prov.Step()) {
+      p.provenance = nlohmann::json::parse(prov.Text(0)).get<std::map<std::string, std::string>>();
+    }
+    prov.Reset();
+  }
+  if (HasColumn("job_labels", "key")) {
+    Statement& labels = db_->Prepare("SELECT key, value FROM job_labels WHERE job_id = ?");
+    labels.Bind(1, job_id);
+    while (labels.Step()) p.labels[labels.Text(0)] = labels.Text(1);
+  }
   Statement& counts =
       db_->Prepare("SELECT state, COUNT(*) FROM episodes WHERE job_id = ? GROUP BY state");
   counts.Bind(1, job_id);
@@ -286,11 +446,26 @@ std::optional<api::JobProgress> Store::Progress(const std::string& job_id, std::
   return p;
 }
 
-std::vector<api::JobProgress> Store::ListJobs(std::int64_t now_ms) {
+std::vector<api::JobProgress> Store::ListJobs(std::int64_t now_ms) { return ListJobs(now_ms, {}); }
+
+std::vector<api::JobProgress> Store::ListJobs(std::int64_t now_ms,
+                                              const std::map<std::string, std::string>& labels) {
   std::lock_guard lock(mutex_);
   std::vector<std::string> ids;
-  Statement& list = db_->Prepare("SELECT id FROM jobs ORDER BY created_ms, rowid");
-  while (list.Step()) ids.push_back(list.Text(0));
+  if (labels.empty()) {
+    Statement& list = db_->Prepare("SELECT id FROM jobs ORDER BY created_ms, rowid");
+    while (list.Step()) ids.push_back(list.Text(0));
+  } else if (HasColumn("job_labels", "key")) {
+    // Jobs matching every filter: one row per matching label, so the count must be all of them.
+    Statement& list = db_->Prepare(
+        "SELECT j.id FROM jobs j JOIN job_labels l ON l.job_id = j.id "
+        "WHERE (l.key, l.value) IN (SELECT value ->> '$[0]', value ->> '$[1]' FROM json_each(?)) "
+        "GROUP BY j.id HAVING COUNT(*) = ? ORDER BY j.created_ms, j.rowid");
+    nlohmann::json pairs = nlohmann::json::array();
+    for (const auto& [k, v] : labels) pairs.push_back({k, v});
+    list.Bind(1, pairs.dump()).Bind(2, static_cast<std::int64_t>(labels.size()));
+    while (list.Step()) ids.push_back(list.Text(0));
+  }
   std::vector<api::JobProgress> out;
   for (const auto& id : ids) out.push_back(ProgressLocked(id, now_ms));
   return out;
@@ -510,17 +685,22 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
   std::lock_guard lock(mutex_);
   Transaction tx(*db_);
   Statement& lookup = db_->Prepare(
-      "SELECT e.state, e.attempts, e.lease_owner, e.job_id, j.state FROM episodes e "
-      "JOIN jobs j ON j.id = e.job_id WHERE e.id = ?");
+      "SELECT e.state, e.attempts, e.lease_owner, e.job_id, j.state, c.policy_hash FROM episodes e "
+      "JOIN jobs j ON j.id = e.job_id LEFT JOIN collect_jobs c ON c.job_id = e.job_id "
+      "WHERE e.id = ?");
+  Statement& insert_rollout = db_->Prepare(
+      "INSERT OR REPLACE INTO rollouts (episode_id, job_id, attempt, policy_hash, steps, data) "
+      "VALUES (?, ?, ?, ?, ?, ?)");
   Statement& insert = db_->Prepare(
       "INSERT OR IGNORE INTO results (episode_id, job_id, worker, attempt, board, scenario, world, "
       "method, seed, clock, success, collided, timed_out, end_reason, flight_time_s, "
       "path_length_m, velocity_mean_mps, velocity_std_mps, nav_cpu_util_pct, "
-      "deadline_miss_ratio, replans, wall_time_s, received_ms, result_json, series) "
-      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+      "deadline_miss_ratio, replans, wall_time_s, received_ms, result_json, series, metrics_json) "
+      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   Statement& set_state = db_->Prepare(
       "UPDATE episodes SET state = ?, attempts = ?, lease_owner = NULL, lease_deadline_ms = NULL, "
       "last_error = ?, updated_ms = ? WHERE id = ?");
+  Statement& add_cell = db_->Prepare(kAddCellMetrics);
   std::vector<std::string> touched_jobs;
 
   for (const api::ResultMessage& m : results) {
@@ -537,10 +717,25 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
     const std::string owner = lookup.Text(2);
     out.job_id = lookup.Text(3);
     const std::string job_state = lookup.Text(4);
+    const std::string collect_hash = lookup.IsNull(5) ? std::string() : lookup.Text(5);
     lookup.Reset();
+    // A collection episode's result counts only with a rollout of the job's policy: a rollout of
+    // another (stale) policy is refused by its hash, and the episode runs again.
+    api::ResultMessage refused;
+    const api::ResultMessage* msg = &m;
+    if (!collect_hash.empty() && m.status == api::ResultStatus::kOk &&
+        (m.rollout.empty() || m.policy_hash != collect_hash)) {
+      refused = m;
+      refused.status = api::ResultStatus::kError;
+      refused.error = m.rollout.empty() ? "collection episode without a rollout"
+                                        : "rollout of policy " + m.policy_hash.substr(0, 12) +
+                                              ", not the job's " + collect_hash.substr(0, 12) +
+                                              " (stale policy)";
+      msg = &refused;
+    }
     const bool current_lease = state == "leased" && attempts == m.attempt && owner == m.worker_id;
 
-    if (m.status == api::ResultStatus::kOk) {
+    if (msg->status == api::ResultStatus::kOk) {
       if (state == "done") {
         out.ack = api::AckStatus::kDuplicate;
         out.detail = "episode already has a result";
@@ -550,8 +745,10 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
       } else {
         // pending/leased (any attempt: episodes are deterministic) or failed (a late success).
         const api::EpisodeResult& r = m.result;
+        const nlohmann::json flat = api::ResultSummaryJson(r);
+        const std::string metrics = nlohmann::json(api::ResultMetrics(flat)).dump();
         const std::string summary = [&] {
-          nlohmann::json j = api::ResultSummaryJson(r);
+          nlohmann::json j = flat;
           j["spec"] = r.spec;
           nlohmann::json events = nlohmann::json::array();
           for (const auto& e : r.events) events.push_back({{"t", e.t}, {"kind", e.kind}, {"detail", e.detail}});
@@ -568,20 +765,29 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
             .Bind(17, r.velocity_mean_mps).Bind(18, r.velocity_std_mps)
             .Bind(19, r.nav_cpu_util_pct).Bind(20, r.deadline_miss_ratio)
             .Bind(21, r.replans).Bind(22, m.wall_time_s).Bind(23, now_ms).Bind(24, summary)
-            .BindBlob(25, PackSeries(r.series)).Run();
+            .BindBlob(25, PackSeries(r.series)).Bind(26, metrics).Run();
+        add_cell.Reset()
+            .Bind(1, out.job_id).Bind(2, r.spec.board)
+            .Bind(3, r.scenario.empty() ? api::ScenarioOf(r.spec.world) : r.scenario)
+            .Bind(4, r.spec.method).Bind(5, r.success ? 1 : 0).Bind(6, metrics).Run();
+        if (!m.rollout.empty()) {
+          insert_rollout.Reset().Bind(1, m.episode_id).Bind(2, out.job_id).Bind(3, m.attempt)
+              .Bind(4, m.policy_hash).Bind(5, static_cast<std::int64_t>(RolloutSteps(m.rollout)))
+              .BindBlob(6, std::vector<std::uint8_t>(m.rollout.begin(), m.rollout.end())).Run();
+        }
         set_state.Reset().Bind(1, "done").Bind(2, std::max(attempts, m.attempt)).BindNull(3)
             .Bind(4, now_ms).Bind(5, m.episode_id).Run();
         out.ack = api::AckStatus::kStored;
         out.event = "episode_done";
         touched_jobs.push_back(out.job_id);
       }
-    } else if (m.status == api::ResultStatus::kError) {
+    } else if (msg->status == api::ResultStatus::kError) {
       if (!current_lease) {
         out.ack = state == "done" ? api::AckStatus::kDuplicate : api::AckStatus::kDiscarded;
         out.detail = "not the current lease of this episode (" + state + ")";
       } else {
         const bool failed = attempts >= options_.max_attempts;
-        std::string reason = m.error;
+        std::string reason = msg->error;
         if (failed) reason += " (gave up after " + std::to_string(attempts) + " attempts)";
         set_state.Reset().Bind(1, failed ? "failed" : "pending").Bind(2, attempts)
             .Bind(3, reason).Bind(4, now_ms).Bind(5, m.episode_id).Run();
@@ -610,23 +816,33 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
   return outcomes;
 }
 
+std::string Store::ResultsQuery(bool paged) {
+  const bool hosts = HasColumn("workers", "host");
+  // Driven by the episodes' (job_id, idx) index: a page reads only its rows, unsorted.
+  return std::string("SELECT r.episode_id, r.worker, r.attempt, r.wall_time_s, r.result_json, ") +
+         (hosts ? "w.host" : "NULL") + " FROM episodes e JOIN results r ON r.episode_id = e.id " +
+         (hosts ? "LEFT JOIN workers w ON w.worker_id = r.worker " : "") +
+         "WHERE e.job_id = ? ORDER BY e.idx" + (paged ? " LIMIT ? OFFSET ?" : "");
+}
+
+nlohmann::json Store::ResultObject(const Statement& q) {
+  nlohmann::json j = nlohmann::json::parse(q.Text(4));
+  j.erase("spec");
+  j.erase("events");
+  j["episode_id"] = q.Text(0);
+  j["worker"] = q.Text(1);
+  j["worker_host"] = q.Text(5);
+  j["attempt"] = q.Int(2);
+  j["wall_time_s"] = q.Double(3);
+  return j;
+}
+
 nlohmann::json Store::Results(const std::string& job_id) {
   std::lock_guard lock(mutex_);
   nlohmann::json list = nlohmann::json::array();
-  Statement& q = db_->Prepare(
-      "SELECT r.episode_id, r.worker, r.attempt, r.wall_time_s, r.result_json FROM results r "
-      "JOIN episodes e ON e.id = r.episode_id WHERE r.job_id = ? ORDER BY e.idx");
+  Statement& q = db_->Prepare(ResultsQuery(false));
   q.Bind(1, job_id);
-  while (q.Step()) {
-    nlohmann::json j = nlohmann::json::parse(q.Text(4));
-    j.erase("spec");
-    j.erase("events");
-    j["episode_id"] = q.Text(0);
-    j["worker"] = q.Text(1);
-    j["attempt"] = q.Int(2);
-    j["wall_time_s"] = q.Double(3);
-    list.push_back(std::move(j));
-  }
+  while (q.Step()) list.push_back(ResultObject(q));
   return list;
 }
 
@@ -639,6 +855,205 @@ std::optional<api::EpisodeResult> Store::FullResult(const std::string& episode_i
   r.series = UnpackSeries(q.Blob(1));
   q.Reset();
   return r;
+}
+
+// ---------------------------------------------------------------- dashboard aggregates
+
+namespace {
+
+double SampleStd(std::int64_t n, double mean, double mean_sq) {
+  if (n < 2) return 0.0;
+  const double var = std::max(0.0, mean_sq - mean * mean) * static_cast<double>(n) / (n - 1);
+  return std::sqrt(var);
+}
+
+nlohmann::json Stats(std::int64_t n, double mean, double min, double max, double mean_sq) {
+  return {{"n", n}, {"mean", mean}, {"std", SampleStd(n, mean, mean_sq)}, {"min", min}, {"max", max}};
+}
+
+nlohmann::json PageJson(const Page& page, std::int64_t total) {
+  return {{"offset", page.offset}, {"limit", page.limit}, {"total", total}};
+}
+
+}  // namespace
+
+nlohmann::json Store::JobSummary(const std::string& job_id, const Page& page) {
+  std::lock_guard lock(mutex_);
+  const std::string metrics = HasColumn("results", "metrics_json") ? "r.metrics_json" : "r.result_json";
+  nlohmann::json out = PageJson(page, 0);
+  Statement& count = db_->Prepare(
+      "SELECT COUNT(*) FROM (SELECT 1 FROM results WHERE job_id = ? GROUP BY board, scenario, method)");
+  count.Bind(1, job_id);
+  count.Step();
+  out["total"] = count.Int(0);
+  count.Reset();
+  // Per cell and metric, all episodes and successful ones: from the running sums when the
+  // database has them, else (a read-only database written before them) from every result.
+  const std::string sums =
+      HasColumn("cell_metrics", "n")
+          ? "SELECT board, scenario, method, name, n, sum / n, min, max, sum_sq / n, n_ok, "
+            "  sum_ok / NULLIF(n_ok, 0), min_ok, max_ok, sum_sq_ok / NULLIF(n_ok, 0) "
+            "FROM cell_metrics WHERE job_id = ?1 AND (board, scenario, method) IN ("
+            "  SELECT board, scenario, method FROM cell_metrics WHERE job_id = ?1 "
+            "  GROUP BY board, scenario, method ORDER BY board, scenario, method LIMIT ?2 OFFSET ?3) "
+            "ORDER BY board, scenario, method"
+          : "WITH cells AS (SELECT board, scenario, method FROM results WHERE job_id = ?1 "
+            "  GROUP BY board, scenario, method ORDER BY board, scenario, method LIMIT ?2 OFFSET ?3) "
+            "SELECT r.board, r.scenario, r.method, m.key, "
+            "  COUNT(*), AVG(m.value), MIN(m.value), MAX(m.value), AVG(m.value * m.value), "
+            "  COUNT(*) FILTER (WHERE r.success = 1), AVG(m.value) FILTER (WHERE r.success = 1), "
+            "  MIN(m.value) FILTER (WHERE r.success = 1), MAX(m.value) FILTER (WHERE r.success = 1), "
+            "  AVG(m.value * m.value) FILTER (WHERE r.success = 1) "
+            "FROM results r JOIN cells c ON c.board = r.board AND c.scenario = r.scenario "
+            "  AND c.method = r.method, json_each(" + metrics + ") m "
+            "WHERE r.job_id = ?1 AND m.type IN ('integer', 'real', 'true', 'false') "
+            "GROUP BY r.board, r.scenario, r.method, m.key ORDER BY r.board, r.scenario, r.method";
+  Statement& q = db_->Prepare(sums);
+  q.Bind(1, job_id).Bind(2, page.limit).Bind(3, page.offset);
+  nlohmann::json cells = nlohmann::json::array();
+  while (q.Step()) {
+    const std::string board = q.Text(0), scenario = q.Text(1), method = q.Text(2);
+    if (cells.empty() || cells.back()["board"] != board || cells.back()["scenario"] != scenario ||
+        cells.back()["method"] != method) {
+      cells.push_back({{"board", board}, {"scenario", scenario}, {"method", method},
+                       {"results", 0}, {"metrics", nlohmann::json::object()},
+                       {"success_only", nlohmann::json::object()}});
+    }
+    nlohmann::json& cell = cells.back();
+    cell["results"] = std::max(cell["results"].get<std::int64_t>(), q.Int(4));
+    cell["metrics"][q.Text(3)] = Stats(q.Int(4), q.Double(5), q.Double(6), q.Double(7), q.Double(8));
+    if (q.Int(9) > 0) {
+      cell["success_only"][q.Text(3)] =
+          Stats(q.Int(9), q.Double(10), q.Double(11), q.Double(12), q.Double(13));
+    }
+  }
+  q.Reset();
+  // Episodes that never produced a result (failed after all attempts) count against the cell.
+  Statement& failed = db_->Prepare(
+      "SELECT board, world, method, COUNT(*) FROM episodes WHERE job_id = ? AND state = 'failed' "
+      "GROUP BY board, world, method");
+  failed.Bind(1, job_id);
+  std::map<std::tuple<std::string, std::string, std::string>, std::int64_t> failures;
+  while (failed.Step()) {
+    failures[{failed.Text(0), api::ScenarioOf(failed.Text(1)), failed.Text(2)}] += failed.Int(3);
+  }
+  for (auto& cell : cells) {
+    const auto it = failures.find({cell["board"], cell["scenario"], cell["method"]});
+    cell["failed_episodes"] = it == failures.end() ? 0 : it->second;
+  }
+  out["cells"] = std::move(cells);
+  return out;
+}
+
+nlohmann::json Store::ResultsPage(const std::string& job_id, const Page& page) {
+  std::lock_guard lock(mutex_);
+  Statement& count = db_->Prepare("SELECT COUNT(*) FROM results WHERE job_id = ?");
+  count.Bind(1, job_id);
+  count.Step();
+  nlohmann::json out = PageJson(page, count.Int(0));
+  count.Reset();
+  nlohmann::json list = nlohmann::json::array();
+  Statement& q = db_->Prepare(ResultsQuery(true));
+  q.Bind(1, job_id).Bind(2, page.limit).Bind(3, page.offset);
+  while (q.Step()) list.push_back(ResultObject(q));
+  q.Reset();
+  out["results"] = std::move(list);
+  return out;
+}
+
+nlohmann::json Store::JobFailures(const std::string& job_id, const Page& page) {
+  std::lock_guard lock(mutex_);
+  // Failed episodes have no result (a late success makes them done), so the two sets are
+  // disjoint; each comes from its own index.
+  Statement& count = db_->Prepare(
+      "SELECT (SELECT COUNT(*) FROM episodes WHERE state = 'failed' AND job_id = ?1) + "
+      "(SELECT COUNT(*) FROM results WHERE job_id = ?1 AND success = 0)");
+  count.Bind(1, job_id);
+  count.Step();
+  nlohmann::json out = PageJson(page, count.Int(0));
+  count.Reset();
+  Statement& q = db_->Prepare(
+      "SELECT e.id, e.board, e.world, e.method, e.seed, e.state, e.attempts, "
+      "COALESCE(r.end_reason, e.last_error, '') FROM episodes e "
+      "LEFT JOIN results r ON r.episode_id = e.id WHERE e.id IN ("
+      "  SELECT id FROM episodes WHERE state = 'failed' AND job_id = ?1 UNION ALL "
+      "  SELECT episode_id FROM results WHERE job_id = ?1 AND success = 0) "
+      "ORDER BY e.idx LIMIT ?2 OFFSET ?3");
+  q.Bind(1, job_id).Bind(2, page.limit).Bind(3, page.offset);
+  nlohmann::json list = nlohmann::json::array();
+  while (q.Step()) {
+    list.push_back({{"episode_id", q.Text(0)}, {"board", q.Text(1)},
+                    {"scenario", api::ScenarioOf(q.Text(2))}, {"world", q.Text(2)},
+                    {"method", q.Text(3)}, {"seed", q.Int(4)}, {"state", q.Text(5)},
+                    {"attempts", q.Int(6)}, {"reason", q.Text(7)}});
+  }
+  q.Reset();
+  out["failures"] = std::move(list);
+  return out;
+}
+
+nlohmann::json Store::Trend(const std::string& key, const std::string& value,
+                            const std::string& metric, const Page& page) {
+  if (metric.empty() || !std::all_of(metric.begin(), metric.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.';
+      })) {
+    throw std::invalid_argument("metric: '" + metric + "': letters, digits, _ and . only");
+  }
+  std::lock_guard lock(mutex_);
+  nlohmann::json out = PageJson(page, 0);
+  out["points"] = nlohmann::json::array();
+  if (!HasColumn("job_labels", "key")) return out;
+  const std::string metrics = HasColumn("results", "metrics_json") ? "r.metrics_json" : "r.result_json";
+  Statement& count = db_->Prepare("SELECT COUNT(*) FROM job_labels WHERE key = ? AND value = ?");
+  count.Bind(1, key).Bind(2, value);
+  count.Step();
+  out["total"] = count.Int(0);
+  count.Reset();
+  Statement& q = db_->Prepare(
+      "WITH series AS (SELECT j.id, j.name, j.created_ms, j.rowid AS seq FROM jobs j "
+      "  JOIN job_labels l ON l.job_id = j.id WHERE l.key = ?1 AND l.value = ?2 "
+      "  ORDER BY j.created_ms, j.rowid LIMIT ?4 OFFSET ?5) "
+      "SELECT s.id, s.name, s.created_ms, r.board, COUNT(json_extract(" + metrics + ", ?3)), "
+      "  AVG(json_extract(" + metrics + ", ?3)) "
+      "FROM series s JOIN results r ON r.job_id = s.id "
+      "GROUP BY s.id, r.board ORDER BY s.created_ms, s.seq, r.board");
+  q.Bind(1, key).Bind(2, value).Bind(3, "$.\"" + metric + "\"").Bind(4, page.limit).Bind(5, page.offset);
+  while (q.Step()) {
+    if (q.Int(4) == 0) continue;  // the metric is not in these results
+    out["points"].push_back({{"job_id", q.Text(0)}, {"name", q.Text(1)}, {"created_ms", q.Int(2)},
+                             {"board", q.Text(3)}, {"n", q.Int(4)}, {"mean", q.Double(5)}});
+  }
+  q.Reset();
+  return out;
+}
+
+// ---------------------------------------------------------------- workers
+
+void Store::RecordWorker(const api::WorkerStatus& s, std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  db_->Prepare(
+         "INSERT INTO workers (worker_id, host, version, calibration_id, slots, boards, "
+         "first_seen_ms, last_seen_ms) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?7) "
+         "ON CONFLICT (worker_id) DO UPDATE SET host = ?2, version = ?3, calibration_id = ?4, "
+         "slots = ?5, boards = ?6, last_seen_ms = ?7")
+      .Bind(1, s.worker_id).Bind(2, s.host).Bind(3, s.version).Bind(4, s.calibration_id)
+      .Bind(5, s.slots).Bind(6, nlohmann::json(s.boards).dump()).Bind(7, now_ms).Run();
+}
+
+nlohmann::json Store::KnownWorkers() {
+  std::lock_guard lock(mutex_);
+  nlohmann::json list = nlohmann::json::array();
+  if (!HasColumn("workers", "host")) return list;
+  Statement& q = db_->Prepare(
+      "SELECT worker_id, host, version, calibration_id, slots, boards, first_seen_ms, "
+      "last_seen_ms FROM workers ORDER BY worker_id");
+  while (q.Step()) {
+    list.push_back({{"worker_id", q.Text(0)}, {"host", q.Text(1)}, {"version", q.Text(2)},
+                    {"calibration_id", q.Text(3)}, {"slots", q.Int(4)},
+                    {"boards", nlohmann::json::parse(q.Text(5))}, {"first_seen_ms", q.Int(6)},
+                    {"last_seen_ms", q.Int(7)}});
+  }
+  return list;
 }
 
 }  // namespace enavi::server

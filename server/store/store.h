@@ -29,16 +29,21 @@
 #include "api/episode.h"
 #include "api/farm_messages.h"
 #include "api/http_schema.h"
+#include "api/rollout_records.h"
 
 namespace enavi::server {
 
 class Database;
+class Statement;
 
 inline constexpr int kStoreSchemaVersion = 1;
 
 struct StoreOptions {
   int max_attempts = 3;       ///< leases an episode may take before it is `failed`
   int busy_timeout_ms = 10000;
+  /// Opens an existing database for reading only (`enavi dashboard`, `enavi compare`): no
+  /// schema change, no checkpoints; every write throws.
+  bool read_only = false;
 };
 
 /// One leased attempt handed to a worker.
@@ -79,6 +84,24 @@ struct EpisodeInfo {
   api::EpisodeSpec spec;
 };
 
+/// A collection job: its episodes fly the policy `policy_hash` and store their rollouts.
+struct CollectionInfo {
+  std::string policy_hash;  ///< SHA-256 hex of the policy's canonical bytes (policies table)
+  bool sample = false;
+};
+
+/// What a job carries besides its episodes: the spec's labels and where it came from.
+struct JobMeta {
+  std::map<std::string, std::string> labels;
+  std::map<std::string, std::string> provenance;
+};
+
+/// Paging of list endpoints.
+struct Page {
+  std::int64_t offset = 0;
+  std::int64_t limit = 100;
+};
+
 /// Filters a worker announces: empty lists accept anything.
 struct WorkerCapabilities {
   std::vector<std::string> boards;
@@ -96,9 +119,14 @@ class Store {
   // ---- jobs ----
   /// Stores a job and its episodes (all pending); returns the new job id.
   std::string CreateJob(const std::string& name, const std::string& spec_yaml,
-                        const std::vector<api::EpisodeSpec>& episodes, std::int64_t now_ms);
+                        const std::vector<api::EpisodeSpec>& episodes, std::int64_t now_ms,
+                        const JobMeta& meta = {},
+                        const std::optional<CollectionInfo>& collect = std::nullopt);
   std::optional<api::JobProgress> Progress(const std::string& job_id, std::int64_t now_ms);
   std::vector<api::JobProgress> ListJobs(std::int64_t now_ms);
+  /// Jobs carrying every label of `labels` (all jobs when empty), oldest first.
+  std::vector<api::JobProgress> ListJobs(std::int64_t now_ms,
+                                         const std::map<std::string, std::string>& labels);
   /// Cancels a running job. Returns the leases it revoked (their workers should stop), or
   /// nullopt when there is no such job.
   std::optional<std::vector<ReleasedLease>> CancelJob(const std::string& job_id,
@@ -136,6 +164,36 @@ class Store {
   /// The full result (series and events included) of a done episode.
   std::optional<api::EpisodeResult> FullResult(const std::string& episode_id);
 
+  // ---- collection jobs (server/store/collect_store.cc) ----
+  /// Keeps a policy by content hash (idempotent). @pre hash == Sha256Hex(json).
+  void PutPolicy(const std::string& hash, const std::string& json, std::int64_t now_ms);
+  std::optional<std::string> Policy(const std::string& hash);
+  std::optional<CollectionInfo> Collection(const std::string& job_id);
+  /// Policies of running collection jobs, hash -> JSON (published to workers).
+  std::map<std::string, std::string> ActivePolicies();
+  /// The job's stored rollouts in episode order (one per done episode, exactly once).
+  std::vector<api::StoredRollout> Rollouts(const std::string& job_id);
+
+  // ---- dashboard aggregates (computed in SQLite) ----
+  /// Per board x scenario x method cell of a job (a page of cells, in that order): episodes,
+  /// and per metric n, mean, std, min, max over the cell's results; "success_only" repeats the
+  /// statistics over successful episodes. {"cells": [...], "total" (cells), "offset", "limit"}.
+  nlohmann::json JobSummary(const std::string& job_id, const Page& page);
+  /// A page of result objects (as Results) in episode order: {"results", "total", ...}.
+  nlohmann::json ResultsPage(const std::string& job_id, const Page& page);
+  /// Failed episodes and unsuccessful flights with their reasons: {"failures", "total", ...}.
+  nlohmann::json JobFailures(const std::string& job_id, const Page& page);
+  /// Mean of `metric` per job and board over the jobs with label `key=value`, oldest first:
+  /// {"points": [{"job_id", "name", "created_ms", "board", "n", "mean"}], "total" (jobs), ...}.
+  nlohmann::json Trend(const std::string& key, const std::string& value,
+                       const std::string& metric, const Page& page);
+
+  // ---- workers ----
+  /// Remembers a worker's host, version and calibration (provenance of its results).
+  void RecordWorker(const api::WorkerStatus& status, std::int64_t now_ms);
+  /// Every worker this database has seen: {"worker_id", "host", "version", ...}.
+  nlohmann::json KnownWorkers();
+
   int max_attempts() const { return options_.max_attempts; }
 
  private:
@@ -146,6 +204,10 @@ class Store {
   api::JobProgress ProgressLocked(const std::string& job_id, std::int64_t now_ms);
 
   void CheckpointLoop(std::filesystem::path path);
+  void Migrate();
+  std::string ResultsQuery(bool paged);
+  nlohmann::json ResultObject(const Statement& q);
+  bool HasColumn(const std::string& table, const std::string& column);
 
   StoreOptions options_;
   std::mutex mutex_;  // one connection, used by the scheduler and the HTTP threads

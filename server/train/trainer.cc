@@ -1,24 +1,24 @@
 #include "server/train/trainer.h"
 
-#include <unistd.h>
-
 #include <chrono>
 #include <cstdio>
-#include <deque>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
-#include "api/episode.h"
+#include "api/client.h"
+#include "api/content_hash.h"
+#include "api/job_spec.h"
 #include "navstack/adapt/action_grid.h"
 #include "navstack/rl/policy_io.h"
 #include "navstack/rl/rollout.h"
+#include "server/eval/local_farm.h"
 #include "server/report/chart.h"
 #include "workers/board/board_profile.h"
-#include "workers/worker/process.h"
 
 namespace enavi::train {
 namespace fs = std::filesystem;
@@ -41,7 +41,7 @@ void Validate(const TrainOptions& o) {
   Check(o.iterations >= 1 && o.iterations <= 100000, "--iterations: must be in [1, 100000]");
   Check(o.episodes_per_iteration >= 1 && o.episodes_per_iteration <= 10000,
         "--episodes-per-iter: must be in [1, 10000]");
-  Check(o.workers >= 1 && o.workers <= 256, "--workers: must be in [1, 256]");
+  Check(o.workers >= 1 && o.workers <= 64, "--workers: must be in [1, 64]");
   o.ppo.Validate();
 }
 
@@ -62,66 +62,48 @@ void WriteFile(const fs::path& p, const std::string& text) {
   fs::rename(tmp, p);
 }
 
-struct EpisodeJob {
-  api::EpisodeSpec spec;
-  fs::path dir;
+struct Pick {
+  std::string board, scenario;
+  std::uint64_t seed = 0;
 };
 
-struct EpisodeData {
-  bool ok = false;
-  std::string error;
-  rl::Rollout rollout;
-  nlohmann::json summary;  ///< the episode's result record (no time series)
-};
-
-// Flies the episodes in up to `workers` child processes at once: each one is `enavi fly`
-// with the current policy, sampling its actions, writing its rollout.
-std::vector<EpisodeData> FlyAll(const std::vector<EpisodeJob>& jobs, int workers) {
-  std::vector<EpisodeData> data(jobs.size());
-  std::deque<std::size_t> queue;
-  for (std::size_t i = 0; i < jobs.size(); ++i) queue.push_back(i);
-  std::map<std::size_t, worker::ChildProcess> running;
-  const fs::path exe = worker::SelfExecutable();
-  while (!queue.empty() || !running.empty()) {
-    while (!queue.empty() && static_cast<int>(running.size()) < workers) {
-      const std::size_t i = queue.front();
-      queue.pop_front();
-      const EpisodeJob& job = jobs[i];
-      fs::create_directories(job.dir);
-      WriteFile(job.dir / "spec.json", nlohmann::json(job.spec).dump());
-      worker::SpawnOptions spawn;
-      spawn.argv = {exe.string(), "fly", "--spec-file", (job.dir / "spec.json").string(), "--result-file",
-                    (job.dir / "result.json").string(), "--rollout-file", (job.dir / "rollout.json").string()};
-      spawn.stderr_file = job.dir / "stderr.txt";
-      spawn.stdout_file = job.dir / "stdout.txt";
-      running.emplace(i, worker::ChildProcess::Spawn(spawn));
-    }
-    for (auto it = running.begin(); it != running.end();) {
-      const auto status = it->second.Poll();
-      if (!status) {
-        ++it;
-        continue;
-      }
-      EpisodeData& d = data[it->first];
-      const fs::path dir = jobs[it->first].dir;
-      if (status->ok()) {
-        try {
-          d.rollout = rl::DeserializeRollout(ReadFile(dir / "rollout.json"), (dir / "rollout.json").string());
-          d.summary = nlohmann::json::parse(ReadFile(dir / "result.json"));
-          d.summary.erase("series");
-          d.ok = !d.rollout.steps.empty();
-          if (!d.ok) d.error = "empty rollout";
-        } catch (const std::exception& e) {
-          d.error = e.what();
-        }
-      } else {
-        d.error = status->Describe() + ": " + ReadFile(dir / "stderr.txt");
-      }
-      it = running.erase(it);
-    }
-    if (!running.empty()) usleep(20000);
+// The collection job of one iteration: these episodes, the policy by hash, sampled actions.
+std::string IterationJobYaml(std::int64_t it, const std::string& policy_ref, const std::vector<Pick>& picks) {
+  std::ostringstream y;
+  y << "name: train-iter-" << it << "\n"
+    << "methods: [enavi]\n"
+    << "collect: rollouts\n"
+    << "sample: true\n"
+    << "policy: \"" << policy_ref << "\"\n"
+    << "episodes:\n";
+  for (const Pick& p : picks) {
+    y << "  - {board: \"" << p.board << "\", scenario: \"" << p.scenario << "\", seed: " << p.seed << "}\n";
   }
-  return data;
+  return y.str();
+}
+
+// Runs one collection job to its end on the farm; returns its rollouts and result records.
+struct Collected {
+  std::vector<api::StoredRollout> rollouts;
+  nlohmann::json results;
+  int failed = 0;
+};
+
+Collected Collect(api::FarmClient& client, server::LocalFarm* local, const std::string& yaml,
+                  std::int64_t it) {
+  const auto submitted = client.Submit(yaml, "train iteration " + std::to_string(it));
+  while (true) {
+    const api::JobProgress p = client.Status(submitted.job_id);
+    if (p.terminal()) {
+      Collected c;
+      c.failed = p.failed;
+      c.rollouts = client.Rollouts(submitted.job_id);
+      c.results = client.Results(submitted.job_id);
+      return c;
+    }
+    if (local) local->CheckWorkers();
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
 }
 
 void SaveCurvePng(const std::vector<IterationLog>& log, const fs::path& path) {
@@ -197,57 +179,72 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
     }
   }
 
+  // The farm: a running one, or a private one for this run.
+  std::unique_ptr<server::LocalFarm> local;
+  std::string url = options.server;
+  if (url.empty()) {
+    server::LocalFarmOptions farm;
+    farm.workers = options.workers;
+    farm.name = "train";
+    farm.http = true;
+    farm.job_spec.catalog = options.catalog;
+    local = std::make_unique<server::LocalFarm>(farm);
+    url = local->url();
+  }
+  api::FarmClient client(url, options.token);
+
   const auto t_start = std::chrono::steady_clock::now();
   const std::int64_t first = trainer.iteration();
   for (std::int64_t it = first; it < options.iterations; ++it) {
     const auto t0 = std::chrono::steady_clock::now();
-    const fs::path iter_dir = work / ("iter-" + std::to_string(it));
-    fs::create_directories(iter_dir);
-    const fs::path policy_path = iter_dir / "policy.json";
-    rl::SavePolicyFile(policy_path.string(), trainer.policy());
+    // The policy goes to the farm by content hash; only rollouts of exactly it are trained on.
+    const std::string policy_text = rl::CanonicalPolicyText(trainer.policy());
+    const std::string hash = api::Sha256Hex(policy_text);
+    const std::string policy_ref = client.UploadPolicy(policy_text);
+    if (policy_ref != api::kPolicyHashPrefix + hash) {
+      throw std::runtime_error("train: the farm stored the policy as " + policy_ref + ", expected sha256:" + hash);
+    }
 
     // This iteration's episodes: every scenario in turn (so each iteration sees the same mix and
     // its statistics compare across iterations), boards in turn, training-only world seeds.
-    std::vector<EpisodeJob> jobs;
+    std::vector<Pick> picks;
     const int E = options.episodes_per_iteration;
     for (int e = 0; e < E; ++e) {
       const std::uint64_t k = static_cast<std::uint64_t>(it) * E + e;
-      EpisodeJob job;
-      job.spec.world = options.scenarios[k % options.scenarios.size()];
-      job.spec.board = options.boards[(k / options.scenarios.size()) % options.boards.size()];
-      job.spec.seed = options.world_seed_base + (options.seed * 7919 + k) % options.world_seed_count;
-      job.spec.method = "enavi";
-      job.spec.policy = fs::absolute(policy_path).string();
-      job.spec.overrides["strategy.explore"] = 1;
-      job.dir = iter_dir / ("ep-" + std::to_string(e));
-      jobs.push_back(job);
+      picks.push_back({options.boards[(k / options.scenarios.size()) % options.boards.size()],
+                       options.scenarios[k % options.scenarios.size()],
+                       options.world_seed_base + (options.seed * 7919 + k) % options.world_seed_count});
     }
-    const std::vector<EpisodeData> data = FlyAll(jobs, options.workers);
+    const Collected data = Collect(client, local.get(), IterationJobYaml(it, policy_ref, picks), it);
 
     IterationLog row;
     row.iteration = it;
-    std::vector<rl::Rollout> rollouts;
+    row.failed_episodes = data.failed;
     // Every training flight's result, for looking back at what the policy did (episodes.jsonl).
     {
       std::ofstream episodes(work / "episodes.jsonl", std::ios::app);
-      for (std::size_t i = 0; i < data.size(); ++i) {
-        nlohmann::json line = data[i].ok ? data[i].summary : nlohmann::json{{"error", data[i].error}};
+      for (nlohmann::json line : data.results) {
         line["iteration"] = it;
         episodes << line.dump() << "\n";
       }
     }
-    for (std::size_t i = 0; i < data.size(); ++i) {
-      if (!data[i].ok) {
+    std::vector<rl::Rollout> rollouts;
+    for (const api::StoredRollout& s : data.rollouts) {
+      if (s.policy_hash != hash) {
+        std::fprintf(stderr, "\ntrain: rollout of %s refused: policy %s is not this iteration's\n",
+                     s.episode_id.c_str(), s.policy_hash.c_str());
         ++row.failed_episodes;
-        std::fprintf(stderr, "\ntrain: episode %s failed: %s\n", jobs[i].dir.string().c_str(), data[i].error.c_str());
         continue;
       }
-      rl::Rollout r = data[i].rollout;
+      rl::Rollout r = rl::DecodeRollout(s.rollout, "rollout of " + s.episode_id);
+      r.id = s.episode_id;
       r.policy_iteration = trainer.iteration();
-      row.success_rate += r.info.count("success") ? r.info.at("success") : 0.0;
-      row.collision_rate += r.info.count("collided") ? r.info.at("collided") : 0.0;
-      row.mean_nav_cpu += r.info.count("nav_cpu_util_pct") ? r.info.at("nav_cpu_util_pct") : 0.0;
-      row.mean_flight_time += r.info.count("flight_time_s") ? r.info.at("flight_time_s") : 0.0;
+      r.info = {{"success", s.success ? 1.0 : 0.0}, {"collided", s.collided ? 1.0 : 0.0},
+                {"flight_time_s", s.flight_time_s}, {"nav_cpu_util_pct", s.nav_cpu_util_pct}};
+      row.success_rate += s.success ? 1.0 : 0.0;
+      row.collision_rate += s.collided ? 1.0 : 0.0;
+      row.mean_nav_cpu += s.nav_cpu_util_pct;
+      row.mean_flight_time += s.flight_time_s;
       rollouts.push_back(std::move(r));
     }
     if (rollouts.empty()) throw std::runtime_error("train: every episode of iteration " + std::to_string(it) + " failed");
@@ -280,7 +277,6 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
     WriteFile(curve_json, curve.dump(1));
     WriteFile(work / "learning_curve.csv", LearningCurveCsv(log));
     SaveCurvePng(log, work / "learning_curve.png");
-    fs::remove_all(iter_dir);  // rollouts are in the checkpointed update now
 
     if (options.progress) {
       const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

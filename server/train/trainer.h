@@ -1,14 +1,17 @@
 #pragma once
 // `enavi train`: PPO training of E-Navi's frequency adapter from farm rollouts (paper Sec. V.C).
-// Each iteration flies episodes with the current policy (sampling its actions) in parallel child
-// processes, gathers their rollouts, runs one PPO update, and checkpoints; a run resumes from its
-// checkpoint.
+// Each iteration uploads the current policy to a farm, submits a collection job (the policy by
+// content hash, sampled actions), trains one PPO update on the rollouts that come back, and
+// checkpoints; a run resumes from its checkpoint. The farm is a running one (--server) or a
+// private one started for the run (server/eval/local_farm.h), so a worker that dies only delays
+// an iteration: its episode runs again elsewhere.
 
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "api/episode.h"
 #include "navstack/rl/ppo.h"
 
 namespace enavi::train {
@@ -18,7 +21,10 @@ struct TrainOptions {
   std::vector<std::string> scenarios = {"s1", "s2", "s3", "s4", "s5"};
   int iterations = 20;
   int episodes_per_iteration = 10;
-  int workers = 2;                 ///< parallel episode processes
+  std::string server;              ///< farm URL; empty: a private local farm
+  std::string token;               ///< the farm's token (state-changing requests)
+  int workers = 2;                 ///< private farm: local worker processes (one slot each)
+  api::MethodCatalog catalog;      ///< private farm: the methods its job validation knows
   std::uint64_t seed = 1;
   /// Training worlds use seeds from here on, so evaluation seeds (1, 2, 3 ...) stay unseen.
   std::uint64_t world_seed_base = 100;
@@ -35,7 +41,7 @@ struct TrainOptions {
 struct IterationLog {
   std::int64_t iteration = 0;
   int episodes = 0;
-  int failed_episodes = 0;  ///< child errors (not flights that failed: those are data)
+  int failed_episodes = 0;  ///< episodes the farm gave up on (not flights that failed: those are data)
   double mean_return = 0;
   double success_rate = 0;
   double collision_rate = 0;

@@ -13,6 +13,7 @@
 #include "workers/sim/embree_scene.h"
 #include "workers/sim/emulated_nav_link.h"
 #include "workers/sim/episode_config.h"
+#include "workers/sim/episode_provenance.h"
 #include "workers/sim/flight_recorder.h"
 #include "workers/sim/quadrotor.h"
 #include "workers/sim/static_world.h"
@@ -54,14 +55,20 @@ std::shared_ptr<const PreparedWorld> PrepareWorld(worlds::World world) {
   return prepared;
 }
 
-api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const EpisodeOptions& options) {
+worlds::WorldRequest WorldRequestOf(const api::EpisodeSpec& spec) {
   worlds::WorldRequest request;
   request.world = spec.world;
   request.seed = spec.seed;
   request.params = spec.world_params;
   if (spec.start) request.start = Eigen::Vector3d((*spec.start)[0], (*spec.start)[1], (*spec.start)[2]);
   if (spec.goal) request.goal = Eigen::Vector3d((*spec.goal)[0], (*spec.goal)[1], (*spec.goal)[2]);
-  const auto world = PrepareWorld(worlds::ResolveWorld(request));
+  request.placement = worlds::ParsePlacement(spec.units, spec.scale, spec.up, spec.recenter);
+  request.model_path.assign(spec.model_path.begin(), spec.model_path.end());
+  return request;
+}
+
+api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const EpisodeOptions& options) {
+  const auto world = PrepareWorld(worlds::ResolveWorld(WorldRequestOf(spec)));
   return RunEpisode(spec, *world, options);
 }
 
@@ -100,7 +107,9 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
       " on " + std::to_string(config.scheduler.threads > 0 ? std::min(config.scheduler.threads, board.cores) : board.cores) +
       " thread(s)";
   result.notes["triangles"] = std::to_string(prepared.triangles);
+  if (!world.metadata.import_note.empty()) result.notes["world_import"] = world.metadata.import_note;
   result.notes["depth_stream"] = std::to_string(config.nav.camera.width) + "x" + std::to_string(config.nav.camera.height);
+  result.notes.merge(EpisodeProvenance(spec, board, config.nav.strategy.has_value()));
 
   // Vehicle: hovering at the start, facing the goal.
   const navstack::VehicleParams vehicle;

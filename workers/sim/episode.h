@@ -9,6 +9,7 @@
 #include "navstack/rl/rollout.h"
 #include "navstack/runtime/executor.h"
 #include "workers/sim/emulation_options.h"
+#include "worlds/resolve.h"
 #include "worlds/world.h"
 
 namespace enavi::sim {
@@ -25,6 +26,11 @@ struct PreparedWorld {
   std::size_t triangles = 0;
 };
 std::shared_ptr<const PreparedWorld> PrepareWorld(worlds::World world);
+
+/// The world an episode spec names (id or file, seed, params, start, goal, mesh placement,
+/// model path), as a request for worlds::ResolveWorld. Throws worlds::WorldError on a bad
+/// placement (unknown unit, up axis, scale out of range).
+worlds::WorldRequest WorldRequestOf(const api::EpisodeSpec& spec);
 
 struct EpisodeOptions {
   double physics_dt = 0.001;  ///< 1 kHz

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "navstack/rl/rollout.h"
 #include "workers/worker/process.h"
 
 namespace enavi::worker {
@@ -51,7 +52,9 @@ EpisodeOutcome RunEpisode(const api::EpisodeSpec& spec, const EpisodeRun& run,
   const fs::path spec_file = dir / "spec.json";
   const fs::path result_file = dir / "result.json";
   const fs::path stderr_file = dir / "stderr.log";
+  const fs::path rollout_file = dir / "rollout.json";
   fs::remove(result_file);
+  fs::remove(rollout_file);
   {
     std::ofstream out(spec_file, std::ios::binary | std::ios::trunc);
     out << nlohmann::json(spec).dump(2) << "\n";
@@ -62,6 +65,7 @@ EpisodeOutcome RunEpisode(const api::EpisodeSpec& spec, const EpisodeRun& run,
   options.argv = run.command;
   options.argv.insert(options.argv.end(), {"--spec-file", spec_file.string(), "--result-file",
                                            result_file.string()});
+  if (run.collect_rollout) options.argv.insert(options.argv.end(), {"--rollout-file", rollout_file.string()});
   options.env = run.env;
   options.cwd = dir;
   options.stdout_file = dir / "stdout.log";
@@ -114,6 +118,19 @@ EpisodeOutcome RunEpisode(const api::EpisodeSpec& spec, const EpisodeRun& run,
     if (!j.contains("spec")) out.result.spec = spec;
   } catch (const std::exception& e) {
     return Error("invalid result file " + result_file.string() + ": " + e.what(), wall_s);
+  }
+  // The rollout goes on in its compact binary form, checked on the way.
+  if (run.collect_rollout) {
+    std::ifstream rin(rollout_file, std::ios::binary);
+    if (!rin) return Error("episode command exited 0 but wrote no " + rollout_file.string(), wall_s);
+    const std::string text((std::istreambuf_iterator<char>(rin)), std::istreambuf_iterator<char>());
+    try {
+      const navstack::rl::Rollout rollout = navstack::rl::DeserializeRollout(text, rollout_file.string());
+      if (rollout.steps.empty()) return Error("the episode recorded an empty rollout", wall_s);
+      out.rollout = navstack::rl::EncodeRollout(rollout);
+    } catch (const std::exception& e) {
+      return Error(std::string("invalid rollout: ") + e.what(), wall_s);
+    }
   }
   out.kind = EpisodeOutcome::Kind::kResult;
   out.wall_time_s = wall_s;

@@ -27,6 +27,7 @@ struct EpisodeRun {
   std::filesystem::path dir;         ///< working directory, created; spec, result and logs go here
   EpisodeLimits limits;
   std::vector<std::string> env;      ///< NAME=value for the child (episode id, attempt, ...)
+  bool collect_rollout = false;      ///< also pass --rollout-file and read the rollout back
 };
 
 struct EpisodeOutcome {
@@ -35,6 +36,7 @@ struct EpisodeOutcome {
   std::string error;       ///< kError: what went wrong
   double wall_time_s = 0;
   api::EpisodeResult result;  ///< kResult
+  std::string rollout;        ///< kResult of a collect_rollout run: navstack::rl::EncodeRollout
 };
 
 /// The production episode command: this executable's `fly` subcommand.

@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <fstream>
 
 #include <spdlog/spdlog.h>
 
+#include "api/content_hash.h"
 #include "api/job_spec.h"
 #include "workers/worker/process.h"
 
@@ -65,6 +67,7 @@ Worker::Worker(WorkerOptions options)
     options_.episode_command = DefaultEpisodeCommand();
   }
   fs::create_directories(options_.work_dir);
+  fs::create_directories(options_.work_dir / "policies");
   bus_ = std::make_unique<api::WorkerBus>(options_.bus, options_.worker_id);
 }
 
@@ -112,7 +115,9 @@ void Worker::Run() {
         std::chrono::milliseconds(1), std::chrono::milliseconds(200));
     api::WorkerBus::Inbox inbox = bus_->Wait(wait);
     for (const auto& bad : inbox.bad_samples) spdlog::warn("dropped malformed sample: {}", bad);
+    for (const auto& p : inbox.policies) HandlePolicy(p);
     for (const auto& a : inbox.assignments) HandleAssignment(a);
+    StartWaiting();
     for (const auto& ack : inbox.acks) HandleAck(ack);
     for (const auto& e : inbox.events) HandleEvent(e);
     CollectFinished();
@@ -127,12 +132,23 @@ void Worker::Run() {
         PublishStatus();  // announce draining at once
       }
       if (abandon_.load() || Clock::now() >= drain_deadline) {
+        for (auto& [key, w] : waiting_) {
+          api::ResultMessage m;
+          m.episode_id = key.first;
+          m.attempt = key.second;
+          m.worker_id = options_.worker_id;
+          m.job_id = w.first.job_id;
+          m.status = api::ResultStatus::kRejected;
+          m.error = "worker stopped before the episode's policy arrived";
+          Send(std::move(m), /*spool=*/false);
+        }
+        waiting_.clear();
         for (auto& [key, slot] : running_) {
           slot->shutdown = true;
           slot->abort = true;
         }
       }
-      if (running_.empty()) {
+      if (running_.empty() && waiting_.empty()) {
         if (ack_deadline == Clock::time_point::max()) ack_deadline = Clock::now() + options_.ack_grace;
         if (unacked_.empty() || Clock::now() >= ack_deadline) break;
       }
@@ -153,7 +169,7 @@ void Worker::Run() {
 
 void Worker::HandleAssignment(const api::Assignment& a) {
   const Key key{a.episode_id, a.attempt};
-  if (running_.count(key) || unacked_.count(key)) return;  // durable replay of one we have
+  if (running_.count(key) || waiting_.count(key) || unacked_.count(key)) return;  // replay of one we have
   auto reject = [&](const std::string& why) {
     api::ResultMessage m;
     m.episode_id = a.episode_id;
@@ -170,10 +186,69 @@ void Worker::HandleAssignment(const api::Assignment& a) {
     Send(std::move(m), /*spool=*/false);
   };
   if (stop_requests_.load() > 0) return reject("worker is stopping");
-  if (static_cast<int>(running_.size()) >= options_.slots) return reject("no free slot");
+  if (static_cast<int>(running_.size() + waiting_.size()) >= options_.slots) return reject("no free slot");
   if (!Has(options_.boards, a.spec.board)) return reject("board " + a.spec.board + " not served");
   if (!Has(options_.clocks, a.spec.clock)) return reject("clock " + a.spec.clock + " not served");
+  if (!a.policy_hash.empty() && !fs::exists(PolicyPath(a.policy_hash))) {
+    spdlog::info("{} attempt {} waits for policy {}", a.episode_id, a.attempt, a.policy_hash.substr(0, 12));
+    waiting_.emplace(key, std::make_pair(a, Clock::now()));
+    PublishStatus();
+    return;
+  }
+  StartSlot(a);
+}
 
+fs::path Worker::PolicyPath(const std::string& hash) const {
+  return options_.work_dir / "policies" / (hash + ".json");
+}
+
+// Policies are cached by content hash: verified, written once, shared by every episode.
+void Worker::HandlePolicy(const api::PolicyBlob& policy) {
+  const fs::path path = PolicyPath(policy.hash);
+  if (fs::exists(path)) return;
+  if (api::Sha256Hex(policy.json) != policy.hash) {
+    spdlog::warn("policy {} does not match its hash: ignored", policy.hash);
+    return;
+  }
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << policy.json;
+    if (!out) {
+      spdlog::error("cannot cache policy {} in {}", policy.hash, tmp.string());
+      return;
+    }
+  }
+  fs::rename(tmp, path);
+  spdlog::info("cached policy {} ({} bytes)", policy.hash.substr(0, 12), policy.json.size());
+}
+
+void Worker::StartWaiting() {
+  for (auto it = waiting_.begin(); it != waiting_.end();) {
+    const api::Assignment& a = it->second.first;
+    if (fs::exists(PolicyPath(a.policy_hash))) {
+      StartSlot(a);
+    } else if (Clock::now() - it->second.second >= options_.policy_wait) {
+      api::ResultMessage m;
+      m.episode_id = a.episode_id;
+      m.attempt = a.attempt;
+      m.worker_id = options_.worker_id;
+      m.job_id = a.job_id;
+      m.status = api::ResultStatus::kError;
+      m.error = "policy " + a.policy_hash + " not received within " +
+                std::to_string(options_.policy_wait.count()) + " s";
+      spdlog::warn("{} attempt {}: {}", a.episode_id, a.attempt, m.error);
+      Send(std::move(m), /*spool=*/true);
+    } else {
+      ++it;
+      continue;
+    }
+    it = waiting_.erase(it);
+  }
+}
+
+void Worker::StartSlot(const api::Assignment& a) {
+  const Key key{a.episode_id, a.attempt};
   auto slot = std::make_unique<Slot>();
   slot->assignment = a;
   Slot* raw = slot.get();
@@ -186,7 +261,11 @@ void Worker::HandleAssignment(const api::Assignment& a) {
 
 void Worker::SlotMain(Slot* slot) {
   const api::Assignment& a = slot->assignment;
+  // A collection episode flies the cached policy file; its result records the hash.
+  api::EpisodeSpec spec = a.spec;
+  if (!a.policy_hash.empty()) spec.policy = PolicyPath(a.policy_hash).string();
   EpisodeRun run;
+  run.collect_rollout = !a.policy_hash.empty();
   run.command = options_.episode_command;
   run.dir = options_.work_dir / (a.episode_id + "." + std::to_string(a.attempt));
   run.limits = options_.limits;
@@ -194,7 +273,8 @@ void Worker::SlotMain(Slot* slot) {
              "ENAVI_JOB_ID=" + a.job_id, "ENAVI_WORKER_ID=" + options_.worker_id};
   EpisodeOutcome outcome;
   try {
-    outcome = RunEpisode(a.spec, run, slot->abort);
+    outcome = RunEpisode(spec, run, slot->abort);
+    if (!a.policy_hash.empty()) outcome.result.spec.policy = api::kPolicyHashPrefix + a.policy_hash;
   } catch (const std::exception& e) {
     outcome.kind = EpisodeOutcome::Kind::kError;
     outcome.error = std::string("worker could not run the episode: ") + e.what();
@@ -234,6 +314,14 @@ void Worker::CollectFinished() {
       case EpisodeOutcome::Kind::kResult:
         m.status = api::ResultStatus::kOk;
         m.result = std::move(outcome.result);
+        m.policy_hash = a.policy_hash;
+        m.rollout = std::move(outcome.rollout);
+        if (m.rollout.size() > api::kMaxRolloutBytes) {
+          m.status = api::ResultStatus::kError;
+          m.error = "rollout of " + std::to_string(m.rollout.size()) + " bytes exceeds the " +
+                    std::to_string(api::kMaxRolloutBytes) + "-byte limit of one bus sample";
+          m.rollout.clear();
+        }
         break;
       case EpisodeOutcome::Kind::kError:
         m.status = api::ResultStatus::kError;
@@ -310,6 +398,10 @@ void Worker::HandleAck(const api::ResultAck& ack) {
 }
 
 void Worker::HandleEvent(const api::JobEvent& e) {
+  std::erase_if(waiting_, [&](const auto& w) {
+    return (e.kind == "cancelled" && w.second.first.job_id == e.job_id) ||
+           (e.kind == "episode_done" && w.first.first == e.episode_id);
+  });
   for (auto& [key, slot] : running_) {
     const bool job_cancelled = e.kind == "cancelled" && slot->assignment.job_id == e.job_id;
     // Another attempt of an episode we run has finished it: ours is wasted work. (Not on
@@ -329,12 +421,13 @@ void Worker::PublishStatus() {
   s.pid = getpid();
   s.slots = options_.slots;
   s.draining = stop_requests_.load() > 0;
-  s.free_slots = s.draining ? 0 : options_.slots - static_cast<int>(running_.size());
+  s.free_slots = s.draining ? 0 : options_.slots - static_cast<int>(running_.size() + waiting_.size());
   s.boards = options_.boards;
   s.clocks = options_.clocks;
   s.calibration_id = options_.calibration_id;
   s.seq = ++seq_;
   for (const auto& [key, slot] : running_) s.running.push_back({key.first, key.second});
+  for (const auto& [key, w] : waiting_) s.running.push_back({key.first, key.second});
   s.unacked_results = static_cast<int>(unacked_.size());
   s.version = ENAVI_VERSION;
   try {

@@ -42,6 +42,8 @@ struct WorkerOptions {
   std::chrono::seconds drain_timeout{60};
   /// After the last episode, how long to wait for outstanding acknowledgements.
   std::chrono::seconds ack_grace{5};
+  /// A collection episode whose policy has not arrived after this long fails.
+  std::chrono::seconds policy_wait{60};
 };
 
 struct WorkerStats {
@@ -84,6 +86,10 @@ class Worker {
   using Key = std::pair<std::string, int>;  // episode id, attempt
 
   void HandleAssignment(const api::Assignment& a);
+  void HandlePolicy(const api::PolicyBlob& policy);
+  void StartWaiting();
+  void StartSlot(const api::Assignment& a);
+  std::filesystem::path PolicyPath(const std::string& hash) const;
   void HandleAck(const api::ResultAck& ack);
   void HandleEvent(const api::JobEvent& e);
   void CollectFinished();
@@ -96,6 +102,8 @@ class Worker {
   std::unique_ptr<api::WorkerBus> bus_;
   ResultSpool spool_;
   std::map<Key, std::unique_ptr<Slot>> running_;
+  // Collection assignments waiting for their policy (they hold a slot and their lease).
+  std::map<Key, std::pair<api::Assignment, std::chrono::steady_clock::time_point>> waiting_;
   std::map<Key, Outgoing> unacked_;
 
   std::mutex finished_mutex_;

@@ -68,6 +68,30 @@ TEST_F(JobSpecTest, MinimalSpecParsesWithDefaults) {
   EXPECT_EQ(job.MatrixSize(), 4u);
 }
 
+TEST_F(JobSpecTest, LabelsAreParsedAndValidated) {
+  const JobSpec job = Parse(std::string(kMinimal) + "labels: {branch: main, commit: 1a2b3c, suite: nightly}\n");
+  EXPECT_EQ(job.labels, (std::map<std::string, std::string>{{"branch", "main"}, {"commit", "1a2b3c"},
+                                                           {"suite", "nightly"}}));
+  EXPECT_EQ(Error(std::string(kMinimal) + "labels: {Suite: x}\n"),
+            "job.yaml:6: labels.Suite: label keys are lower-case letters, digits and _ . - (starting with a letter or digit)");
+  EXPECT_EQ(Error(std::string(kMinimal) + "labels: {suite: \"<b>\"}\n"),
+            "job.yaml:6: labels.suite: label values are letters, digits and _ . : / @ + -");
+  EXPECT_EQ(Error(std::string(kMinimal) + "labels: {suite: \"\"}\n"),
+            "job.yaml:6: labels.suite: label values have 1..128 characters");
+  EXPECT_EQ(Error(std::string(kMinimal) + "labels: {" + std::string(64, 'k') + ": v}\n"),
+            "job.yaml:6: labels." + std::string(64, 'k') + ": label keys have 1..63 characters");
+  EXPECT_EQ(Error(std::string(kMinimal) + "labels: [a, b]\n"), "job.yaml:6: labels: expected a map of name: value");
+  EXPECT_EQ(Error(std::string(kMinimal) + "labels: {a: 1, a: 2}\n"), "job.yaml:6: labels.a: duplicate key");
+}
+
+TEST_F(JobSpecTest, LabelFiltersParseKeyEqualsValue) {
+  EXPECT_EQ(ParseLabelFilter("suite=nightly", "--label"), (std::pair<std::string, std::string>{"suite", "nightly"}));
+  EXPECT_EQ(ParseLabelFilter("ref=origin/main@1a2b", "--label").second, "origin/main@1a2b");
+  EXPECT_THROW(ParseLabelFilter("k=a=b", "--label"), std::invalid_argument);
+  EXPECT_THROW(ParseLabelFilter("suite", "--label"), std::invalid_argument);
+  EXPECT_THROW(ParseLabelFilter("suite=a b", "--label"), std::invalid_argument);
+}
+
 TEST_F(JobSpecTest, NameDefaultsToFileStem) {
   const JobSpec job = ParseJobSpec("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\n",
                                    "/x/nightly-tx2.yaml", options_);
@@ -200,7 +224,7 @@ TEST_F(JobSpecTest, PathsOutsideTheAllowedRootsAreRejected) {
 
 TEST_F(JobSpecTest, ObjWorldWithoutStartAndGoalIsRejected) {
   EXPECT_EQ(Error("boards: tx2\nmethods: enavi\nseeds: 1\nscenarios: [worlds/yard.obj]\n"),
-            "job.yaml:4: scenarios: 'worlds/yard.obj' is an OBJ mesh: give start and goal");
+            "job.yaml:4: scenarios: 'worlds/yard.obj' is a mesh or SDF world: give start and goal");
 }
 
 TEST_F(JobSpecTest, UnknownKeysAreRejectedWithTheirLine) {

@@ -82,8 +82,8 @@ TEST(FlyCliInputTest, SetOutOfRangeNamesTheFieldAndItsRange) {
 TEST(FlyCliInputTest, ObjWorldNeedsStartAndGoal) {
   TempDir dir;
   const std::string obj = dir.Write("tri.obj", "v 0 0 0\nv 4 0 0\nv 0 4 0\nf 1 2 3\n").string();
-  ExpectRefused(Fly(dir, "--world " + obj), {obj.c_str(), "start", "required for an OBJ world"}, "no start");
-  ExpectRefused(Fly(dir, "--world " + obj + " --start 1,1,1"), {obj.c_str(), "goal", "required for an OBJ world"},
+  ExpectRefused(Fly(dir, "--world " + obj), {obj.c_str(), "start", "required for a mesh world"}, "no start");
+  ExpectRefused(Fly(dir, "--world " + obj + " --start 1,1,1"), {obj.c_str(), "goal", "required for a mesh world"},
                 "no goal");
 }
 

@@ -155,3 +155,63 @@ TEST(FarmClientTest, MalformedUrlIsBadInput) {
 
 }  // namespace
 }  // namespace enavi::server
+
+namespace enavi::server {
+namespace {
+
+AccessRequest Get(const std::string& host = "127.0.0.1:8717") {
+  AccessRequest r;
+  r.method = "GET";
+  r.host = host;
+  return r;
+}
+
+TEST(CheckAccessTest, LoopbackReadsNeedNoTokenButWritesDo) {
+  HttpOptions o;
+  o.token = "s3cret";
+  EXPECT_EQ(CheckAccess(o, Get()).status, 0);
+  AccessRequest post = Get();
+  post.method = "POST";
+  EXPECT_EQ(CheckAccess(o, post).status, 401);
+  post.authorization = "Bearer s3cret";
+  EXPECT_EQ(CheckAccess(o, post).status, 0);
+  post.authorization = "Bearer s3cre";
+  EXPECT_EQ(CheckAccess(o, post).status, 401);
+  post.authorization.clear();
+  post.cookie = "theme=dark; enavi_token=s3cret";
+  EXPECT_EQ(CheckAccess(o, post).status, 0);
+}
+
+TEST(CheckAccessTest, OffLoopbackEveryRouteNeedsTheToken) {
+  HttpOptions o;
+  o.host = "10.0.0.10";
+  o.token = "s3cret";
+  EXPECT_EQ(CheckAccess(o, Get("10.0.0.10:8717")).status, 401);
+  AccessRequest with_cookie = Get("10.0.0.10:8717");
+  with_cookie.cookie = "enavi_token=s3cret";
+  EXPECT_EQ(CheckAccess(o, with_cookie).status, 0);
+  AccessRequest login = Get("10.0.0.10:8717");
+  login.token_param = "s3cret";
+  const AccessDecision d = CheckAccess(o, login);
+  EXPECT_EQ(d.status, 0);
+  EXPECT_TRUE(d.set_cookie);
+  login.token_param = "guess";
+  EXPECT_EQ(CheckAccess(o, login).status, 401);
+}
+
+TEST(CheckAccessTest, ForeignHostAndCrossOriginWritesAreRefused) {
+  HttpOptions o;  // loopback, no token
+  EXPECT_EQ(CheckAccess(o, Get("localhost:8717")).status, 0);
+  EXPECT_EQ(CheckAccess(o, Get("[::1]:8717")).status, 0);
+  EXPECT_EQ(CheckAccess(o, Get("evil.example:8717")).status, 403);  // DNS rebinding
+  AccessRequest post = Get();
+  post.method = "POST";
+  EXPECT_EQ(CheckAccess(o, post).status, 0);  // the CLI sends no Origin
+  post.origin = "http://evil.example";
+  EXPECT_EQ(CheckAccess(o, post).status, 403);
+  post.origin = "http://127.0.0.1:8717";
+  EXPECT_EQ(CheckAccess(o, post).status, 0);
+}
+
+}  // namespace
+}  // namespace enavi::server

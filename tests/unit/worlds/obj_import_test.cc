@@ -47,28 +47,28 @@ f 4 1 5 8
 )";
 
 TEST(ObjImportTest, ReadsAllFaceFormsAndFanTriangulatesQuads) {
-  const TriangleMesh m = ParseObj(kCube, "cube.obj");
+  const ImportedMesh m = ParseObj(kCube, "cube.obj");
   EXPECT_EQ(m.vertices.size(), 8u);
   ASSERT_EQ(m.triangle_count(), 12u);
   EXPECT_EQ(m.triangles[0], Eigen::Vector3i(0, 3, 2)) << "first fan triangle of f 1 4 3 2";
   EXPECT_EQ(m.triangles[1], Eigen::Vector3i(0, 2, 1)) << "second fan triangle of f 1 4 3 2";
-  EXPECT_EQ(m.Bounds().max(), Eigen::Vector3f(1, 1, 1));
+  EXPECT_EQ(m.Bounds().max(), Eigen::Vector3d(1, 1, 1));
 }
 
 TEST(ObjImportTest, PentagonBecomesThreeTriangles) {
-  const TriangleMesh m = ParseObj("v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5\n", "p.obj");
+  const ImportedMesh m = ParseObj("v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5\n", "p.obj");
   EXPECT_EQ(m.triangle_count(), 3u);
 }
 
 TEST(ObjImportTest, NegativeIndicesCountBackFromTheLastVertex) {
-  const TriangleMesh m = ParseObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 5 5 5\nf -4/1 -3/1 -1/1\n", "n.obj");
+  const ImportedMesh m = ParseObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 5 5 5\nf -4/1 -3/1 -1/1\n", "n.obj");
   ASSERT_EQ(m.triangle_count(), 2u);
   EXPECT_EQ(m.triangles[0], Eigen::Vector3i(0, 1, 2));
   EXPECT_EQ(m.triangles[1], Eigen::Vector3i(0, 1, 3));
 }
 
 TEST(ObjImportTest, AcceptsCrlfCommentsVertexColoursAndPlusSigns) {
-  const TriangleMesh m =
+  const ImportedMesh m =
       ParseObj("v 0 0 0 1 0 0\r\nv +1 0 0 # x\r\nv 0 1.5e0 0 1.0\r\n\r\nf 1 2 3\r\nl 1 2\r\n", "c.obj");
   EXPECT_EQ(m.triangle_count(), 1u);
   EXPECT_FLOAT_EQ(m.vertices[1].x(), 1.0f);
@@ -84,7 +84,7 @@ TEST(ObjImportTest, IndexBeyondTheVertexCountNamesFileLineAndCount) {
 }
 
 TEST(ObjImportTest, ForwardReferenceIsAllowedWhenTheVertexExistsLater) {
-  const TriangleMesh m = ParseObj("f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n", "fwd.obj");
+  const ImportedMesh m = ParseObj("f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n", "fwd.obj");
   EXPECT_EQ(m.triangle_count(), 1u);
 }
 
@@ -106,8 +106,8 @@ TEST(ObjImportTest, MalformedInputNamesTheLineAndStatement) {
             "a.obj:3: f: a face needs at least 3 vertices (got 2)");
   EXPECT_EQ(ErrorOf([] { ParseObj("v 0 0 0\nf 1/x 1 1\n", "a.obj"); }),
             "a.obj:2: f: malformed vertex reference '1/x' (expected v, v/vt, v//vn or v/vt/vn)");
-  EXPECT_EQ(ErrorOf([] { ParseObj("v 1e9 0 0\n", "a.obj"); }),
-            "a.obj:1: v: coordinate 1e9 is out of range (|x| <= 100000)");
+  EXPECT_EQ(ErrorOf([] { ParseObj("v 1e13 0 0\n", "a.obj"); }),
+            "a.obj:1: v: coordinate 1e13 is out of range (|x| <= 1e12 in the file's units)");
   EXPECT_EQ(ErrorOf([] { ParseObj("hello world\n", "a.obj"); }),
             "a.obj:1: hello: unknown OBJ statement 'hello' (expected v, f, vt, vn, ...)");
   EXPECT_EQ(ErrorOf([] { ParseObj("v 0 0 0\n", "a.obj"); }), "a.obj: f: no faces found (an OBJ world needs triangles)");
@@ -136,7 +136,7 @@ TEST(ObjImportTest, LoadObjFileNamesAMissingFile) {
 TEST(ObjImportTest, ObjWorldBoundsContainMeshStartAndGoalWithPadding) {
   testing::TempDir dir;
   const auto path = dir.Write("cube.obj", kCube);
-  const World w = WorldFromObj(path, Eigen::Vector3d(-3, 0.5, 0.5), Eigen::Vector3d(4, 0.5, 0.5), 2.0);
+  const World w = WorldFromMesh(path, LoadObjFile(path), {}, Eigen::Vector3d(-3, 0.5, 0.5), Eigen::Vector3d(4, 0.5, 0.5), 2.0);
   EXPECT_EQ(w.bounds.min(), Eigen::Vector3d(-5, -2, -2));
   EXPECT_EQ(w.bounds.max(), Eigen::Vector3d(6, 3, 3));
   EXPECT_FALSE(w.ground.enabled);

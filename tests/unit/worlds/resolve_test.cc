@@ -55,9 +55,9 @@ TEST(ResolveTest, ObjNeedsStartAndGoal) {
   const auto path = dir.Write("cube.obj", kCube);
   WorldRequest r;
   r.world = path.string();
-  EXPECT_EQ(ErrorOf(r), path.string() + ": start: required for an OBJ world (--start x,y,z)");
+  EXPECT_EQ(ErrorOf(r), path.string() + ": start: required for a mesh world (--start x,y,z)");
   r.start = Eigen::Vector3d(-2, 0.5, 0.5);
-  EXPECT_EQ(ErrorOf(r), path.string() + ": goal: required for an OBJ world (--goal x,y,z)");
+  EXPECT_EQ(ErrorOf(r), path.string() + ": goal: required for a mesh world (--goal x,y,z)");
   r.goal = Eigen::Vector3d(3, 0.5, 0.5);
   const World w = ResolveWorld(r);
   EXPECT_EQ(w.metadata.scenario, "custom");
@@ -71,7 +71,7 @@ TEST(ResolveTest, UnknownWorldIsNamed) {
   r.world = "moon";
   EXPECT_EQ(ErrorOf(r),
             "world: 'moon' is neither a scenario (s1, s2, s3, s4, s5, canyon, forest, empty) nor a world "
-            "file (.yaml, .obj)");
+            "file (.yaml, .obj, .gltf, .glb, .dae, .stl, .ply, .fbx, .sdf, .world)");
 }
 
 }  // namespace

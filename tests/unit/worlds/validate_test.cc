@@ -143,10 +143,10 @@ TEST(ValidateTest, EllipsoidDistanceMatchesADenseSurfaceSample) {
 
 TEST(ValidateTest, ClosedMeshHasAnInsideAndAnOpenMeshOnlyASurface) {
   World w = Yard();
-  MeshObject cube;
-  cube.mesh = ParseObj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
-                       "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n",
-                       "cube.obj");
+  MeshObject cube = PlaceMesh(ParseObj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                       "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n",
+                                       "cube.obj"),
+                              {}, "cube.obj", "cube.obj");
   cube.position = {1, 1, 0};
   cube.scale = 2.0;  // occupies [1, 3] x [1, 3] x [0, 2]
   w.objects.emplace_back(cube);

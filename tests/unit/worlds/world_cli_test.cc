@@ -95,7 +95,7 @@ TEST(WorldCliTest, CheckTakesStartAndGoalForAnObj) {
   EXPECT_EQ(r.code, 0) << r.err;
   r = Enavi(dir, "world check " + obj.string() + " --start -2,0.5,0.5");
   EXPECT_EQ(r.code, 2);
-  EXPECT_EQ(r.err, obj.string() + ": goal: required for an OBJ world (--goal x,y,z)\n");
+  EXPECT_EQ(r.err, obj.string() + ": goal: required for a mesh world (--goal x,y,z)\n");
   r = Enavi(dir, "world check " + obj.string() + " --start -2,0.5 --goal 3,0.5,0.5");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--start: expected x,y,z"), std::string::npos) << r.err;

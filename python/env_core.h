@@ -1,0 +1,72 @@
+#pragma once
+// E-Navi's frequency-adaptation problem as a step-by-step environment: each step is one decision
+// of the Strategy Controller (paper Sec. V) in a real virtual-clock flight episode. The episode
+// runs on its own thread; a decision hook (navstack/rl/decision_hook.h) hands each observation
+// and feasible-action mask out and waits for the action, and reports each action's reward.
+
+#include <condition_variable>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "api/episode.h"
+
+namespace enavi::python {
+
+struct EnvConfig {
+  std::string world = "empty";  ///< any world the CLI accepts (s1..s5, forest, empty, a file)
+  std::string board = "tx2";
+  std::string policy;           ///< critic/actor file the stack loads; empty: the shipped one
+  double timeout_s = 0;         ///< 0: derived from the start-goal distance
+  std::map<std::string, std::string> world_params;
+  std::map<std::string, double> overrides;
+};
+
+/// What reset() and step() return.
+struct Transition {
+  Eigen::VectorXd obs;
+  std::vector<std::uint8_t> mask;  ///< feasible actions of the decision at `obs`
+  double reward = 0;
+  bool terminated = false;  ///< goal reached or collision
+  bool truncated = false;   ///< the episode ended otherwise (time-out, fail-safe)
+  std::map<std::string, double> metrics;  ///< at the end: success, collided, flight_time_s, ...
+  std::string end_reason;
+  double t = 0;             ///< decision index
+};
+
+class EnvCore {
+ public:
+  /// @throws std::invalid_argument for an unknown board or a clock other than virtual.
+  explicit EnvCore(EnvConfig config);
+  ~EnvCore();
+  EnvCore(const EnvCore&) = delete;
+  EnvCore& operator=(const EnvCore&) = delete;
+
+  /// Starts a new episode (world and episode seed `seed`); returns its first decision.
+  /// @throws std::invalid_argument for a bad world or overrides, std::runtime_error when the
+  ///   episode ends before its first decision.
+  Transition Reset(std::uint64_t seed);
+  /// Takes `action` for the pending decision; returns the next decision or the episode's end.
+  /// @throws std::invalid_argument for an infeasible action, std::logic_error without reset().
+  Transition Step(int action);
+
+  int obs_size() const;
+  int action_size() const;
+
+ private:
+  class Hook;
+  void Abort();
+
+  EnvConfig config_;
+  std::unique_ptr<Hook> hook_;
+  std::thread episode_;
+};
+
+}  // namespace enavi::python

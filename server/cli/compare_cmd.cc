@@ -1,0 +1,106 @@
+// enavi compare BASE CANDIDATE: did the candidate job get worse than the base job?
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "api/client.h"
+#include "server/cli/commands.h"
+#include "server/compare/compare.h"
+#include "server/store/store.h"
+
+namespace enavi::cli {
+namespace {
+
+struct CompareFlags {
+  std::string base, candidate;
+  std::string server = api::DefaultServerUrl();
+  std::string token;
+  std::string thresholds;
+  std::string format = "table";
+  std::string mode = "auto";
+};
+
+// "FILE.db" (its only job) or "FILE.db:JOB" reads a database; anything else is a job id on the
+// server.
+nlohmann::json LoadResults(const std::string& source, const CompareFlags& f, const char* which) {
+  std::string path = source, job;
+  if (!std::filesystem::is_regular_file(path)) {
+    const auto colon = source.rfind(':');
+    if (colon != std::string::npos && std::filesystem::is_regular_file(source.substr(0, colon))) {
+      path = source.substr(0, colon);
+      job = source.substr(colon + 1);
+    } else {
+      path.clear();
+    }
+  }
+  if (path.empty()) {
+    if (source.find('/') != std::string::npos || source.size() > 64) {
+      throw std::invalid_argument(std::string(which) + ": '" + source +
+                                  "': no such database file, and not a job id");
+    }
+    api::FarmClient client(f.server, f.token);
+    return client.Results(source);
+  }
+  server::StoreOptions options;
+  options.read_only = true;
+  server::Store store(path, options);
+  const auto jobs = store.ListJobs(0);
+  if (job.empty()) {
+    if (jobs.size() != 1) {
+      std::string ids;
+      for (const auto& p : jobs) ids += " " + p.id;
+      throw std::invalid_argument(std::string(which) + ": " + path + " holds " +
+                                  std::to_string(jobs.size()) + " jobs; name one as " + path +
+                                  ":JOB (jobs:" + (ids.empty() ? " none" : ids) + ")");
+    }
+    job = jobs.front().id;
+  } else if (!store.Progress(job, 0)) {
+    throw std::invalid_argument(std::string(which) + ": " + path + " has no job '" + job + "'");
+  }
+  return store.Results(job);
+}
+
+void RunCompare(const CompareFlags& f) {
+  server::CompareOptions options;
+  options.mode = f.mode;
+  if (!f.thresholds.empty()) options.rules = server::LoadMetricRules(f.thresholds);
+  const nlohmann::json base = LoadResults(f.base, f, "BASE");
+  const nlohmann::json candidate = LoadResults(f.candidate, f, "CANDIDATE");
+  const server::CompareReport report = server::Compare(base, candidate, options, f.base, f.candidate);
+  if (f.format == "json") {
+    std::cout << server::CompareJson(report).dump(2) << "\n";
+  } else if (f.format == "junit") {
+    std::cout << server::CompareJunit(report);
+  } else {
+    std::cout << server::CompareTable(report);
+  }
+  std::cout.flush();
+  if (report.regressions > 0) throw ExitStatus{kExitRegression};
+}
+
+}  // namespace
+
+void RegisterCompareCommand(CLI::App& app) {
+  auto f = std::make_shared<CompareFlags>();
+  CLI::App* sub = app.add_subcommand(
+      "compare", "Compare two jobs episode by episode; exit 3 when the candidate regressed");
+  sub->add_option("base", f->base, "base job: a job id on --server, FILE.db or FILE.db:JOB")->required();
+  sub->add_option("candidate", f->candidate, "candidate job (same forms)")->required();
+  sub->add_option("--thresholds", f->thresholds,
+                  "YAML file changing metric directions and thresholds (metrics: {name: {rel: 0.1}})")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--format", f->format, "table, json or junit")
+      ->check(CLI::IsMember({"table", "json", "junit"}))
+      ->capture_default_str();
+  sub->add_option("--mode", f->mode,
+                  "auto (exact on the virtual clock with the cost model, else paired), exact, paired")
+      ->check(CLI::IsMember({"auto", "exact", "paired"}))
+      ->capture_default_str();
+  sub->add_option("--server", f->server, "farm server URL for job ids")
+      ->envname("ENAVI_SERVER")
+      ->capture_default_str();
+  sub->add_option("--token", f->token, "farm server token")->envname("ENAVI_TOKEN");
+  sub->callback([f] { RunCompare(*f); });
+}
+
+}  // namespace enavi::cli

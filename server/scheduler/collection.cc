@@ -1,0 +1,55 @@
+#include "server/scheduler/collection.h"
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "api/content_hash.h"
+#include "navstack/rl/policy_io.h"
+#include "server/scheduler/farm_server.h"
+
+namespace enavi::server {
+
+std::string StorePolicy(Store* store, const std::string& text, const std::string& source) {
+  const std::string canonical =
+      navstack::rl::CanonicalPolicyText(navstack::rl::FrequencyPolicyFromText(text, source));
+  const std::string hash = api::Sha256Hex(canonical);
+  store->PutPolicy(hash, canonical, NowMs());
+  return hash;
+}
+
+std::optional<CollectionInfo> PrepareCollection(Store* store, const api::JobSpec& job,
+                                                std::vector<api::EpisodeSpec>* episodes) {
+  const std::string prefix = api::kPolicyHashPrefix;
+  if (!job.collect) {
+    for (const auto& e : *episodes) {
+      if (api::IsPolicyHashRef(e.policy)) {
+        throw std::invalid_argument("policy: " + e.policy +
+                                    ": a policy by hash is for collection jobs (collect: rollouts)");
+      }
+    }
+    return std::nullopt;
+  }
+  for (const auto& e : *episodes) {
+    if (e.policy != job.policy) {
+      throw std::invalid_argument("episode_overrides.policy: a collection job flies one policy");
+    }
+  }
+  std::string hash;
+  if (api::IsPolicyHashRef(job.policy)) {
+    hash = job.policy.substr(prefix.size());
+    if (!store->Policy(hash)) {
+      throw std::invalid_argument("policy: " + job.policy + ": not on this server (POST /api/policies first)");
+    }
+  } else {
+    std::ifstream in(job.policy, std::ios::binary);
+    if (!in) throw std::invalid_argument("policy: cannot read '" + job.policy + "'");
+    std::ostringstream text;
+    text << in.rdbuf();
+    hash = StorePolicy(store, text.str(), "policy file '" + job.policy + "'");
+  }
+  for (auto& e : *episodes) e.policy = prefix + hash;
+  return CollectionInfo{hash, job.collect->sample};
+}
+
+}  // namespace enavi::server

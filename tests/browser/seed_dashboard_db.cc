@@ -1,0 +1,54 @@
+// seed_dashboard_db DB: a farm database for the dashboard and compare tests, without a farm.
+//   nightly-1  suite=nightly  tx2, pi4b x s1, s3 x baseline, enavi x 3 seeds; one episode fails
+//   nightly-2  suite=nightly  the same, with planner.v_max 1.5 on tx2/s1/baseline: slower
+//                             flights there, the planted regression
+//   hostile    suite=hostile  a job named <img src=x onerror=alert(1)>
+// Prints {"base", "candidate", "hostile"} job ids as JSON.
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "server/store/store.h"
+#include "tests/support/seed_store.h"
+
+namespace {
+
+constexpr const char* kNightly = R"(
+boards: [tx2, pi4b]
+scenarios: [s1, s3]
+methods: [baseline, enavi]
+seeds: 3
+)";
+
+constexpr const char* kFailing = R"(  - match: {board: pi4b, scenario: s3, method: enavi, seed: 2}
+    overrides: {fake.exit_code: 3}
+)";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::cerr << "usage: seed_dashboard_db DB\n";
+    return 2;
+  }
+  enavi::server::StoreOptions options;
+  options.max_attempts = 1;
+  enavi::server::Store store(argv[1], options);
+  const std::int64_t t0 = 1764547200000;  // 2025-12-01 00:00 UTC; fixed so pages are reproducible
+  const std::string base = enavi::testing::SeedJob(
+      store, std::string("name: nightly-1\nlabels: {suite: nightly, branch: main}\n") + kNightly +
+                 "episode_overrides:\n" + kFailing,
+      t0);
+  const std::string candidate = enavi::testing::SeedJob(
+      store, std::string("name: nightly-2\nlabels: {suite: nightly, branch: feature}\n") + kNightly +
+                 "episode_overrides:\n" + kFailing +
+                 "  - match: {board: tx2, scenario: s1, method: baseline}\n"
+                 "    overrides: {planner.v_max: 1.5}\n",
+      t0 + 86400000);
+  const std::string hostile = enavi::testing::SeedJob(
+      store, "name: \"<img src=x onerror=alert(1)>\"\nlabels: {suite: hostile}\n"
+             "boards: [x86]\nscenarios: [s2]\nmethods: [baseline]\nseeds: 1\n",
+      t0 + 2 * 86400000);
+  std::cout << nlohmann::json{{"base", base}, {"candidate", candidate}, {"hostile", hostile}}.dump() << "\n";
+  return 0;
+}

@@ -1,0 +1,141 @@
+// Collection jobs in the store: one rollout per done episode, written with its result (a re-run
+// attempt that finishes first wins, a late duplicate is ignored), stale-policy rollouts refused by
+// hash, and the tables added to a database created before them.
+#include <unistd.h>
+
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "navstack/rl/rollout.h"
+#include "server/store/sqlite.h"
+#include "server/store/store.h"
+
+namespace enavi::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::int64_t kNow = 1'000'000;
+constexpr std::int64_t kLease = 15'000;
+const std::string kHash(64, 'a');
+const std::string kOtherHash(64, 'b');
+
+std::string RolloutBytes(int steps, double reward) {
+  navstack::rl::Rollout r;
+  for (int t = 0; t < steps; ++t) {
+    navstack::rl::RolloutStep s;
+    s.obs = Eigen::VectorXd::Constant(16, t);
+    s.mask.assign(98, 1);
+    s.action = t;
+    s.log_prob = -1;
+    s.reward = reward;
+    s.done = t + 1 == steps;
+    r.steps.push_back(s);
+  }
+  return navstack::rl::EncodeRollout(r);
+}
+
+api::ResultMessage Ok(const Lease& l, const std::string& worker, std::string policy_hash, std::string rollout) {
+  api::ResultMessage m;
+  m.episode_id = l.episode_id;
+  m.attempt = l.attempt;
+  m.worker_id = worker;
+  m.job_id = l.job_id;
+  m.status = api::ResultStatus::kOk;
+  m.result.spec = l.spec;
+  m.result.success = true;
+  m.policy_hash = std::move(policy_hash);
+  m.rollout = std::move(rollout);
+  return m;
+}
+
+class CollectStoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("collect_store_test-" + std::to_string(getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    store_ = std::make_unique<Store>(dir_ / "farm.db");
+  }
+  void TearDown() override {
+    store_.reset();
+    fs::remove_all(dir_);
+  }
+  std::string CollectionJob(int episodes) {
+    store_->PutPolicy(kHash, "{}", kNow);
+    std::vector<api::EpisodeSpec> specs(static_cast<std::size_t>(episodes));
+    for (int i = 0; i < episodes; ++i) {
+      specs[i].world = "empty";
+      specs[i].method = "enavi";
+      specs[i].seed = static_cast<std::uint64_t>(i + 1);
+      specs[i].policy = "sha256:" + kHash;
+    }
+    return store_->CreateJob("collect", "yaml", specs, kNow, CollectionInfo{kHash, true});
+  }
+  fs::path dir_;
+  std::unique_ptr<Store> store_;
+};
+
+TEST_F(CollectStoreTest, ReRunAttemptStoresExactlyOneRollout) {
+  const std::string job = CollectionJob(1);
+  ASSERT_EQ(store_->Collection(job)->policy_hash, kHash);
+  const Lease first = store_->LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow).at(0);
+  // w1 goes silent: its lease expires and w2 runs attempt 2.
+  ASSERT_EQ(store_->ExpireLeases(kNow + kLease + 1).size(), 1u);
+  const Lease second = store_->LeaseEpisodes("w2", 1, {}, kNow + 3 * kLease, kNow + kLease + 2).at(0);
+  ASSERT_EQ(second.attempt, 2);
+  auto out = store_->Ingest({Ok(second, "w2", kHash, RolloutBytes(5, 1.0))}, kNow + kLease + 3);
+  EXPECT_EQ(out.at(0).ack, api::AckStatus::kStored);
+  // w1's late result of attempt 1 (a different rollout) is a duplicate: nothing changes.
+  out = store_->Ingest({Ok(first, "w1", kHash, RolloutBytes(7, 2.0))}, kNow + kLease + 4);
+  EXPECT_EQ(out.at(0).ack, api::AckStatus::kDuplicate);
+
+  const auto rollouts = store_->Rollouts(job);
+  ASSERT_EQ(rollouts.size(), 1u);
+  EXPECT_EQ(rollouts[0].attempt, 2);
+  EXPECT_EQ(rollouts[0].worker, "w2");
+  EXPECT_EQ(rollouts[0].rollout, RolloutBytes(5, 1.0));
+  EXPECT_EQ(rollouts[0].policy_hash, kHash);
+}
+
+TEST_F(CollectStoreTest, StaleOrMissingRolloutIsRefusedAndTheEpisodeRunsAgain) {
+  const std::string job = CollectionJob(1);
+  Lease l = store_->LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow).at(0);
+  auto out = store_->Ingest({Ok(l, "w1", kOtherHash, RolloutBytes(3, 1.0))}, kNow + 1);
+  EXPECT_EQ(out.at(0).ack, api::AckStatus::kRecorded);
+  EXPECT_EQ(out.at(0).event, "requeued");
+  EXPECT_TRUE(store_->Rollouts(job).empty());
+  const auto episodes = store_->Episodes(job);
+  EXPECT_EQ(episodes.at(0).state, "pending");
+  EXPECT_NE(episodes.at(0).last_error.find("stale policy"), std::string::npos) << episodes.at(0).last_error;
+
+  l = store_->LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow + 2).at(0);
+  out = store_->Ingest({Ok(l, "w1", kHash, "")}, kNow + 3);
+  EXPECT_EQ(out.at(0).ack, api::AckStatus::kRecorded);
+  EXPECT_NE(store_->Episodes(job).at(0).last_error.find("without a rollout"), std::string::npos);
+
+  l = store_->LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow + 4).at(0);
+  out = store_->Ingest({Ok(l, "w1", kHash, RolloutBytes(3, 1.0))}, kNow + 5);
+  EXPECT_EQ(out.at(0).ack, api::AckStatus::kStored);
+  EXPECT_EQ(store_->Rollouts(job).size(), 1u);
+  EXPECT_EQ(store_->ActivePolicies().size(), 0u) << "the job is done";
+}
+
+TEST_F(CollectStoreTest, DatabaseFromBeforeCollectionGainsTheTables) {
+  store_.reset();
+  {
+    // A database as the previous build left it: no collection tables.
+    Database db(dir_ / "farm.db", 1000);
+    db.Exec("DROP TABLE rollouts; DROP TABLE collect_jobs; DROP TABLE policies;");
+  }
+  store_ = std::make_unique<Store>(dir_ / "farm.db");
+  const std::string job = CollectionJob(2);
+  EXPECT_TRUE(store_->Collection(job).has_value());
+  EXPECT_EQ(store_->ActivePolicies().count(kHash), 1u);
+  EXPECT_FALSE(store_->Collection("j-nope").has_value());
+}
+
+}  // namespace
+}  // namespace enavi::server

@@ -1,0 +1,161 @@
+#include "server/compare/compare.h"
+
+#include <gtest/gtest.h>
+
+#include "api/episode.h"
+#include "tests/support/synthetic_result.h"
+
+namespace enavi::server {
+namespace {
+
+// Result objects as Store::Results returns them: the flat record plus episode_id.
+nlohmann::json Job(const std::string& prefix, const std::vector<std::string>& boards, int seeds,
+                   double v_max_on_tx2 = 0, const std::string& clock = "virtual") {
+  nlohmann::json list = nlohmann::json::array();
+  int i = 0;
+  for (const auto& board : boards) {
+    for (const char* method : {"baseline", "enavi"}) {
+      for (int seed = 1; seed <= seeds; ++seed) {
+        api::EpisodeSpec spec;
+        spec.world = "s1";
+        spec.board = board;
+        spec.method = method;
+        spec.seed = seed;
+        spec.clock = clock;
+        if (v_max_on_tx2 > 0 && board == "tx2") spec.overrides["planner.v_max"] = v_max_on_tx2;
+        nlohmann::json r = api::ResultSummaryJson(testing::SyntheticResult(spec));
+        r["episode_id"] = prefix + "-" + std::to_string(i++);
+        list.push_back(std::move(r));
+      }
+    }
+  }
+  return list;
+}
+
+const MetricChange& Metric(const CompareReport& r, const std::string& board, const std::string& method,
+                           const std::string& name) {
+  for (const auto& c : r.cells) {
+    if (c.board != board || c.method != method) continue;
+    for (const auto& m : c.metrics) {
+      if (m.name == name) return m;
+    }
+  }
+  throw std::runtime_error("no metric " + name);
+}
+
+TEST(CompareTest, SameResultsAreNoChange) {
+  const auto a = Job("a", {"tx2", "pi4b"}, 3);
+  const CompareReport r = Compare(a, a, {});
+  EXPECT_EQ(r.mode, "exact");
+  EXPECT_TRUE(r.no_change());
+  EXPECT_EQ(r.regressions, 0);
+  EXPECT_EQ(r.cells.size(), 4u);
+  EXPECT_NE(CompareTable(r).find("no change"), std::string::npos);
+}
+
+TEST(CompareTest, ExactModeGivesExactDeltasAndNamesTheRegressedCell) {
+  const auto a = Job("a", {"tx2", "pi4b"}, 3);
+  const auto b = Job("b", {"tx2", "pi4b"}, 3, /*v_max_on_tx2=*/1.0);  // twice the flight time
+  const CompareReport r = Compare(a, b, {});
+  const MetricChange& ft = Metric(r, "tx2", "baseline", "flight_time_s");
+  EXPECT_EQ(ft.verdict, "regression");
+  EXPECT_DOUBLE_EQ(ft.delta, ft.base_mean);  // exactly doubled
+  EXPECT_EQ(ft.changed_pairs, 3);
+  EXPECT_EQ(Metric(r, "pi4b", "baseline", "flight_time_s").verdict, "same");
+  EXPECT_EQ(r.regressions, 2);  // tx2 baseline and tx2 enavi
+  ASSERT_EQ(r.cells[0].changed.size(), 3u);
+  EXPECT_EQ(r.cells[0].changed[0].base_episode, "a-0");
+  EXPECT_EQ(r.cells[0].changed[0].candidate_episode, "b-0");
+  // Deterministic: the report is a function of the inputs.
+  EXPECT_EQ(CompareJson(r).dump(), CompareJson(Compare(a, b, {})).dump());
+}
+
+TEST(CompareTest, BetterIsAnImprovementAndUnjudgedMetricsOnlyChange) {
+  const auto a = Job("a", {"tx2"}, 2, 1.0);
+  const auto b = Job("b", {"tx2"}, 2);
+  const CompareReport r = Compare(a, b, {});
+  EXPECT_EQ(r.regressions, 0);
+  EXPECT_EQ(Metric(r, "tx2", "baseline", "flight_time_s").verdict, "improvement");
+  EXPECT_EQ(Metric(r, "tx2", "baseline", "velocity_mean_mps").verdict, "change");
+  EXPECT_EQ(Metric(r, "tx2", "baseline", "velocity_mean_mps").direction, Direction::kNone);
+}
+
+TEST(CompareTest, UnpairedResultsAreListedNotDropped) {
+  const auto a = Job("a", {"tx2", "pi4b"}, 3);
+  auto b = Job("b", {"tx2"}, 2);
+  const CompareReport r = Compare(a, b, {});
+  // pi4b: 6 results only in base; tx2: seed 3 of both methods only in base.
+  EXPECT_EQ(r.unpaired.size(), 8u);
+  EXPECT_FALSE(r.no_change());
+  EXPECT_NE(CompareTable(r).find("base only: pi4b/s1/baseline seed 1 (a-"), std::string::npos);
+}
+
+// Noisy flights (emulated clock): a small consistent slowdown is significant, a larger but
+// erratic one is not.
+TEST(CompareTest, PairedModeCallsOnlySignificantChanges) {
+  auto a = Job("a", {"tx2"}, 8, 0, "emulated");
+  auto b = a;
+  const double noise[8] = {0.3, -0.2, 0.1, -0.4, 0.2, 0.0, -0.1, 0.3};
+  for (std::size_t i = 0; i < 8; ++i) {
+    b[i]["flight_time_s"] = a[i]["flight_time_s"].get<double>() * 1.10 + noise[i] * 0.1;  // baseline
+    const double erratic = (i % 2 ? 1.0 : -1.0) * 6.0 + 1.0;
+    b[8 + i]["flight_time_s"] = a[8 + i]["flight_time_s"].get<double>() + erratic;  // enavi
+  }
+  const CompareReport r = Compare(a, b, {});
+  EXPECT_EQ(r.mode, "paired");
+  const MetricChange& slow = Metric(r, "tx2", "baseline", "flight_time_s");
+  EXPECT_EQ(slow.verdict, "regression");
+  EXPECT_GT(slow.ci_low, 0.0);
+  const MetricChange& erratic = Metric(r, "tx2", "enavi", "flight_time_s");
+  EXPECT_EQ(erratic.verdict, "insignificant");
+  EXPECT_LT(erratic.ci_low, 0.0);
+  EXPECT_GT(erratic.ci_high, 0.0);
+  EXPECT_EQ(r.regressions, 1);
+}
+
+TEST(CompareTest, ThresholdFileOverridesDefaultsAndAddsMetrics) {
+  const MetricRules rules = ParseMetricRules(
+      "metrics:\n  flight_time_s: {rel: 2.0}\n  velocity_mean_mps: {direction: higher, rel: 0.01}\n", "t.yaml");
+  CompareOptions options;
+  options.rules = rules;
+  const CompareReport r = Compare(Job("a", {"tx2"}, 2), Job("b", {"tx2"}, 2, 1.0), options);
+  EXPECT_EQ(Metric(r, "tx2", "baseline", "flight_time_s").verdict, "change");
+  EXPECT_EQ(Metric(r, "tx2", "baseline", "velocity_mean_mps").verdict, "regression");
+  EXPECT_TRUE(rules.at("flight_time_s").success_only);  // unchanged fields keep the default
+}
+
+TEST(CompareTest, BadThresholdFileNamesLineFieldAndReason) {
+  try {
+    ParseMetricRules("metrics:\n  flight_time_s:\n    direction: sideways\n", "t.yaml");
+    FAIL() << "accepted a bad direction";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "t.yaml:3: metrics.flight_time_s.direction: 'sideways': expected lower, higher or none");
+  }
+  EXPECT_THROW(ParseMetricRules("metric: {}\n", "t.yaml"), std::invalid_argument);
+  EXPECT_THROW(ParseMetricRules("metrics:\n  x: {abs: nope}\n", "t.yaml"), std::invalid_argument);
+  CompareOptions fast;
+  fast.mode = "fast";
+  EXPECT_THROW(Compare(nlohmann::json::array(), nlohmann::json::array(), fast), std::invalid_argument);
+}
+
+TEST(CompareTest, JunitEscapesNamesAndCountsFailures) {
+  nlohmann::json a = nlohmann::json::array({Job("a", {"tx2"}, 1)[0]});
+  a[0]["method"] = "<m&\"x\">";
+  auto b = a;
+  b[0]["success"] = false;
+  const std::string xml = CompareJunit(Compare(a, b, {}));
+  EXPECT_NE(xml.find("classname=\"tx2.s1.&lt;m&amp;&quot;x&quot;&gt;\""), std::string::npos) << xml;
+  EXPECT_EQ(xml.find("<m&"), std::string::npos);
+  EXPECT_NE(xml.find("failures=\"1\""), std::string::npos);
+}
+
+TEST(CompareTest, StudentQuantilesMatchTheTable) {
+  EXPECT_DOUBLE_EQ(StudentT975(1), 12.706);
+  EXPECT_DOUBLE_EQ(StudentT975(9), 2.262);
+  EXPECT_DOUBLE_EQ(StudentT975(30), 2.042);
+  EXPECT_DOUBLE_EQ(StudentT975(500), 1.980);
+  EXPECT_THROW(StudentT975(0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace enavi::server

@@ -1,0 +1,41 @@
+#include "workers/sim/episode_provenance.h"
+
+#include <cstring>
+
+#include "api/provenance.h"
+
+namespace enavi::sim {
+
+// Generated from navstack/rl/policies/*.json by cmake/EmbedFiles.cmake.
+const std::map<std::string, std::string>& EmbeddedPolicies();
+
+std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spec,
+                                                     const board::BoardProfile& board,
+                                                     bool uses_policy) {
+  std::map<std::string, std::string> notes;
+  notes["provenance.enavi_version"] = api::BuildVersion();
+  notes["provenance.git_commit"] = api::BuildCommit();
+  if (uses_policy) {
+    if (spec.policy.empty()) {
+      const auto& files = EmbeddedPolicies();
+      const auto it = files.find("enavi_default.json");
+      if (it != files.end()) notes["provenance.policy_sha256"] = api::Sha256Hex(it->second);
+      notes["provenance.policy"] = "shipped enavi_default.json";
+    } else {
+      notes["provenance.policy_sha256"] = api::Sha256File(spec.policy);
+      notes["provenance.policy"] = spec.policy;
+    }
+  }
+  // The digest covers exactly what prices a job on this board: the reference ns per unit and
+  // per job divided by the board's per-core speed.
+  const board::ReferenceCosts reference = board::LoadReferenceCosts();
+  const auto coefficients = board::BoardCoefficients(board, reference);
+  std::string bytes(reinterpret_cast<const char*>(coefficients.ns_per_unit.data()),
+                    sizeof(double) * coefficients.ns_per_unit.size());
+  bytes.append(reinterpret_cast<const char*>(&coefficients.ns_per_job), sizeof(double));
+  notes["provenance.cost_model_sha256"] = api::Sha256Hex(bytes).substr(0, 16);
+  notes["provenance.calibration_id"] = reference.calibration_id;
+  return notes;
+}
+
+}  // namespace enavi::sim

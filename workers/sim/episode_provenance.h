@@ -1,0 +1,19 @@
+#pragma once
+// Provenance notes of one episode (`provenance.*` in EpisodeResult::notes): the enavi build, the
+// policy file's sha256 (methods that fly a policy), the cost model's coefficient digest and the
+// calibration id of its reference costs. They name the inputs, not the host, so the same build
+// gives the same notes (and the same result.json) on any machine.
+
+#include <map>
+#include <string>
+
+#include "api/episode.h"
+#include "workers/board/board_profile.h"
+
+namespace enavi::sim {
+
+std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spec,
+                                                     const board::BoardProfile& board,
+                                                     bool uses_policy);
+
+}  // namespace enavi::sim
