@@ -72,7 +72,7 @@ class CollectStoreTest : public ::testing::Test {
       specs[i].seed = static_cast<std::uint64_t>(i + 1);
       specs[i].policy = "sha256:" + kHash;
     }
-    return store_->CreateJob("collect", "yaml", specs, kNow, CollectionInfo{kHash, true});
+    return store_->CreateJob("collect", "yaml", specs, kNow, {}, CollectionInfo{kHash, true});
   }
   fs::path dir_;
   std::unique_ptr<Store> store_;
