@@ -47,7 +47,7 @@ struct MethodCatalog {
 };
 
 struct EpisodeSpec {
-  std::string world = "s1";  ///< scenario id (s1..s5, forest, empty), a world file, a mesh or an SDF world
+  std::string world = "s1";  ///< scenario id (s1..s5, canyon, forest, empty), a world file, a mesh or an SDF world
   std::uint64_t seed = 1;    ///< world generator seed and episode seed (sensor noise, planner)
   std::map<std::string, std::string> world_params;  ///< generator parameters
   std::optional<Vec3> start;  ///< required for mesh and SDF worlds

@@ -4,7 +4,7 @@
 //
 //   name: tx2-city                # optional; default: the file's stem
 //   boards: [tx2, pi4b]           # pi4b tx2 nx opi5 x86 host
-//   scenarios:                    # s1..s5 forest empty, or a world file under an allowed root
+//   scenarios:                    # s1..s5 canyon forest empty, or a world file under an allowed root
 //     - s1
 //     - worlds/hall.yaml
 //     - {world: meshes/yard.obj, start: [0, 0, 1], goal: [30, 0, 1], params: {k: v}}
@@ -48,8 +48,7 @@
 namespace enavi::api {
 
 inline constexpr std::array<const char*, 6> kBoards = {"pi4b", "tx2", "nx", "opi5", "x86", "host"};
-inline constexpr std::array<const char*, 7> kScenarios = {"s1", "s2", "s3", "s4",
-                                                          "s5", "forest", "empty"};
+inline constexpr std::array<const char*, 8> kScenarios = {"s1", "s2", "s3", "s4", "s5", "canyon", "forest", "empty"};
 /// A job expands to at most this many episodes.
 inline constexpr std::size_t kMaxJobEpisodes = 10000;
 /// `seeds: N` accepts 1..kMaxSeedCount; a seed list holds at most that many entries.

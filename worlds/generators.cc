@@ -20,6 +20,7 @@ namespace enavi::worlds {
 namespace {
 
 constexpr double kFlightAltitude = 1.5;  // m above the ground
+constexpr double kCanyonAltitude = 5.0;  // m: over the low roofs, below every other one
 constexpr double kDroneRadius = 0.3;     // m; the straight line must come closer than this somewhere
 constexpr int kMaxDraws = 64;
 
@@ -537,6 +538,103 @@ void BuildS5(Rng& rng, const Params& p, World* w) {
   }
 }
 
+// canyon: street canyons of a city centre. An irregular grid of blocks with 6-10 m streets,
+// each block split into buildings of mixed heights (3-48 m: some low enough to fly over at the
+// 5 m flight altitude, most far above it) with small setbacks, so every intersection has corners.
+// Start and goal lie on two perpendicular streets, `length` apart on a diagonal: the straight line
+// crosses blocks, so the ~1.41 x length route along the streets turns at least one corner.
+void BuildCanyon(Rng& rng, const Params& p, World* w) {
+  const double D = p.at("length") / std::sqrt(2.0);  // start-goal offset along x and along y
+  constexpr double kMargin = 16.0;                   // city beyond the route on every side
+  // Street centres, walking out from the two route streets (x = 0 and y = 0 before the shift).
+  struct Street {
+    double centre, width;
+  };
+  auto streets = [&rng](double lo, double hi) {
+    std::vector<Street> out;
+    out.push_back({0.0, rng.Uniform(6.0, 10.0)});
+    for (double x = 0.0, half = 0.5 * out[0].width; x - half > lo;) {
+      const double width = rng.Uniform(6.0, 10.0), block = rng.Uniform(14.0, 24.0);
+      x -= half + block + 0.5 * width;
+      half = 0.5 * width;
+      out.insert(out.begin(), {x, width});
+    }
+    for (double x = 0.0, half = 0.5 * out.back().width; x + half < hi;) {
+      const double width = rng.Uniform(6.0, 10.0), block = rng.Uniform(14.0, 24.0);
+      x += half + block + 0.5 * width;
+      half = 0.5 * width;
+      out.push_back({x, width});
+    }
+    return out;
+  };
+  // Vertical streets (constant x) from left of the start to right of the goal street, horizontal
+  // ones (constant y) from below the start street to above the goal.
+  const std::vector<Street> xs = streets(-D - kMargin, kMargin);
+  const std::vector<Street> ys = streets(-kMargin, D + kMargin);
+  // Shift so the start-goal midpoint is the origin: start (-D/2, -D/2) on the street y = -D/2,
+  // goal (D/2, D/2) on the street x = D/2.
+  const double ox = 0.5 * D, oy = -0.5 * D;
+  const Area area{-D - kMargin + ox, kMargin + ox, -kMargin + oy, D + kMargin + oy};
+  SetBounds(w, area.x0, area.y0, 0.0, area.x1, area.y1, 10.0);
+  w->start = Eigen::Vector3d(-0.5 * D + rng.Uniform(-2.0, 2.0), oy + rng.Uniform(-1.0, 1.0), kCanyonAltitude);
+  w->goal = Eigen::Vector3d(ox + rng.Uniform(-1.0, 1.0), 0.5 * D + rng.Uniform(-2.0, 2.0), kCanyonAltitude);
+  Builder b{w};
+  // Does the straight start-goal line cross the rectangle? (Liang-Barsky clipping in xy.)
+  auto on_line = [&](double x0, double x1, double y0, double y1) {
+    const double dx = w->goal.x() - w->start.x(), dy = w->goal.y() - w->start.y();
+    double t0 = 0.0, t1 = 1.0;
+    const double p[4] = {-dx, dx, -dy, dy};
+    const double q[4] = {w->start.x() - x0, x1 - w->start.x(), w->start.y() - y0, y1 - w->start.y()};
+    for (int k = 0; k < 4; ++k) {
+      if (p[k] == 0.0) {
+        if (q[k] < 0.0) return false;
+      } else if (p[k] < 0.0) {
+        t0 = std::max(t0, q[k] / p[k]);
+      } else {
+        t1 = std::min(t1, q[k] / p[k]);
+      }
+    }
+    return t0 <= t1;
+  };
+  // One building: clipped to the bounds (the city goes on beyond them, nothing there is flown).
+  // Mixed heights: some low (3-4.5 m, below the flight altitude), the rest mid-rise or towers up
+  // to 48 m. No low roof on the straight line, so there is no short cut over the roofs.
+  auto building = [&](double x0, double x1, double y0, double y1) {
+    x0 = std::max(x0, area.x0);
+    x1 = std::min(x1, area.x1);
+    y0 = std::max(y0, area.y0);
+    y1 = std::min(y1, area.y1);
+    if (x1 - x0 < 1.0 || y1 - y0 < 1.0) return;
+    const double kind = rng.Uniform();
+    const double h = kind < 0.2 && !on_line(x0, x1, y0, y1)
+                         ? rng.Uniform(3.0, 4.5)
+                         : (kind < 0.7 ? rng.Uniform(8.0, 20.0) : rng.Uniform(20.0, 48.0));
+    b.AddBox(0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.0, x1 - x0, y1 - y0, h);
+  };
+  for (std::size_t i = 0; i + 1 < xs.size(); ++i) {
+    for (std::size_t j = 0; j + 1 < ys.size(); ++j) {
+      const double bx0 = xs[i].centre + 0.5 * xs[i].width + ox, bx1 = xs[i + 1].centre - 0.5 * xs[i + 1].width + ox;
+      const double by0 = ys[j].centre + 0.5 * ys[j].width + oy, by1 = ys[j + 1].centre - 0.5 * ys[j + 1].width + oy;
+      // Split the block across its longer side into 1-3 buildings, each set back 0-0.8 m from
+      // the street on its own, so the street walls are not flat.
+      const bool along_x = bx1 - bx0 >= by1 - by0;
+      const int parts = rng.Int(1, 3);
+      double cut = along_x ? bx0 : by0;
+      const double end = along_x ? bx1 : by1;
+      for (int k = 0; k < parts; ++k) {
+        const double next = k + 1 == parts ? end : cut + (end - cut) * rng.Uniform(0.7, 1.3) / (parts - k);
+        const double s0 = rng.Uniform(0.0, 0.8), s1 = rng.Uniform(0.0, 0.8);
+        if (along_x) {
+          building(cut + (k == 0 ? s0 : 0.0), next - (k + 1 == parts ? s1 : 0.0), by0 + s0, by1 - s1);
+        } else {
+          building(bx0 + s0, bx1 - s1, cut + (k == 0 ? s0 : 0.0), next - (k + 1 == parts ? s1 : 0.0));
+        }
+        cut = next;
+      }
+    }
+  }
+}
+
 // forest: trees only, at a given density.
 void BuildForest(Rng& rng, const Params& p, World* w) {
   const double L = p.at("length"), half = 0.5 * L, density = p.at("density");
@@ -593,6 +691,13 @@ const std::vector<Entry>& Entries() {
       {{"s3", "indoor hall with partitions and furniture", 17.0, {Length(17.0, 8.0, 60.0)}}, BuildS3, true},
       {{"s4", "city grid of buildings of similar height", 42.0, {Length(42.0, 30.0, 150.0)}}, BuildS4, true},
       {{"s5", "village: houses, a river channel and a bridge", 32.0, {Length(32.0, 20.0, 150.0)}}, BuildS5, true},
+      {{"canyon",
+        "street canyons: 6-10 m streets between blocks of mixed heights (3-48 m), flown at 5 m",
+        0.0,
+        {Length(72.0, 30.0, 200.0)},
+        kCanyonAltitude},
+       BuildCanyon,
+       true},
       {{"forest",
         "trees at a given density",
         0.0,

@@ -1,8 +1,9 @@
 #pragma once
-// Seeded scenario generators (DESIGN.md section 6): s1-s5 after the paper's five scenarios, plus
-// `forest` and `empty`. The same (scenario, seed, params) gives a byte-identical world file on
-// every machine: std::mt19937_64 raw draws mapped to doubles by our own code, only + - * / sqrt
-// and detmath in anything that reaches the file, every value rounded to the file precision.
+// Seeded scenario generators: s1-s5 after the paper's five scenarios, plus `canyon` (street
+// canyons, a world the policy was not trained on), `forest` and `empty`. The same (scenario,
+// seed, params) gives a byte-identical world file on every machine: std::mt19937_64 raw draws
+// mapped to doubles by our own code, only + - * / sqrt and detmath in anything that reaches the
+// file, every value rounded to the file precision.
 
 #include <cstdint>
 #include <map>
@@ -27,10 +28,11 @@ struct GeneratorParam {
 };
 
 struct GeneratorInfo {
-  std::string id;               ///< s1..s5, forest, empty
+  std::string id;               ///< s1..s5, canyon, forest, empty
   std::string description;
   double paper_path_length = 0;  ///< m, the paper's flight path (0 when not from the paper)
   std::vector<GeneratorParam> params;
+  double flight_altitude = 1.5;  ///< m above the ground, of start and goal
 };
 
 /// All generators, in a fixed order.
@@ -39,9 +41,9 @@ const std::vector<GeneratorInfo>& Generators();
 /// The generator with this id, or nullptr.
 const GeneratorInfo* FindGenerator(std::string_view id);
 
-/// Generates and validates a world. Start and goal are at flight altitude (1.5 m above the
-/// ground), in free space, joined by a route at least 1 m wide, and (except `forest` and
-/// `empty`) the straight start-goal line is blocked somewhere. A draw that fails these checks is
+/// Generates and validates a world. Start and goal are at the generator's flight altitude (1.5 m
+/// above the ground, 5 m for `canyon`), in free space, joined by a route at least 1 m wide, and
+/// (except `forest` and `empty`) the straight start-goal line is blocked somewhere. A draw that fails these checks is
 /// redrawn from a seed derived deterministically from (seed, attempt).
 /// Throws WorldError (file = scenario id) for an unknown scenario, unknown parameter or a value
 /// out of range (the message names the parameter and its allowed range).

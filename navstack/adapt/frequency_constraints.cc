@@ -42,6 +42,8 @@ void Validate(const ConstraintInputs& in, const ConstraintOptions& opt) {
     throw std::domain_error("frequency constraints: capacity_fraction must be in (0, 1]");
   }
   RequireNonNegative(opt.tolerance, "tolerance");
+  // The reaction inputs are validated by CheckReaction; check them once here for the grid loop.
+  (void)CheckReaction(in.reaction, in.current, in.wcet, in.f_sen);
 }
 
 double UTotal(const ConstraintInputs& in, const ConstraintOptions& opt) {
@@ -80,6 +82,7 @@ ConstraintStatus CheckUnchecked(const ConstraintInputs& in, const TaskFrequencie
               (f.f_col - in.current.f_col) * in.wcet.col +
               (f.f_dif - in.current.f_dif) * in.wcet.dif;
   s.holds[3] = s.u_after <= u_total + tol;
+  s.reaction = CheckReaction(in.reaction, f, in.wcet, in.f_sen);
   return s;
 }
 
@@ -100,12 +103,16 @@ FeasibleSet ComputeFeasibleSet(const ActionGrid& grid, const ConstraintInputs& i
 
   FeasibleSet out;
   out.mask.assign(static_cast<std::size_t>(grid.size()), 0);
-  // Fallback candidates tracked in the same pass: cheapest structurally valid, cheapest overall.
-  int best_structural = -1, best_any = -1;
-  double cost_structural = std::numeric_limits<double>::infinity();
+  // Fallback candidates tracked in the same pass: cheapest structurally valid that reacts in
+  // time, quickest structurally valid, cheapest overall.
+  int best_safe = -1, best_quick = -1, best_any = -1;
+  double cost_safe = std::numeric_limits<double>::infinity();
   double cost_any = std::numeric_limits<double>::infinity();
+  double quickest = std::numeric_limits<double>::infinity(), cost_quick = cost_any;
+  bool any_reacts = false;
   for (int i = 0; i < grid.size(); ++i) {
     const ConstraintStatus s = CheckUnchecked(inputs, grid.At(i), options, f_per_min, u_total);
+    any_reacts = any_reacts || s.reaction.holds;
     if (s.AllHold()) {
       out.mask[static_cast<std::size_t>(i)] = 1;
       ++out.num_feasible;
@@ -114,14 +121,22 @@ FeasibleSet ComputeFeasibleSet(const ActionGrid& grid, const ConstraintInputs& i
       cost_any = s.c3_load;
       best_any = i;
     }
-    if (s.holds[0] && s.holds[1] && s.c3_load < cost_structural) {
-      cost_structural = s.c3_load;
-      best_structural = i;
+    if (!s.holds[0] || !s.holds[1]) continue;
+    if (s.reaction.holds && s.c3_load < cost_safe) {
+      cost_safe = s.c3_load;
+      best_safe = i;
+    }
+    const double t = s.reaction.t_react;
+    if (t < quickest - options.tolerance || (t <= quickest + options.tolerance && s.c3_load < cost_quick)) {
+      quickest = t;
+      cost_quick = s.c3_load;
+      best_quick = i;
     }
   }
+  out.reaction_infeasible = !any_reacts;
   if (out.num_feasible == 0) {
     out.fallback_used = true;
-    out.fallback_action = best_structural >= 0 ? best_structural : best_any;
+    out.fallback_action = best_safe >= 0 ? best_safe : (best_quick >= 0 ? best_quick : best_any);
     out.mask[static_cast<std::size_t>(out.fallback_action)] = 1;
   }
   return out;

@@ -1,7 +1,7 @@
 #pragma once
-// Frequency constraints C1-C4 of the Strategy Controller (paper Sec. V.B), the feasible set over
-// the action grid, proportional period scaling and the persistent-overload (hover) monitor
-// (paper Sec. V.D "Timing Guarantees").
+// Frequency constraints C1-C4 of the Strategy Controller (paper Sec. V.B) and our reaction
+// constraint (reaction_constraint.h), the feasible set over the action grid, proportional period
+// scaling and the persistent-overload (hover) monitor (paper Sec. V.D "Timing Guarantees").
 //
 // Units: frequencies in Hz, execution times in board seconds, utilisation in cores
 // (1.0 = one core fully busy, the paper's 100 %), so U_total = N for N cores.
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "navstack/adapt/action_grid.h"
+#include "navstack/adapt/reaction_constraint.h"
 
 namespace enavi::navstack {
 
@@ -34,6 +35,8 @@ struct ConstraintInputs {
   int num_cores = 1;             ///< N
   double u_cur = 0.0;            ///< U_cur: current total navigation utilisation, cores
   TaskFrequencies current;       ///< configuration now running (the reference of C4's dU)
+  /// Nearest obstacle and speed for the reaction constraint; the default (d0 = +inf) holds always.
+  ReactionInputs reaction;
 };
 
 /// Tunables of the checker.
@@ -46,40 +49,48 @@ struct ConstraintOptions {
   double tolerance = 1e-9;
 };
 
-/// Which of C1-C4 hold for one candidate, and the quantities they compare.
+/// Which of C1-C4 and the reaction constraint hold for one candidate, and what they compare.
 struct ConstraintStatus {
   static constexpr int kNumConstraints = 4;
-  /// holds[k] is constraint C(k+1); the policy state uses it as a 0/1 vector.
+  /// holds[k] is constraint C(k+1); the policy state uses it as a 0/1 vector (the reaction
+  /// constraint is not in it, so policies trained before it keep their observation).
   std::array<bool, kNumConstraints> holds{};
+  ReactionStatus reaction;  ///< the reaction constraint
   double f_per_min = 0.0;  ///< C1 lower bound 1 / C_L, Hz
   double c3_load = 0.0;    ///< C3 left side: f_per C_per + C_plan / C_L + f_col C_col + f_dif C_dif, cores
   double u_after = 0.0;    ///< C4 left side: U_cur + sum_i (f_new,i - f_cur,i) C_i, cores
   double u_total = 0.0;    ///< U_total, cores
 
-  bool AllHold() const { return holds[0] && holds[1] && holds[2] && holds[3]; }
+  bool AllHold() const { return holds[0] && holds[1] && holds[2] && holds[3] && reaction.holds; }
 };
 
-/// Checks C1-C4 for `candidate` (paper Eqs. framework-constraint1..4). Planning is triggered, not
-/// periodic, so its frequency is not an action and dU_plan = 0.
+/// Checks C1-C4 for `candidate` (paper Eqs. framework-constraint1..4) and the reaction constraint.
+/// Planning is triggered, not periodic, so its frequency is not an action and dU_plan = 0.
 /// @throws std::domain_error when an input is NaN or negative, C_L <= 0, N < 1, or an option is
 ///   outside its range (these come from the runtime, not from a user: a broken contract).
 ConstraintStatus CheckConstraints(const ConstraintInputs& inputs, const TaskFrequencies& candidate,
                                   const ConstraintOptions& options = {});
 
-/// The feasible set over a grid: mask[i] = 1 when action i satisfies C1-C4.
+/// The feasible set over a grid: mask[i] = 1 when action i satisfies C1-C4 and the reaction
+/// constraint.
 struct FeasibleSet {
   std::vector<std::uint8_t> mask;  ///< one entry per grid action; never all zero
-  int num_feasible = 0;            ///< actions satisfying C1-C4 (0 when the fallback was used)
-  /// True when no action satisfies C1-C4: the mask then holds exactly the fallback action, so a
-  /// masked policy must pick it. The caller should record this as an event.
+  int num_feasible = 0;            ///< actions satisfying all constraints (0 when the fallback was used)
+  /// True when no action satisfies all constraints: the mask then holds exactly the fallback
+  /// action, so a masked policy must pick it. The caller should record this as an event.
   bool fallback_used = false;
   int fallback_action = -1;        ///< index of the fallback action, or -1
+  /// No action satisfies the reaction constraint: the fallback is the quickest to react, and the
+  /// vehicle must slow down (SafeSpeed) to make up the rest.
+  bool reaction_infeasible = false;
 };
 
-/// Evaluates C1-C4 for every grid action. Fallback when none is feasible: the action with the
-/// lowest C3 load (least CPU) among those satisfying C1 and C2 (structural bounds: never fly blind,
-/// never check a map faster than it is built), or among all actions if none does; ties -> lowest
-/// index.
+/// Evaluates C1-C4 and the reaction constraint for every grid action. Fallback when none is
+/// feasible, safety before CPU: the action with the lowest C3 load (least CPU) among those
+/// satisfying C1, C2 (structural bounds: never fly blind, never check a map faster than it is
+/// built) and the reaction constraint; if no action can react in time, the one with the shortest
+/// reaction time among those satisfying C1 and C2; otherwise the lowest C3 load among all
+/// actions. Ties -> lowest C3 load, then lowest index.
 FeasibleSet ComputeFeasibleSet(const ActionGrid& grid, const ConstraintInputs& inputs,
                                const ConstraintOptions& options = {});
 

@@ -291,6 +291,7 @@ EciResult ComputeEciWith(const Kernels& kernels, const DepthImage& depth,
   EciResult result;
   result.zones = M;
   result.d0 = d_per;
+  result.d_ahead = d_per;
   result.layers = 1;
 
   // d0: nearest return, clamped to [d_min, d_per].
@@ -304,6 +305,7 @@ EciResult ComputeEciWith(const Kernels& kernels, const DepthImage& depth,
   // obstacle beyond d_per / 3 would score 0 (our reading, DESIGN.md section 5).
   const int lay = std::max(2, static_cast<int>(std::floor((d_per - d0) / (2.0 * d0))) + 1);
   result.d0 = d0;
+  result.d_ahead = d0;
   result.layers = lay;
 
   // Layer edges as r^2 thresholds: [0] = 0 (any return), [j] = ((2j - 1) d0)^2 for j = 1..Lay;
@@ -375,6 +377,22 @@ EciResult ComputeEciWith(const Kernels& kernels, const DepthImage& depth,
     }
   }
   result.eci = sum_w > 0.0 ? sum_w_occ / sum_w : 0.0;
+  // Nearest return ahead: one more pass over the centre zone's pixels (1/M^2 of the image).
+  if (result.velocity_aligned) {
+    const int centre = M / 2;
+    float ahead2 = std::numeric_limits<float>::infinity();
+    for (int v = row_bounds[centre]; v < row_bounds[centre + 1]; ++v) {
+      const float* row = depth.data.data() + static_cast<std::size_t>(v) * W;
+      for (int u = col_bounds[centre]; u < col_bounds[centre + 1]; ++u) {
+        if (row[u] > 0.0f) ahead2 = std::min(ahead2, Range2(row[u], row_c[v], col_a[u]));
+      }
+    }
+    if (work != nullptr) {
+      work->Add(WorkUnit::kPixel, std::int64_t{row_bounds[centre + 1] - row_bounds[centre]} *
+                                      (col_bounds[centre + 1] - col_bounds[centre]));
+    }
+    result.d_ahead = std::min(d_per, std::sqrt(static_cast<double>(ahead2)));
+  }
   return result;
 }
 

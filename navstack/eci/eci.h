@@ -42,6 +42,10 @@ struct EciResult {
   Status status = Status::kNoObstacle;  ///< kNoObstacle: no valid pixel within d_per, eci = 0
   double eci = 0.0;                     ///< sum(w Occ) / sum(w), in [0, 1]
   double d0 = 0.0;                      ///< m, nearest obstacle range clamped to [d_min, d_per]
+  /// m, the nearest return in the centre zone, the one "oriented along the UAV's velocity vector"
+  /// that "represents the most threat" (paper Sec. IV.A), unclamped; d_per when it has none.
+  /// d0 when not velocity_aligned (hovering, or moving out of the view: nothing is known ahead).
+  double d_ahead = 0.0;
   int layers = 0;                       ///< Lay = floor((d_per - d0) / (2 d0)) + 1
   int zones = 0;                        ///< M
   int occupied_zones = 0;               ///< zones with Occ = 1, of layers x M x M
@@ -71,8 +75,9 @@ struct EciResult {
 /// exp(-(theta_a^2 + beta_a^2) / (4 sigma^2)) / (sigma sqrt(2 pi)), theta_a, beta_a in zone
 /// units from the centre zone, d_k the layer's mid-range (d0 / 2, then 2 k d0);
 /// eci = sum(w Occ) / sum(w). The centre falls back to the optical axis when |v_C| <
-/// hover_speed or v_C points away from the view (v_C.z <= 0).
-/// Counts one WorkUnit::kPixel per image pixel.
+/// hover_speed or v_C points away from the view (v_C.z <= 0). d_ahead takes one more pass over
+/// the centre zone's pixels.
+/// Counts one WorkUnit::kPixel per image pixel, plus one per centre-zone pixel for d_ahead.
 /// @param v_C vehicle velocity in the camera frame C (z forward, x right, y down), m/s.
 /// @pre depth matches the intrinsics' size.
 EciResult ComputeEci(const DepthImage& depth, const CameraIntrinsics& intrinsics,

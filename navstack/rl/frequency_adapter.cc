@@ -44,6 +44,7 @@ FrequencyDecision FrequencyAdapter::Decide(const ConstraintInputs& constraints,
   const FeasibleSet feasible = ComputeFeasibleSet(grid(), constraints, constraint_options_);
   d.fallback_used = feasible.fallback_used;
   d.num_feasible = feasible.num_feasible;
+  d.reaction_infeasible = feasible.reaction_infeasible;
 
   const bool recording = record != nullptr;
   PolicyOutput out =

@@ -32,7 +32,8 @@ struct FlightContext {
 struct FrequencyDecision {
   TaskFrequencies f;              ///< the chosen grid triple, Hz
   int action = -1;                ///< its grid index
-  bool fallback_used = false;     ///< nothing satisfied C1-C4; `f` is the fallback (record an event)
+  bool fallback_used = false;     ///< nothing satisfied all constraints; `f` is the fallback (record an event)
+  bool reaction_infeasible = false;  ///< no action satisfied the reaction constraint
   int num_feasible = 0;
   ConstraintStatus current_status;///< C1-C4 for the configuration that was running
   double log_prob = 0.0;          ///< filled when a rollout step is recorded

@@ -205,6 +205,7 @@ JobOutput NavStack::PlanningJob() {
   // cell nearer than that, so plan with that much more radius, or every plan is "in collision".
   PlannerOptions planner = options_.planner;
   planner.robot_radius += 0.5 * (std::sqrt(3.0) - 1.0) * map_->resolution();
+  planner.v_max = std::min(planner.v_max, speed_limit_);  // E-Navi: the reaction constraint's limit
   auto result = std::make_shared<PlanResult>(Plan(request, planner));
   out.work += result->work;
   // The Resolution Adapter scores the path against the map's obstacle density (paper Sec. V.A).
@@ -244,10 +245,11 @@ JobOutput NavStack::EciJob() {
   if (!frame || frame == last_eci_frame_) return out;
   last_eci_frame_ = frame;
   const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * frame->v_W;
-  const double eci = ComputeEci(frame->image, options_.camera, v_C, options_.eci, &out.work).eci;
-  out.commit = [this, eci] {
+  const EciResult r = ComputeEci(frame->image, options_.camera, v_C, options_.eci, &out.work);
+  out.commit = [this, eci = r.eci, d_ahead = r.d_ahead] {
     d_eci_ = eci_tracker_.Update(eci);
     eci_ = eci;
+    d_ahead_ = d_ahead;
     strategy_->ObserveEci(executor_->now(), eci);
   };
   return out;
@@ -269,6 +271,9 @@ StrategyInputs NavStack::GatherStrategyInputs(double t) {
              executor_->stats(TaskId::kCollision).cost_recent_s, executor_->stats(TaskId::kDifference).cost_recent_s};
   in.trajectory_duration = trajectory_ ? trajectory_->duration() : std::numeric_limits<double>::infinity();
   in.current = {rates_.f_per, rates_.f_col, rates_.f_dif};
+  in.d_ahead = d_ahead_;
+  in.a_brake = options_.planner.a_max;
+  in.robot_radius = options_.planner.robot_radius;
   in.flight.eci = eci_;
   in.flight.d_eci = d_eci_;
   in.flight.resolution = map_->resolution();
@@ -306,6 +311,7 @@ JobOutput NavStack::AdapterJob() {
     r.f_dif = decision->f.f_dif;
     r.resolution = decision->resolution;
     SetRates(r);
+    speed_limit_ = decision->v_limit;
     if (decision->fallback) AddEvent("constraint_fallback");
     if (decision->scaled) AddEvent("period_scaling");
     if (decision->failsafe && !failsafe_) {

@@ -6,6 +6,7 @@
 // fly a real drone through an adapter.
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -91,6 +92,8 @@ class NavStack final : public Navigator {
   EciTracker eci_tracker_;
   DepthFramePtr last_eci_frame_;
   double eci_ = 0, d_eci_ = 0;
+  double d_ahead_ = std::numeric_limits<double>::infinity();      ///< EciResult::d_ahead, latest frame
+  double speed_limit_ = std::numeric_limits<double>::infinity();  ///< StrategyDecision::v_limit
   double straight_length_ = 0;
   double flown_ = 0;
   Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();

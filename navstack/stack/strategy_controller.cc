@@ -1,5 +1,6 @@
 #include "navstack/stack/strategy_controller.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -9,6 +10,13 @@
 namespace enavi::navstack {
 namespace {
 
+// Plans never go slower than this, m/s (planner.v_max's range starts at 0.2): at the limit's
+// zero, the vehicle is already as near as the margin, and a crawl still lets the planner back off.
+constexpr double kMinSpeedLimit = 0.3;
+
+// The body's radius, plus half a cell: a coarse map may put an obstacle that much nearer.
+double ReactionMargin(const StrategyInputs& in) { return in.robot_radius + 0.5 * in.flight.resolution; }
+
 ConstraintInputs ToConstraints(const StrategyInputs& in) {
   ConstraintInputs c;
   c.f_sen = in.f_sen;
@@ -17,6 +25,10 @@ ConstraintInputs ToConstraints(const StrategyInputs& in) {
   c.num_cores = in.cores;
   c.u_cur = in.u_cur;
   c.current = in.current;
+  c.reaction.d0 = in.d_ahead;
+  c.reaction.speed = in.flight.v_WB.norm();
+  c.reaction.a_brake = in.a_brake;
+  c.reaction.margin = ReactionMargin(in);
   return c;
 }
 
@@ -63,6 +75,7 @@ StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eige
                                                   options_.record ? &step : nullptr);
   d.f = f.f;
   d.fallback = f.fallback_used;
+  d.reaction_infeasible = f.reaction_infeasible;
   if (options_.record) rollout_.steps.push_back(std::move(step));
 
   // Paper Sec. V.D: over capacity, periods are scaled down proportionally, and overload that
@@ -71,6 +84,14 @@ StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eige
     const ScaledFrequencies scaled = ScaleToCapacity(constraints, options_.constraints);
     d.f = scaled.f;
     d.scaled = scaled.scaled;
+  }
+  // When even the quickest rates cannot stop in time, new plans fly no faster than the chosen
+  // rates (possibly scaled above) can stop from. Otherwise the rates carry it: limiting every plan
+  // by the nearest obstacle ahead held the vehicle back round every corner (canyon seed 1 on
+  // three boards: 4-8 % longer flights) for walls the chosen rates would have caught anyway.
+  if (d.reaction_infeasible) {
+    d.v_limit = std::max(kMinSpeedLimit, SafeSpeed(in.d_ahead, ReactionMargin(in), in.a_brake,
+                                                   ReactionTime(d.f, in.wcet, in.f_sen)));
   }
   const OverloadMonitor::Update overload = overload_.Observe(in.t, in.u_cur, in.cores);
   failsafe_ = overload.mode == OverloadMonitor::Mode::kFailSafe;

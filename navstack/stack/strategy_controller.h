@@ -6,6 +6,7 @@
 // stack can run it as a job under the board's scheduler.
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -46,6 +47,12 @@ struct StrategyInputs {
   double distance_to_goal = 0;
   double straight_length = 1;          ///< |Lbar| of the episode
   double expected_path = 0;            ///< |L_e|: flown + planned + rest to the goal, m
+  /// Reaction constraint: the nearest obstacle ahead in the latest frame (EciResult::d_ahead;
+  /// +inf before the first), the emergency stop's deceleration and the robot radius. The speed
+  /// is |flight.v_WB|, the margin the radius plus half a cell of flight.resolution.
+  double d_ahead = std::numeric_limits<double>::infinity();
+  double a_brake = 3.0;                ///< m/s^2
+  double robot_radius = 0.3;           ///< m
 };
 
 struct StrategyDecision {
@@ -55,6 +62,11 @@ struct StrategyDecision {
   bool fallback = false;        ///< nothing satisfied C1-C4
   bool failsafe = false;        ///< persistent overload: hover
   bool recovered = false;       ///< left the fail-safe this epoch
+  /// Speed limit for new plans, m/s, when no action satisfies the reaction constraint: the
+  /// largest speed at which the chosen rates still stop the vehicle before the nearest obstacle
+  /// ahead (reaction_constraint.h, SafeSpeed), at least 0.3 m/s. +inf otherwise.
+  double v_limit = std::numeric_limits<double>::infinity();
+  bool reaction_infeasible = false;  ///< no action could react in time at the current speed
   WorkCounts work;              ///< the decision's own work (network multiply-adds)
 };
 

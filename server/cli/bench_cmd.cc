@@ -120,7 +120,7 @@ void RegisterBenchCommands(CLI::App& app) {
   auto raycast = std::make_shared<RaycastArgs>();
   CLI::App* rc = bench->add_subcommand(
       "raycast", "Depth frames along the start-goal line rendered by Embree and by Bullet rayTest");
-  rc->add_option("--world", raycast->world, "world to render (s1..s5, forest, empty, FILE)")->capture_default_str();
+  rc->add_option("--world", raycast->world, "world to render (s1..s5, canyon, forest, empty, FILE)")->capture_default_str();
   rc->add_option("--seed", raycast->seed, "world seed")->capture_default_str();
   rc->add_option("--frames", raycast->frames, "Embree frames")->capture_default_str()->check(CLI::Range(1, 10000));
   rc->add_option("--bullet-frames", raycast->bullet_frames, "of those, frames also rendered by Bullet")

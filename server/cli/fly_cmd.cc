@@ -163,7 +163,7 @@ void Run(FlyArgs args) {
 void RegisterFlyCommand(CLI::App& app) {
   auto args = std::make_shared<FlyArgs>();
   CLI::App* fly = app.add_subcommand("fly", "Fly one episode locally (no server) and print or write its results");
-  fly->add_option("--world", args->spec.world, "s1..s5, forest, empty, FILE.yaml, a mesh (.obj .gltf .glb .dae .stl .ply .fbx) or a Gazebo world (.sdf .world)")->capture_default_str();
+  fly->add_option("--world", args->spec.world, "s1..s5, canyon, forest, empty, FILE.yaml, a mesh (.obj .gltf .glb .dae .stl .ply .fbx) or a Gazebo world (.sdf .world)")->capture_default_str();
   fly->add_option("--seed", args->spec.seed, "world and episode seed")
       ->capture_default_str()
       ->check(CLI::Validator(

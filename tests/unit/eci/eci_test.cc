@@ -144,6 +144,27 @@ TEST(EciTest, VelocityTowardObstacleRaisesEci) {
   EXPECT_DOUBLE_EQ(backwards.eci, Eci(scene).eci);
 }
 
+TEST(EciTest, RangeAheadIsTheCentreZonesNotTheNearestAnywhere) {
+  const Eigen::Vector3d forward(0.0, 0.0, 2.0);  // v_C: flying along the optical axis
+  // A cube dead ahead at 2 m: the nearest return is ahead, in layer 1 = [d0, 3 d0).
+  const EciResult ahead = Eci(CubeAt(2.0), forward);
+  EXPECT_NEAR(ahead.d_ahead, ahead.d0, 1e-12);
+  EXPECT_NEAR(ahead.d0, 2.0, 0.01);
+  // The same cube 1.2 m to the left (24-37 deg off the velocity, outside the 29 deg wide centre
+  // zone): its nearest corner is the nearest return anywhere, nothing is ahead within the layers.
+  const EciResult side = Eci(CubeAt(2.0, -1.2, 0.0), forward);
+  EXPECT_NEAR(side.d0, std::hypot(2.0, 0.9), 0.01);
+  EXPECT_DOUBLE_EQ(side.d_ahead, 10.0) << "d_per";
+  // The side cube and a far one ahead at 7 m: d_ahead is the far one's range.
+  Scene both = CubeAt(2.0, -1.2, 0.0);
+  both.boxes.push_back(CubeAt(7.0).boxes[0]);
+  const EciResult r = Eci(both, forward);
+  EXPECT_NEAR(r.d_ahead, 7.0, 0.01);
+  EXPECT_NEAR(r.d0, side.d0, 1e-9);
+  // Hovering: the centre zone is not the direction of motion, so d_ahead falls back to d0.
+  EXPECT_DOUBLE_EQ(Eci(CubeAt(2.0, -1.2, 0.0)).d_ahead, Eci(CubeAt(2.0, -1.2, 0.0)).d0);
+}
+
 TEST(EciTest, LayerCountFollowsFormula) {
   for (double d : {0.6, 0.8, 1.0, 1.7, 2.5, 3.2}) {
     const EciResult r = Eci(WallAt(d));
@@ -247,10 +268,15 @@ TEST(EciTest, EveryKernelGivesIdenticalResults) {
   }
 }
 
-TEST(EciTest, CountsOnePixelUnitPerPixel) {
+TEST(EciTest, CountsOnePixelUnitPerPixelAndTheCentreZoneOnceMoreWhenMoving) {
   WorkCounts work;
   ComputeEci(Render(WallAt(2.0), kCam, kX_WC), kCam, kHover, {}, &work);
   EXPECT_EQ(work.Get(WorkUnit::kPixel), 640 * 480);
+  // Moving: d_ahead reads the centre zone once more (27 % of the width x 31 % of the height).
+  WorkCounts moving;
+  ComputeEci(Render(WallAt(2.0), kCam, kX_WC), kCam, Eigen::Vector3d(0, 0, 2), {}, &moving);
+  EXPECT_GT(moving.Get(WorkUnit::kPixel), 640 * 480 * 108 / 100);
+  EXPECT_LT(moving.Get(WorkUnit::kPixel), 640 * 480 * 109 / 100);
 }
 
 TEST(EciTest, RejectsBadOptions) {

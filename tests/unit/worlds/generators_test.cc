@@ -47,7 +47,9 @@ TEST_P(GeneratorContractTest, StartGoalDistanceIsThePapersFlightPath) {
   }
 }
 
-TEST_P(GeneratorContractTest, StartAndGoalFlyAtOneAndAHalfMetresAboveTheGround) {
+TEST_P(GeneratorContractTest, StartAndGoalFlyAtTheGeneratorsAltitudeAboveTheGround) {
+  const GeneratorInfo* info = FindGenerator(GetParam());
+  ASSERT_NE(info, nullptr);
   const World w = Generate(GetParam(), 4);
   // Ground plane or, without one, the top of the floor/terrain right below.
   auto ground_below = [&](const Eigen::Vector3d& p) {
@@ -61,8 +63,8 @@ TEST_P(GeneratorContractTest, StartAndGoalFlyAtOneAndAHalfMetresAboveTheGround) 
     }
     return top;
   };
-  EXPECT_NEAR(w.start.z() - ground_below(w.start), 1.5, 1e-9);
-  EXPECT_NEAR(w.goal.z() - ground_below(w.goal), 1.5, 1e-9);
+  EXPECT_NEAR(w.start.z() - ground_below(w.start), info->flight_altitude, 1e-9);
+  EXPECT_NEAR(w.goal.z() - ground_below(w.goal), info->flight_altitude, 1e-9);
   EXPECT_LE(w.bounds.sizes().z(), 10.0) << "flight volumes stay low";
 }
 
@@ -112,7 +114,7 @@ TEST_P(GeneratorContractTest, MeshIsBoundedAndWithinTheTriangleBudget) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllScenarios, GeneratorContractTest,
-                         ::testing::Values("s1", "s2", "s3", "s4", "s5", "forest", "empty"),
+                         ::testing::Values("s1", "s2", "s3", "s4", "s5", "canyon", "forest", "empty"),
                          [](const auto& info) { return info.param; });
 
 class PaperScenarioTest : public ::testing::TestWithParam<std::string> {};
@@ -131,7 +133,7 @@ INSTANTIATE_TEST_SUITE_P(PaperScenarios, PaperScenarioTest, ::testing::Values("s
 TEST(GeneratorsTest, EveryGeneratorIsListedOnce) {
   std::set<std::string> ids;
   for (const auto& g : Generators()) EXPECT_TRUE(ids.insert(g.id).second) << g.id;
-  EXPECT_EQ(ids, (std::set<std::string>{"s1", "s2", "s3", "s4", "s5", "forest", "empty"}));
+  EXPECT_EQ(ids, (std::set<std::string>{"s1", "s2", "s3", "s4", "s5", "canyon", "forest", "empty"}));
   EXPECT_EQ(FindGenerator("s9"), nullptr);
 }
 
@@ -163,6 +165,53 @@ TEST(GeneratorsTest, ScenarioFlavours) {
   EXPECT_GE(height_spread(Generate("s1", 1)), 5.0);
 }
 
+// canyon: every street 6-10 m wide, buildings 3-48 m with some below the flight altitude (to fly
+// over) and most far above it, the straight line blocked, so the route along the streets turns.
+TEST(GeneratorsTest, CanyonIsStreetsBetweenBuildingsOfMixedHeights) {
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    const World w = Generate("canyon", seed);
+    int low = 0, tall = 0;
+    std::vector<Eigen::AlignedBox3d> boxes;
+    for (const auto& o : w.objects) {
+      const auto* b = std::get_if<Box>(&o);
+      ASSERT_NE(b, nullptr) << "canyon is made of boxes";
+      EXPECT_GE(b->size.z(), 3.0 - 1e-9);
+      EXPECT_LE(b->size.z(), 48.0 + 1e-9);
+      low += b->size.z() < w.start.z();
+      tall += b->size.z() > 20.0;
+      boxes.push_back(ObjectBounds(o));
+    }
+    EXPECT_GT(low, 0) << "seed " << seed << ": some roofs below the flight altitude";
+    EXPECT_GT(tall, 0) << "seed " << seed << ": some towers";
+    // Two buildings facing each other with nothing in between either touch (one block, up to
+    // the file precision) or stand across a street of 6-10 m, widened by setbacks of up to
+    // 0.8 m on either side.
+    auto overlap = [](double lo0, double hi0, double lo1, double hi1) { return std::min(hi0, hi1) - std::max(lo0, lo1); };
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      for (std::size_t j = 0; j < boxes.size(); ++j) {
+        for (int a = 0; a < 2; ++a) {
+          const int o = 1 - a;
+          const double lo = boxes[i].max()[a], hi = boxes[j].min()[a];
+          const double o_lo = std::max(boxes[i].min()[o], boxes[j].min()[o]);
+          const double o_hi = std::min(boxes[i].max()[o], boxes[j].max()[o]);
+          if (i == j || hi < lo || o_hi - o_lo <= 0.01) continue;
+          const bool between = std::any_of(boxes.begin(), boxes.end(), [&](const Eigen::AlignedBox3d& k) {
+            return overlap(k.min()[a], k.max()[a], lo, hi) > 0.0 && overlap(k.min()[o], k.max()[o], o_lo, o_hi) > 0.0;
+          });
+          if (between) continue;
+          const double street = hi - lo;
+          EXPECT_TRUE(street < 0.001 || (street >= 6.0 - 1e-9 && street <= 11.6 + 1e-9))
+              << "seed " << seed << ": " << street << " m between buildings " << i << " and " << j;
+        }
+      }
+    }
+    const ObstacleField field(w, /*include_ground=*/false);
+    EXPECT_LT(field.SegmentClearance(w.start, w.goal), 0.3) << "seed " << seed;
+    EXPECT_GE(field.Distance(w.start), 2.5) << "seed " << seed << ": the start lies in a street";
+    EXPECT_GE(field.Distance(w.goal), 2.5) << "seed " << seed << ": the goal lies in a street";
+  }
+}
+
 TEST(GeneratorsTest, ParametersAreCheckedByNameAndRange) {
   auto error = [](const std::string& id, const std::map<std::string, std::string>& params) -> std::string {
     try {
@@ -177,7 +226,8 @@ TEST(GeneratorsTest, ParametersAreCheckedByNameAndRange) {
             "forest: params.density: not a number (got 'lots'; allowed range [0.0, 10.0])");
   EXPECT_EQ(error("s1", {{"density", "2"}}), "s1: params.density: unknown parameter (allowed: length)");
   EXPECT_EQ(error("s3", {{"length", "100"}}), "s3: params.length: must be in [8.0, 60.0] (got 100)");
-  EXPECT_EQ(error("s7", {}).rfind("scenario: unknown scenario 's7' (known: s1, s2, s3, s4, s5, forest, empty)", 0), 0u);
+  EXPECT_EQ(error("s7", {}).rfind("scenario: unknown scenario 's7' (known: s1, s2, s3, s4, s5, canyon, forest, empty)", 0),
+            0u);
 }
 
 TEST(GeneratorsTest, ParametersShapeTheWorldAndAreRecorded) {

@@ -1,0 +1,28 @@
+// E-Navi with the shipped policy on street canyons, a world it was not trained on. Before the
+// reaction constraint, the policy slowed its map and collision-check rates near building corners
+// and nothing kept them within what the vehicle needs to stop before a wall.
+#include <gtest/gtest.h>
+
+#include "tests/integration/loop_test_util.h"
+#include "workers/sim/episode.h"
+
+namespace enavi::integration {
+namespace {
+
+TEST(CanyonSafetyTest, EnaviSeesTheWallRoundTheCornerInTimeToAvoidItWithoutAnEmergencyStop) {
+  // canyon seed 1 on opi5, 37 s in: coming round a corner at 1.5 m/s with 5 Hz map updates and
+  // 2 Hz checks, the check found the wall 0.46 s ahead, too late for a replan: emergency stop,
+  // 0.44 m from the wall (the frame is 0.29 m in radius; the x86 flight, 0.2 s ahead at
+  // 1.7 m/s, hit). The reaction constraint masks those rates there: the planner hears of the wall
+  // in time to steer round it.
+  api::EpisodeSpec spec = Spec("canyon", 1);
+  spec.board = "opi5";
+  spec.method = "enavi";
+  const api::EpisodeResult r = sim::RunEpisode(spec);
+  ASSERT_TRUE(r.success) << Describe(r);
+  EXPECT_FALSE(r.collided);
+  EXPECT_EQ(r.emergency_stops, 0) << Describe(r);
+}
+
+}  // namespace
+}  // namespace enavi::integration
