@@ -35,9 +35,11 @@ void Validate(const TrainOptions& o) {
   for (const auto& b : o.boards)
     Check(std::find(known.begin(), known.end(), b) != known.end(), "--boards: unknown board '" + b + "'");
   Check(!o.scenarios.empty(), "--scenarios: at least one scenario");
+  std::string known_scenarios;
+  for (const char* k : api::kScenarios) known_scenarios += (known_scenarios.empty() ? "" : ", ") + std::string(k);
   for (const auto& s : o.scenarios)
-    Check(s == "forest" || s == "empty" || (s.size() == 2 && s[0] == 's' && s[1] >= '1' && s[1] <= '5'),
-          "--scenarios: unknown scenario '" + s + "' (known: s1..s5, forest, empty)");
+    Check(std::find(api::kScenarios.begin(), api::kScenarios.end(), s) != api::kScenarios.end(),
+          "--scenarios: unknown scenario '" + s + "' (known: " + known_scenarios + ")");
   Check(o.iterations >= 1 && o.iterations <= 100000, "--iterations: must be in [1, 100000]");
   Check(o.episodes_per_iteration >= 1 && o.episodes_per_iteration <= 10000,
         "--episodes-per-iter: must be in [1, 10000]");

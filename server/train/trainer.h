@@ -18,7 +18,8 @@ namespace enavi::train {
 
 struct TrainOptions {
   std::vector<std::string> boards = {"tx2", "pi4b"};
-  std::vector<std::string> scenarios = {"s1", "s2", "s3", "s4", "s5"};
+  /// The paper's five and the street canyons (corners at speed: what the reaction constraint is for).
+  std::vector<std::string> scenarios = {"s1", "s2", "s3", "s4", "s5", "canyon"};
   int iterations = 20;
   int episodes_per_iteration = 10;
   std::string server;              ///< farm URL; empty: a private local farm
