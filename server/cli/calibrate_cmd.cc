@@ -196,6 +196,7 @@ void Run(const CalibrateArgs& args) {
       spec.method = "enavi";
       spec.policy = policy;
     } else {
+      spec.method = "fixed";  // our stack at fixed rates: the loads the reference was fitted on
       spec.overrides["map.resolution"] = res;
       spec.overrides["rates.f_dif"] = f_dif;
     }
