@@ -13,7 +13,6 @@ packages=(
   libcpp-httplib-dev libssl-dev libpng-dev libcairo2-dev fonts-dejavu-core
   libassimp-dev libsdformat-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libssl-dev
   python3-dev pybind11-dev python3-numpy python3-torch
   iproute2 procps util-linux
   chromium chromium-driver python3-selenium libxml2-utils
