@@ -37,6 +37,7 @@ struct Flight {
   std::vector<double> jumps;  ///< how far back along x the reference moved when a replan landed
   std::int64_t plan_failures = 0;
   double final_x = 0;
+  double hold_x = -1;  ///< where the first emergency stop held the vehicle (-1: none)
 };
 
 // A depth frame of a wall across the whole view at world x = wall_x, seen from p facing +x.
@@ -55,19 +56,21 @@ DepthFramePtr WallFrame(const CameraIntrinsics& camera, const Eigen::Vector3d& p
 }
 
 Flight Fly(const CostModel& cost, std::map<std::string, double> params, double duration = 8.0,
-           std::optional<double> wall_x = std::nullopt) {
+           std::optional<double> wall_x = std::nullopt, double half_width = 10.0, int search_iterations = 5000) {
   const MethodInfo& method = *FindMethod("baseline");
   NavStackOptions o;
   ConfigureMethod(method, MethodSetup{}, &o);
   for (const auto& [k, v] : params) o.params[k] = v;
   o.goal = Eigen::Vector3d(30, 0, 1.5);
-  o.flight_bounds = Eigen::AlignedBox3d(Eigen::Vector3d(-5, -10, 0), Eigen::Vector3d(40, 10, 5));
+  o.flight_bounds = Eigen::AlignedBox3d(Eigen::Vector3d(-5, -half_width, 0), Eigen::Vector3d(40, half_width, 5));
+  o.planner.max_search_iterations = search_iterations;
   VirtualExecutor exec(1, cost, SchedulingPolicy::kFifoNonPreemptive);
   VehicleState s;
   s.p_WB = Eigen::Vector3d(0, 0, 1.5);
   auto nav = method.make(o, &exec, s);
   Flight f;
   double next_frame = 0;
+  bool stopping = false;
   for (double t = 0; t <= duration; t += 0.005) {
     if (wall_x && t >= next_frame) {
       next_frame += 1.0 / 30.0;
@@ -79,7 +82,12 @@ Flight Fly(const CostModel& cost, std::map<std::string, double> params, double d
     bool landed = false;
     for (NavEvent& e : nav->TakeEvents()) {
       landed = landed || (e.kind == "replan" && e.detail == "distance");
+      if (e.kind == "emergency_stop" && f.hold_x < 0) stopping = true;
       f.events.push_back(std::move(e));
+    }
+    if (stopping && after.v.norm() == 0.0) {
+      f.hold_x = after.p.x();
+      stopping = false;
     }
     if (landed) f.jumps.push_back(before.p.x() - after.p.x());
     // Perfect tracking.
@@ -142,6 +150,22 @@ TEST(EgoPlannerNodeTest, SearchesOverTheirBoardTimeLimitFail) {
   // Without the limit no search times out.
   const Flight unlimited = Fly(slow_checks, {{"ego.search_time_limit", 0}}, 6.0, 4.0);
   EXPECT_EQ(timeouts(unlimited), 0);
+}
+
+TEST(EgoPlannerNodeTest, AWallItCannotReplanAroundStopsTheVehicleBeforeIt) {
+  // A corridor 1.6 m wide, closed by a wall at x = 4: the safety check finds the wall on the
+  // trajectory, no replan gets round it, and once the hit is less than emergency_time (1 s)
+  // ahead the node holds the position where it is (EMERGENCY_STOP), short of the wall.
+  const PlanCost cheap(0.005);
+  // (Hopeless searches are cut at 300 samples to keep the test short.)
+  const Flight f = Fly(cheap, {}, 3.0, 4.0, 0.8, 300);
+  EXPECT_GT(Count(f, "emergency_stop"), 0);
+  ASSERT_GE(f.hold_x, 0.0) << "the stop published a hold";
+  EXPECT_LT(f.hold_x, 4.0 - 0.3) << "held short of the wall (robot radius 0.3 m)";
+  // Switched off, a hit only ever asks for a replan.
+  const Flight no_stop = Fly(cheap, {{"ego.emergency_stop", 0}}, 3.0, 4.0, 0.8, 300);
+  EXPECT_EQ(Count(no_stop, "emergency_stop"), 0);
+  EXPECT_LT(no_stop.hold_x, 0.0);
 }
 
 }  // namespace
