@@ -14,7 +14,7 @@
 
 namespace enavi::worlds {
 
-/// Hard limits shared by world files and OBJ meshes (DESIGN.md section 9: oversized input is bad
+/// Hard limits shared by world files and OBJ meshes (docs/farm.md: oversized input is bad
 /// input, refused before it costs memory).
 inline constexpr std::uintmax_t kMaxFileBytes = 256ull << 20;  ///< 256 MiB, checked before parsing
 inline constexpr std::size_t kMaxTriangles = 5'000'000;        ///< in one world, all objects

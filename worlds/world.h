@@ -1,5 +1,5 @@
 #pragma once
-// World description: the static scene one episode flies through (DESIGN.md section 6).
+// World description: the static scene one episode flies through (worlds/generators.h and docs/results.md).
 // Pure geometry: no Bullet, no Embree. Lengths in metres, angles in radians, z up.
 
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-// Environment-adaptive spatial Complexity Index, eci (paper Sec. IV; DESIGN.md section 5).
+// Environment-adaptive spatial Complexity Index, eci (paper Sec. IV; README.md, "E-Navi (our reading of the paper)").
 
 #include <cstdint>
 #include <vector>

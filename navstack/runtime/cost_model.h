@@ -1,5 +1,5 @@
 #pragma once
-// How long a job takes on the emulated board (DESIGN.md section 4).
+// How long a job takes on the emulated board (README.md, "The board: time").
 
 #include <array>
 #include <string>

@@ -1,6 +1,6 @@
 #pragma once
 // TaskExecutor: runs the navigation stack's jobs under an emulated onboard computer
-// (DESIGN.md section 4). Deadlines equal periods (paper Sec. III.A).
+// (README.md, "The board: time"). Deadlines equal periods (paper Sec. III.A).
 
 #include <array>
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-// Linux real-time scheduling for the navstack's periodic tasks (DESIGN.md section 4, emulated
+// Linux real-time scheduling for the navstack's periodic tasks (README.md, "The board: time", emulated
 // clock): SCHED_DEADLINE through sched_setattr(2) with a fallback to SCHED_OTHER, and a small
 // user-space EDF dispatcher that runs periodic jobs on a fixed pool of worker threads.
 //
@@ -137,7 +137,7 @@ struct EdfDispatcherOptions {
 /// User-space EDF dispatcher: a release thread puts periodic jobs into an EdfReadyQueue at
 /// their release times; `workers` threads take the most urgent job. A task whose previous job
 /// is still queued or running when the next release comes skips that release (counted), so an
-/// overrunning task never queues without bound (DESIGN.md section 4).
+/// overrunning task never queues without bound (README.md, "The board: time").
 class EdfDispatcher {
  public:
   explicit EdfDispatcher(EdfDispatcherOptions options);

@@ -10,7 +10,7 @@
 
 namespace enavi::cli {
 
-/// Exit codes shared by every subcommand (DESIGN.md section 10).
+/// Exit codes shared by every subcommand (README.md, "What it does").
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitBadInput = 2;

@@ -1,4 +1,4 @@
-// enavi: one executable, subcommands with --help (DESIGN.md section 10).
+// enavi: one executable, subcommands with --help (README.md, "What it does").
 #include <cstdio>
 #include <exception>
 #include <stdexcept>

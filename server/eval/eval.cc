@@ -65,7 +65,7 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   while (true) {
     report.progress = *store.Progress(report.job_id, NowMs());
     const auto now = std::chrono::steady_clock::now();
-    // A bar redrawn in place on a terminal; piped, only the final line (DESIGN.md section 10).
+    // A bar redrawn in place on a terminal; piped, only the final line (README.md, "What it does").
     if (report.progress.terminal() ||
         (options.progress_bar && now - last_print >= options.progress_period)) {
       const std::string line = ProgressLine(report.progress, options.progress_bar);

@@ -1,7 +1,7 @@
 #pragma once
 // The farm's durable state in SQLite (WAL, synchronous=FULL): jobs, their episodes and the
 // results. Every state transition is one transaction, so a server killed at any instant restarts
-// from a consistent database (DESIGN.md section 9).
+// from a consistent database (docs/farm.md).
 //
 // Episode states:  pending --lease--> leased --result ok--> done
 //                     ^                  |  \--error / lease lost, attempts < max--> pending

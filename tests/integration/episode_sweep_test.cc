@@ -1,7 +1,7 @@
 // The acceptance sweep (label `slow`, about 4-5 min on two cores; `ctest -L slow`): the
 // baseline on board `host` flies s1-s5 with seeds 1 and 2, reaches the goal in at least 9 of 10
 // episodes with no collision, and its s1 paths are at most 1.5x the straight line. Prints one
-// line per episode, with the eci range next to the paper's (DESIGN.md section 6).
+// line per episode, with the eci range next to the paper's (worlds/generators.h and docs/results.md).
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -16,7 +16,7 @@ namespace {
 
 struct Scenario {
   const char* id;
-  const char* paper_eci;  ///< range the paper reports (DESIGN.md section 6)
+  const char* paper_eci;  ///< range the paper reports (worlds/generators.h and docs/results.md)
 };
 constexpr Scenario kScenarios[] = {
     {"s1", "0.06-0.87"}, {"s2", "0.08-0.97"}, {"s3", "0.19-0.83"}, {"s4", "0.26-0.86"}, {"s5", "0.25-0.79"}};

@@ -1,5 +1,5 @@
 #pragma once
-// Onboard computers the farm emulates (DESIGN.md section 7) and their cost-model coefficients.
+// Onboard computers the farm emulates (workers/board/profiles/SOURCES.md) and their cost-model coefficients.
 // Profiles are data (workers/board/profiles/*.yaml, embedded in the binary) with a cited source
 // for every per-core speed figure; see profiles/SOURCES.md.
 

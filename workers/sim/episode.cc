@@ -238,7 +238,7 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
     if (const navstack::rl::Rollout* r = nav->rollout()) *options.rollout = *r;
   }
 
-  // Results (DESIGN.md section 8).
+  // Results (README.md, "One flight" and api/episode.h).
   const NavAccounting acc = nav->Accounting();
   const double T = quad.time();
   result.sim_time_s = T;

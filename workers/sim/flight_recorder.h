@@ -1,5 +1,5 @@
 #pragma once
-// Flight metrics of one episode (DESIGN.md section 8): path length, speed statistics and peak
+// Flight metrics of one episode (README.md, "One flight" and api/episode.h): path length, speed statistics and peak
 // acceleration, from the vehicle state sampled at a fixed rate.
 
 #include <vector>
