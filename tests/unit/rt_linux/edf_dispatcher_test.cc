@@ -99,6 +99,8 @@ TEST(EdfDispatcherTest, ReleasesAreStrictlyPeriodicWithImplicitDeadlines) {
 
 TEST(EdfDispatcherTest, QueuedJobsRunInDeadlineOrder) {
   // One worker, held by a gate job while a long-deadline and a short-deadline job are released.
+  // The gate's 1 ms relative deadline makes it the first pick even when the worker thread starts
+  // after the other two releases (a loaded CI machine), so it always holds the worker first.
   EdfDispatcher d(Workers(1));
   std::promise<void> gate;
   std::shared_future<void> gate_open = gate.get_future().share();
@@ -110,7 +112,8 @@ TEST(EdfDispatcherTest, QueuedJobsRunInDeadlineOrder) {
       order.push_back(name);
     };
   };
-  d.AddTask(Task("gate", std::chrono::hours(1), [gate_open](const ReadyJob&) { gate_open.wait(); }));
+  d.AddTask(Task("gate", std::chrono::hours(1), [gate_open](const ReadyJob&) { gate_open.wait(); },
+                 milliseconds(0), milliseconds(1)));
   const int slow = d.AddTask(Task("slow", std::chrono::seconds(10), record("slow"), milliseconds(1)));
   const int fast = d.AddTask(Task("fast", milliseconds(500), record("fast"), milliseconds(2)));
   d.Start();
