@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <thread>
 
 namespace enavi::navstack {
 namespace {
@@ -68,22 +69,6 @@ std::string DescribeRefusal(int err, const DeadlineParams& p) {
 }
 
 }  // namespace
-
-DeadlineParams PaperDeadlineParams(double frequency_hz, double wcet_s) {
-  if (!(frequency_hz > 0.0) || !std::isfinite(frequency_hz)) {
-    throw std::invalid_argument("PaperDeadlineParams: frequency_hz must be > 0, got " +
-                                std::to_string(frequency_hz));
-  }
-  if (!(wcet_s > 0.0) || !std::isfinite(wcet_s)) {
-    throw std::invalid_argument("PaperDeadlineParams: wcet_s must be > 0, got " +
-                                std::to_string(wcet_s));
-  }
-  DeadlineParams p;
-  p.period_ns = static_cast<std::int64_t>(std::llround(1e9 / frequency_hz));
-  p.deadline_ns = p.period_ns;
-  p.runtime_ns = static_cast<std::int64_t>(std::llround(wcet_s * 1e9));
-  return p;
-}
 
 DeadlineParams SpeedServerParams(double rate, std::int64_t server_period_ns) {
   if (!(rate > 0.0 && rate <= 1.0)) {
@@ -151,183 +136,6 @@ DeadlineResult EnterDeadline(const DeadlineParams& params, const DeadlineOptions
     if (!EnterOther()) result.reason += " (and returning to SCHED_OTHER failed too)";
   }
   return result;
-}
-
-// ---------------------------------------------------------------------------------------------
-// EdfReadyQueue
-
-namespace {
-std::int64_t ThreadCpuNs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
-// Heap comparator: true when a is less urgent than b (std heaps keep the "largest" on top).
-bool LessUrgent(const ReadyJob& a, const ReadyJob& b) {
-  if (a.deadline != b.deadline) return a.deadline > b.deadline;
-  if (a.release != b.release) return a.release > b.release;
-  return a.task > b.task;
-}
-}  // namespace
-
-void EdfReadyQueue::Push(const ReadyJob& job) {
-  heap_.push_back(job);
-  std::push_heap(heap_.begin(), heap_.end(), LessUrgent);
-}
-
-std::optional<ReadyJob> EdfReadyQueue::Pop() {
-  if (heap_.empty()) return std::nullopt;
-  std::pop_heap(heap_.begin(), heap_.end(), LessUrgent);
-  ReadyJob job = heap_.back();
-  heap_.pop_back();
-  return job;
-}
-
-// ---------------------------------------------------------------------------------------------
-// EdfDispatcher
-
-EdfDispatcher::EdfDispatcher(EdfDispatcherOptions options) : options_(std::move(options)) {
-  if (options_.workers < 1) {
-    throw std::invalid_argument("EdfDispatcher: workers must be >= 1, got " +
-                                std::to_string(options_.workers));
-  }
-}
-
-EdfDispatcher::~EdfDispatcher() { Stop(); }
-
-int EdfDispatcher::AddTask(PeriodicTask task) {
-  if (task.period.count() <= 0) {
-    throw std::invalid_argument("EdfDispatcher::AddTask: task '" + task.name +
-                                "' needs a period > 0");
-  }
-  if (task.relative_deadline.count() < 0 || task.relative_deadline > task.period) {
-    throw std::invalid_argument("EdfDispatcher::AddTask: task '" + task.name +
-                                "' needs 0 <= relative_deadline <= period");
-  }
-  if (!task.body) {
-    throw std::invalid_argument("EdfDispatcher::AddTask: task '" + task.name + "' has no body");
-  }
-  std::lock_guard lock(mutex_);
-  TaskState state;
-  state.spec = std::move(task);
-  if (running_) state.next_release = std::chrono::steady_clock::now() + state.spec.phase;
-  tasks_.push_back(std::move(state));
-  release_cv_.notify_all();
-  return static_cast<int>(tasks_.size()) - 1;
-}
-
-void EdfDispatcher::SetPeriod(int task, std::chrono::nanoseconds period) {
-  if (period.count() <= 0) {
-    throw std::invalid_argument("EdfDispatcher::SetPeriod: period must be > 0");
-  }
-  std::lock_guard lock(mutex_);
-  TaskState& t = tasks_.at(static_cast<std::size_t>(task));
-  t.spec.period = period;
-  t.spec.relative_deadline = std::chrono::nanoseconds{0};
-  release_cv_.notify_all();
-}
-
-void EdfDispatcher::Start() {
-  std::unique_lock lock(mutex_);
-  if (running_ || stopping_) return;
-  running_ = true;
-  start_ = std::chrono::steady_clock::now();
-  for (TaskState& t : tasks_) t.next_release = start_ + t.spec.phase;
-  worker_tids_.assign(static_cast<std::size_t>(options_.workers), 0);
-  for (int i = 0; i < options_.workers; ++i) {
-    threads_.emplace_back([this, i] { WorkerLoop(i); });
-  }
-  // Start() returns once every worker has run its start hook and published its thread id.
-  work_cv_.wait(lock, [this] {
-    return std::all_of(worker_tids_.begin(), worker_tids_.end(), [](pid_t t) { return t != 0; });
-  });
-  threads_.emplace_back([this] { ReleaseLoop(); });
-}
-
-void EdfDispatcher::Stop() {
-  {
-    std::lock_guard lock(mutex_);
-    if (!running_ || stopping_) return;
-    stopping_ = true;
-  }
-  work_cv_.notify_all();
-  release_cv_.notify_all();
-  for (std::thread& t : threads_) t.join();
-  threads_.clear();
-}
-
-PeriodicTaskStats EdfDispatcher::Stats(int task) const {
-  std::lock_guard lock(mutex_);
-  return tasks_.at(static_cast<std::size_t>(task)).stats;
-}
-
-std::vector<pid_t> EdfDispatcher::WorkerTids() const {
-  std::lock_guard lock(mutex_);
-  return worker_tids_;
-}
-
-void EdfDispatcher::ReleaseLoop() {
-  std::unique_lock lock(mutex_);
-  while (!stopping_) {
-    const auto now = std::chrono::steady_clock::now();
-    auto earliest = std::chrono::steady_clock::time_point::max();
-    bool released = false;
-    for (std::size_t i = 0; i < tasks_.size(); ++i) {
-      TaskState& t = tasks_[i];
-      while (t.next_release <= now) {
-        // One job per task at a time: a release that finds its predecessor pending is skipped.
-        if (t.pending) {
-          ++t.stats.skipped;
-        } else {
-          const auto rel_deadline =
-              t.spec.relative_deadline.count() > 0 ? t.spec.relative_deadline : t.spec.period;
-          queue_.Push(ReadyJob{static_cast<int>(i), t.next_index, t.next_release,
-                               t.next_release + rel_deadline});
-          t.pending = true;
-          ++t.stats.released;
-          released = true;
-        }
-        ++t.next_index;
-        t.next_release += t.spec.period;
-      }
-      earliest = std::min(earliest, t.next_release);
-    }
-    if (released) work_cv_.notify_all();
-    if (earliest == std::chrono::steady_clock::time_point::max()) {
-      release_cv_.wait(lock);
-    } else {
-      release_cv_.wait_until(lock, earliest);
-    }
-  }
-}
-
-void EdfDispatcher::WorkerLoop(int worker_index) {
-  if (options_.on_worker_start) options_.on_worker_start(worker_index);
-  std::unique_lock lock(mutex_);
-  worker_tids_[static_cast<std::size_t>(worker_index)] = static_cast<pid_t>(gettid());
-  work_cv_.notify_all();
-  while (true) {
-    work_cv_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
-    if (stopping_) return;
-    const ReadyJob job = *queue_.Pop();
-    const PeriodicTask& spec = tasks_[static_cast<std::size_t>(job.task)].spec;
-    auto body = spec.body;  // copy: AddTask may grow tasks_ while the job runs
-    lock.unlock();
-    const std::int64_t cpu0 = ThreadCpuNs();
-    body(job);
-    const std::int64_t cpu_used = ThreadCpuNs() - cpu0;
-    const auto done = std::chrono::steady_clock::now();
-    lock.lock();
-    TaskState& t = tasks_[static_cast<std::size_t>(job.task)];
-    t.pending = false;
-    ++t.stats.completed;
-    if (done > job.deadline) ++t.stats.missed;
-    const auto response = std::chrono::duration_cast<std::chrono::nanoseconds>(done - job.release);
-    t.stats.max_response = std::max(t.stats.max_response, response);
-    t.stats.total_response += response;
-    t.stats.cpu_time += std::chrono::nanoseconds(cpu_used);
-  }
 }
 
 }  // namespace enavi::navstack

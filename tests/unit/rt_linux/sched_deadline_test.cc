@@ -32,14 +32,6 @@ bool AffinitySpansAllCpus() {
   return CPU_COUNT(&set) == static_cast<int>(sysconf(_SC_NPROCESSORS_ONLN));
 }
 
-TEST(SchedDeadlineTest, PaperParamsArePeriodOneOverFAndRuntimeWcet) {
-  const DeadlineParams p = PaperDeadlineParams(30.0, 0.005);
-  EXPECT_EQ(p.period_ns, 33'333'333);
-  EXPECT_EQ(p.deadline_ns, p.period_ns) << "implicit deadline: deadline = period";
-  EXPECT_EQ(p.runtime_ns, 5'000'000);
-  EXPECT_EQ(p.flags, 0u) << "hard reservation, no reclaiming";
-}
-
 TEST(SchedDeadlineTest, SpeedServerRuntimeIsRateTimesPeriod) {
   const DeadlineParams p = SpeedServerParams(0.3, 10'000'000);
   EXPECT_EQ(p.runtime_ns, 3'000'000);
@@ -48,8 +40,6 @@ TEST(SchedDeadlineTest, SpeedServerRuntimeIsRateTimesPeriod) {
 }
 
 TEST(SchedDeadlineTest, BadParamsAreRefusedWithInvalidArgument) {
-  EXPECT_THROW(PaperDeadlineParams(0.0, 0.01), std::invalid_argument);
-  EXPECT_THROW(PaperDeadlineParams(30.0, -1.0), std::invalid_argument);
   EXPECT_THROW(SpeedServerParams(1.5), std::invalid_argument);
   EXPECT_THROW(SpeedServerParams(0.5, 50'000), std::invalid_argument);
 }
