@@ -178,6 +178,11 @@ class Farm {
 
   const std::string& url() const { return url_; }
   pid_t server_pid() const { return processes_.front().pid(); }
+  std::vector<pid_t> worker_pids() const {
+    std::vector<pid_t> out;
+    for (std::size_t i = 1; i < processes_.size(); ++i) out.push_back(processes_[i].pid());
+    return out;
+  }
   /// Runs `fn` where the server's HTTP API is reachable.
   void WithApi(const std::function<void()>& fn) const { ns_ ? ns_->In("server", fn) : fn(); }
 

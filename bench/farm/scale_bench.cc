@@ -3,7 +3,8 @@
 // (tests/system/fake_episode sleeping kEpisodeS: the episodes cost almost no CPU, so what is
 // measured is the farm: assignment, result ingestion, DDS, the worker's child processes).
 //
-// Counters, over the window from submission to the last stored result:
+// Counters, over the window from submission to the last stored result (discovery_s: from
+// starting the processes until the server lists every worker):
 //   assignments_per_s, results_per_s   from the server's own counters (GET /api/health)
 //   ideal_per_s                        workers x slots / kEpisodeS: a farm that costs nothing
 //   efficiency                         results_per_s / ideal_per_s (the reference, same run)
@@ -11,6 +12,12 @@
 //                                      workers x slots x window / episodes - kEpisodeS
 //                                      (assignment latency, ack, spawning the episode process)
 //   server_cpu_pct                     CPU of `enavi serve` over the window, % of one core
+//   server_cpu_ms_per_ep               the same per stored result
+//   server_idle_cpu_pct                CPU of `enavi serve` with the workers connected, idle
+//   server_udp_out_per_ep, _in_per_ep UDP datagrams the server sends and receives per result
+//                                      (DDS without multicast: one copy per matched reader)
+//   workers_cpu_pct, episodes_cpu_pct  CPU of the `enavi worker`s and of their (reaped)
+//                                      episode processes over the window, % of one core
 //   host_busy_pct                      CPU of the whole machine over the window, % of all cores
 // Root only (network namespaces). docs/farm.md has the table and what limits it.
 //
@@ -20,8 +27,10 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <sstream>
+#include <thread>
 
 #include <benchmark/benchmark.h>
 
@@ -37,18 +46,51 @@ using namespace std::chrono_literals;
 constexpr int kSlots = 4;                 // per worker
 constexpr double kEpisodeS = 0.25;        // fake episode length
 constexpr int kEpisodesPerSlot = 12;      // per measured job
+constexpr auto kIdleWindow = std::chrono::seconds(3);
 
-// utime + stime of a process, in seconds (/proc/PID/stat fields 14 and 15).
-double ProcessCpuSeconds(pid_t pid) {
+// CPU seconds of a process (utime + stime, /proc/PID/stat fields 14-15) and of its reaped
+// children (cutime + cstime, fields 16-17: a worker's episode processes).
+struct Cpu {
+  double self = 0, children = 0;
+};
+Cpu ProcessCpu(pid_t pid) {
   std::istringstream in(bench::ReadText("/proc/" + std::to_string(pid) + "/stat"));
   std::string field;
   // Field 2 (comm) is parenthesised and may hold spaces: skip past its closing parenthesis.
   std::getline(in, field, ')');
-  double ticks = 0;
-  for (int i = 3; i <= 15 && in >> field; ++i) {
-    if (i >= 14) ticks += std::stod(field);
+  Cpu cpu;
+  const double tick = 1.0 / static_cast<double>(sysconf(_SC_CLK_TCK));
+  for (int i = 3; i <= 17 && in >> field; ++i) {
+    if (i == 14 || i == 15) cpu.self += std::stod(field) * tick;
+    if (i == 16 || i == 17) cpu.children += std::stod(field) * tick;
   }
-  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
+  return cpu;
+}
+
+Cpu WorkersCpu(const bench::Farm& farm) {
+  Cpu sum;
+  for (pid_t pid : farm.worker_pids()) {
+    const Cpu c = ProcessCpu(pid);
+    sum.self += c.self;
+    sum.children += c.children;
+  }
+  return sum;
+}
+
+// UDP datagrams in and out of a process's network namespace (/proc/PID/net/snmp, "Udp:" rows):
+// the server alone in its namespace, so its DDS traffic.
+std::pair<double, double> UdpDatagrams(pid_t pid) {
+  std::istringstream in(bench::ReadText("/proc/" + std::to_string(pid) + "/net/snmp"));
+  std::string names, values;
+  while (std::getline(in, names) && std::getline(in, values)) {
+    if (names.rfind("Udp:", 0) != 0) continue;
+    std::istringstream n(names), v(values);
+    std::string name, value;
+    std::map<std::string, double> row;
+    while (n >> name && v >> value) row[name] = name == "Udp:" ? 0 : std::stod(value);
+    return {row["InDatagrams"], row["OutDatagrams"]};
+  }
+  throw std::runtime_error("no Udp row in /proc/" + std::to_string(pid) + "/net/snmp");
 }
 
 // Busy and total jiffies of all CPUs (/proc/stat, first line).
@@ -84,17 +126,25 @@ void BM_Scale(benchmark::State& state) {
     launch.partition = tag;
     launch.episode_cmd = std::string(ENAVI_BINARY_DIR) + "/tests/fake_episode";
     launch.worker_env = {"FAKE_EPISODE_SLEEP_S=" + std::to_string(kEpisodeS)};
+    const auto started = std::chrono::steady_clock::now();
     bench::Farm farm(dir, launch, &ns);
     farm.WithApi([&] {
       api::FarmClient client(farm.url(), "bench");
       if (!bench::Eventually([&] { return static_cast<int>(client.Workers().size()) == workers; }, 60s)) {
         throw std::runtime_error("workers not discovered");
       }
+      const double discovery_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      // The cost of being connected: the server's CPU with the workers idle (heartbeats).
+      const double idle0 = ProcessCpu(farm.server_pid()).self;
+      std::this_thread::sleep_for(kIdleWindow);
+      const double idle_cpu = ProcessCpu(farm.server_pid()).self - idle0;
       const int episodes = workers * kSlots * kEpisodesPerSlot;
       int first_seed = 1;
       for (auto _ : state) {
         const nlohmann::json before = client.Health()["stats"];
-        const double server_cpu0 = ProcessCpuSeconds(farm.server_pid());
+        const double server_cpu0 = ProcessCpu(farm.server_pid()).self;
+        const Cpu workers0 = WorkersCpu(farm);
+        const auto udp0 = UdpDatagrams(farm.server_pid());
         const auto host0 = HostJiffies();
         const auto t0 = std::chrono::steady_clock::now();
         const auto job = client.Submit("name: scale\nboards: [tx2]\nscenarios: [s1]\nmethods: [baseline]\n"
@@ -110,7 +160,9 @@ void BM_Scale(benchmark::State& state) {
         }
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const auto host1 = HostJiffies();
-        const double server_cpu = ProcessCpuSeconds(farm.server_pid()) - server_cpu0;
+        const double server_cpu = ProcessCpu(farm.server_pid()).self - server_cpu0;
+        const Cpu workers1 = WorkersCpu(farm);
+        const auto udp1 = UdpDatagrams(farm.server_pid());
         const nlohmann::json after = client.Health()["stats"];
         const api::JobProgress p = client.Status(job.job_id);
         if (p.done != episodes) throw std::runtime_error("only " + std::to_string(p.done) + " episodes done");
@@ -121,9 +173,16 @@ void BM_Scale(benchmark::State& state) {
         state.counters["assignments_per_s"] = assigned / seconds;
         state.counters["results_per_s"] = stored / seconds;
         state.counters["ideal_per_s"] = ideal;
+        state.counters["discovery_s"] = discovery_s;
         state.counters["efficiency"] = stored / seconds / ideal;
         state.counters["overhead_ms"] = 1000 * (workers * kSlots * seconds / episodes - kEpisodeS);
         state.counters["server_cpu_pct"] = 100 * server_cpu / seconds;
+        state.counters["server_idle_cpu_pct"] = 100 * idle_cpu / std::chrono::duration<double>(kIdleWindow).count();
+        state.counters["server_cpu_ms_per_ep"] = 1000 * server_cpu / stored;
+        state.counters["server_udp_out_per_ep"] = (udp1.second - udp0.second) / stored;
+        state.counters["server_udp_in_per_ep"] = (udp1.first - udp0.first) / stored;
+        state.counters["workers_cpu_pct"] = 100 * (workers1.self - workers0.self) / seconds;
+        state.counters["episodes_cpu_pct"] = 100 * (workers1.children - workers0.children) / seconds;
         state.counters["host_busy_pct"] = 100 * (host1.first - host0.first) / (host1.second - host0.second);
       }
     });
