@@ -8,8 +8,11 @@
 #   slurm_one_node_test.sh ENAVI_BINARY FAKE_EPISODE SBATCH_SCRIPT
 #
 # Cases: (1) 3 worker tasks run a job: every episode has exactly one result in the SQLite database;
-# (2) one worker step is scancel'led while it runs an episode: it drains (finishes that episode,
-# takes no new one), the others finish the job, still every result exactly once.
+# (2) one worker step is cancelled (scancel --signal=TERM JOBID.STEP) while it runs an episode: it
+# drains (finishes that episode, takes no new one), the others finish the job, still every result
+# exactly once; (3) the whole Slurm job is cancelled midway with a plain `scancel JOBID`: nothing
+# stored is lost or doubled, and the script submitted again on the same farm directory (no job
+# spec: it serves the database's unfinished jobs) finishes the job, every result exactly once.
 set -euo pipefail
 
 enavi=$1 fake_episode=$2 sbatch_script=$3
@@ -120,12 +123,13 @@ job_state() { scontrol show job "$1" 2>/dev/null | sed -n 's/.*JobState=\([A-Z_]
 # Submits the farm script with 3 worker tasks; prints the Slurm job id.
 submit() {
   local farm=$1 sleep_s=$2
+  shift 2
   mkdir -p "$farm"
   ENAVI_BIN=$enavi ENAVI_FARM_DIR=$farm ENAVI_INTERFACE=127.0.0.1 \
     ENAVI_EPISODE_CMD=$fake_episode FAKE_EPISODE_SLEEP_S=$sleep_s \
     FAKE_EPISODE_LOG=$farm/episodes.txt ENAVI_DRAIN_TIMEOUT=20 \
     sbatch --parsable --ntasks=3 --cpus-per-task=1 --time=5 --chdir="$dir" \
-    --output="$dir/job-%j.out" "$sbatch_script" "$dir/job.yaml"
+    --output="$dir/job-%j.out" "$sbatch_script" "$@"
 }
 
 wait_job() {
@@ -136,6 +140,17 @@ wait_job() {
     sleep 0.1
   done
   echo "$state"
+}
+
+# Results of the farm's database once it has at least $2.
+wait_results() {
+  for _ in $(seq 600); do
+    [ -f "$1/farm.db" ] &&
+      [ "$(sqlite3 "$1/farm.db" "SELECT COUNT(*) FROM results" 2>/dev/null || echo 0)" -ge "$2" ] &&
+      return 0
+    sleep 0.1
+  done
+  fail "$1: fewer than $2 results after 60 s"
 }
 
 # Every episode of the only job in the database is done with exactly one result, and the
@@ -155,7 +170,7 @@ check_exactly_once() {
 }
 
 # Case 1: the job runs to completion on 3 worker steps and the batch script ends by itself.
-id=$(submit "$dir/farm1" 0.5)
+id=$(submit "$dir/farm1" 0.5 "$dir/job.yaml")
 state=$(wait_job "$id")
 [ "$state" = COMPLETED ] || fail "case 1: Slurm job $id ended $state"
 check_exactly_once "$dir/farm1"
@@ -166,13 +181,8 @@ echo "case 1: $total results exactly once from $workers worker steps"
 
 # Case 2: episodes of 2 s; once the first results are in, one worker step is cancelled while it
 # runs an episode. It must drain: finish that episode (its result stored), then leave.
-id=$(submit "$dir/farm2" 2)
-for _ in $(seq 600); do
-  [ -f "$dir/farm2/farm.db" ] &&
-    [ "$(sqlite3 "$dir/farm2/farm.db" "SELECT COUNT(*) FROM results" 2>/dev/null || echo 0)" -ge 1 ] &&
-    break
-  sleep 0.1
-done
+id=$(submit "$dir/farm2" 2 "$dir/job.yaml")
+wait_results "$dir/farm2" 1
 # The step of task 1 (worker SLURMJOB-t1) while it holds a lease.
 victim="$id-t1"
 running=
@@ -196,3 +206,28 @@ owner=$(sqlite3 "$dir/farm2/farm.db" "SELECT worker FROM results WHERE episode_i
 [ "$owner" = "$victim" ] || fail "case 2: episode $running, running when $victim was cancelled, has its result from '$owner'"
 remaining=$(sqlite3 "$dir/farm2/farm.db" "SELECT COUNT(*) FROM results WHERE worker != '$victim'")
 echo "case 2: $total results exactly once; $victim finished $running, the others $remaining episodes"
+
+# Case 3: a plain scancel of the whole Slurm job while episodes run, then the script again.
+id=$(submit "$dir/farm3" 2 "$dir/job.yaml")
+wait_results "$dir/farm3" 2
+scancel "$id"
+state=$(wait_job "$id")
+[ "$state" = CANCELLED ] || fail "case 3: Slurm job $id ended $state after scancel"
+row=$(sqlite3 "$dir/farm3/farm.db" "SELECT (SELECT COUNT(*) FROM results),
+  (SELECT COUNT(DISTINCT episode_id) FROM results), (SELECT COUNT(*) FROM episodes WHERE state = 'failed'),
+  (SELECT COUNT(*) FROM jobs WHERE state = 'running')")
+IFS='|' read -r stored distinct failed running <<<"$row"
+[ "$stored" = "$distinct" ] && [ "$failed" = 0 ] && [ "$running" = 1 ] ||
+  fail "case 3: after scancel: results|distinct|failed episodes|running jobs = $row"
+[ "$stored" -lt "$total" ] || fail "case 3: the job finished before the scancel; nothing was tested"
+echo "case 3: scancel $id with $stored/$total results stored; submitting the farm again"
+id=$(submit "$dir/farm3" 0.5)
+for _ in $(seq 900); do
+  [ "$(sqlite3 "$dir/farm3/farm.db" "SELECT state FROM jobs" 2>/dev/null)" = done ] && break
+  sleep 0.1
+done
+scancel --signal=TERM "$id"
+state=$(wait_job "$id")
+[ "$state" = COMPLETED ] || fail "case 3: the resuming Slurm job $id ended $state"
+check_exactly_once "$dir/farm3"
+echo "case 3: $total results exactly once after the cancelled farm was submitted again"
