@@ -46,7 +46,7 @@ using namespace std::chrono_literals;
 constexpr int kSlots = 4;                 // per worker
 constexpr double kEpisodeS = 0.25;        // fake episode length
 constexpr int kEpisodesPerSlot = 12;      // per measured job
-constexpr auto kIdleWindow = std::chrono::seconds(3);
+constexpr auto kIdleWindow = std::chrono::seconds(5);
 
 // CPU seconds of a process (utime + stime, /proc/PID/stat fields 14-15) and of its reaped
 // children (cutime + cstime, fields 16-17: a worker's episode processes).

@@ -12,7 +12,8 @@
 # drains (finishes that episode, takes no new one), the others finish the job, still every result
 # exactly once; (3) the whole Slurm job is cancelled midway with a plain `scancel JOBID`: nothing
 # stored is lost or doubled, and the script submitted again on the same farm directory (no job
-# spec: it serves the database's unfinished jobs) finishes the job, every result exactly once.
+# spec: it serves the database's unfinished jobs), with one worker task of its own and two more
+# from the array form, finishes the job, every result exactly once.
 set -euo pipefail
 
 enavi=$1 fake_episode=$2 sbatch_script=$3
@@ -128,7 +129,7 @@ submit() {
   ENAVI_BIN=$enavi ENAVI_FARM_DIR=$farm ENAVI_INTERFACE=127.0.0.1 \
     ENAVI_EPISODE_CMD=$fake_episode FAKE_EPISODE_SLEEP_S=$sleep_s \
     FAKE_EPISODE_LOG=$farm/episodes.txt ENAVI_DRAIN_TIMEOUT=20 \
-    sbatch --parsable --ntasks=3 --cpus-per-task=1 --time=5 --chdir="$dir" \
+    sbatch --parsable --ntasks="${TASKS:-3}" --cpus-per-task=1 --time=5 --chdir="$dir" \
     --output="$dir/job-%j.out" "$sbatch_script" "$@"
 }
 
@@ -221,13 +222,24 @@ IFS='|' read -r stored distinct failed running <<<"$row"
   fail "case 3: after scancel: results|distinct|failed episodes|running jobs = $row"
 [ "$stored" -lt "$total" ] || fail "case 3: the job finished before the scancel; nothing was tested"
 echo "case 3: scancel $id with $stored/$total results stored; submitting the farm again"
-id=$(submit "$dir/farm3" 0.5)
+id=$(TASKS=1 submit "$dir/farm3" 2)
+array=$(ENAVI_BIN=$enavi ENAVI_FARM_DIR=$dir/farm3 ENAVI_INTERFACE=127.0.0.1 \
+  ENAVI_EPISODE_CMD=$fake_episode FAKE_EPISODE_SLEEP_S=2 ENAVI_DRAIN_TIMEOUT=20 \
+  sbatch --parsable --array=1-2 --ntasks=1 --cpus-per-task=1 --time=5 --chdir="$dir" \
+  --dependency="after:$id" --output="$dir/array-%A_%a.out" "$sbatch_script")
 for _ in $(seq 900); do
   [ "$(sqlite3 "$dir/farm3/farm.db" "SELECT state FROM jobs" 2>/dev/null)" = done ] && break
   sleep 0.1
 done
-scancel --signal=TERM "$id"
+scancel --signal=TERM "$array" "$id"
 state=$(wait_job "$id")
 [ "$state" = COMPLETED ] || fail "case 3: the resuming Slurm job $id ended $state"
+for task in 1 2; do
+  state=$(wait_job "${array}_$task")
+  [ "$state" = COMPLETED ] || fail "case 3: array task ${array}_$task ended $state"
+done
 check_exactly_once "$dir/farm3"
-echo "case 3: $total results exactly once after the cancelled farm was submitted again"
+by_array=$(sqlite3 "$dir/farm3/farm.db" "SELECT COUNT(*) FROM results WHERE worker LIKE '$array-a%'")
+[ "$by_array" -ge 1 ] || fail "case 3: the array form's workers ran no episode"
+echo "case 3: $total results exactly once after the cancelled farm was submitted again" \
+  "($by_array by the array form's workers)"
