@@ -30,17 +30,33 @@ dir=$(mktemp -d /tmp/enavi-slurm-XXXXXX)
 chmod 755 "$dir"
 export SLURM_CONF=$dir/slurm.conf
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# Loops below poll until a deadline in wall seconds (each poll runs a Slurm or sqlite command of
+# its own, so counting iterations would not bound the time on a loaded machine).
+before() { [ "$SECONDS" -lt "$1" ]; }
 
 cleanup() {
   local rc=$?
   set +e
-  scancel --quiet --full "--user=$(id -un)" "--clusters=$cluster" 2>/dev/null
+  # This cluster's jobs only (SLURM_CONF names it), while its controller still runs.
+  if [ -s "$dir/slurmctld.pid" ]; then
+    scancel --quiet --full "--user=$(id -un)" 2>/dev/null
+    local deadline=$((SECONDS + 10))
+    while before "$deadline" && [ -n "$(squeue -h 2>/dev/null)" ]; do sleep 0.1; done
+  fi
   for pidfile in "$dir/slurmd.pid" "$dir/slurmctld.pid" "$dir/munged.pid"; do
     [ -s "$pidfile" ] || continue
     pid=$(<"$pidfile")
     kill -TERM "$pid" 2>/dev/null
     for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
     kill -KILL "$pid" 2>/dev/null
+  done
+  # Whatever of ours outlived the daemons (slurmstepd and the job's processes carry our
+  # SLURM_CONF in their environment).
+  for env in /proc/[0-9]*/environ; do
+    grep -qzx "SLURM_CONF=$SLURM_CONF" "$env" 2>/dev/null || continue
+    pid=${env#/proc/}
+    pid=${pid%/environ}
+    [ "$pid" = $$ ] || kill -KILL "$pid" 2>/dev/null
   done
   if [ $rc -ne 0 ] && [ $rc -ne 77 ]; then
     for f in "$dir"/*.log "$dir"/farm*/logs/*.log "$dir"/job-*.out; do
@@ -102,7 +118,8 @@ PartitionName=enavi Nodes=localhost Default=YES MaxTime=INFINITE State=UP
 EOF
 slurmctld -c -f "$SLURM_CONF"
 slurmd -f "$SLURM_CONF" -N localhost
-for _ in $(seq 300); do
+deadline=$((SECONDS + 30))
+while before "$deadline"; do
   [ "$(sinfo -h -n localhost -o %t 2>/dev/null)" = idle ] && break
   sleep 0.1
 done
@@ -134,8 +151,8 @@ submit() {
 }
 
 wait_job() {
-  local id=$1 state
-  for _ in $(seq 900); do
+  local id=$1 state deadline=$((SECONDS + 120))
+  while before "$deadline"; do
     state=$(job_state "$id")
     case $state in COMPLETED | FAILED | CANCELLED | TIMEOUT | NODE_FAIL | OUT_OF_MEMORY) break ;; esac
     sleep 0.1
@@ -145,7 +162,8 @@ wait_job() {
 
 # Results of the farm's database once it has at least $2.
 wait_results() {
-  for _ in $(seq 600); do
+  local deadline=$((SECONDS + 60))
+  while before "$deadline"; do
     [ -f "$1/farm.db" ] &&
       [ "$(sqlite3 "$1/farm.db" "SELECT COUNT(*) FROM results" 2>/dev/null || echo 0)" -ge "$2" ] &&
       return 0
@@ -187,7 +205,8 @@ wait_results "$dir/farm2" 1
 # The step of task 1 (worker SLURMJOB-t1) while it holds a lease.
 victim="$id-t1"
 running=
-for _ in $(seq 100); do
+deadline=$((SECONDS + 10))
+while before "$deadline"; do
   running=$(sqlite3 "$dir/farm2/farm.db" \
     "SELECT id FROM episodes WHERE state = 'leased' AND lease_owner = '$victim' LIMIT 1" 2>/dev/null || true)
   [ -n "$running" ] && break
@@ -227,7 +246,8 @@ array=$(ENAVI_BIN=$enavi ENAVI_FARM_DIR=$dir/farm3 ENAVI_INTERFACE=127.0.0.1 \
   ENAVI_EPISODE_CMD=$fake_episode FAKE_EPISODE_SLEEP_S=2 ENAVI_DRAIN_TIMEOUT=20 \
   sbatch --parsable --array=1-2 --ntasks=1 --cpus-per-task=1 --time=5 --chdir="$dir" \
   --dependency="after:$id" --output="$dir/array-%A_%a.out" "$sbatch_script")
-for _ in $(seq 900); do
+deadline=$((SECONDS + 120))
+while before "$deadline"; do
   [ "$(sqlite3 "$dir/farm3/farm.db" "SELECT state FROM jobs" 2>/dev/null)" = done ] && break
   sleep 0.1
 done
