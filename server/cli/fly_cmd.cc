@@ -14,6 +14,7 @@
 #include "server/cli/commands.h"
 #include "server/report/flight_report.h"
 #include "workers/board/board_profile.h"
+#include "navstack/methods/registry.h"
 #include "navstack/rl/rollout.h"
 #include "workers/sim/episode.h"
 #include "workers/sim/episode_config.h"
