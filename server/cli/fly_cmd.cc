@@ -163,7 +163,7 @@ void RegisterFlyCommand(CLI::App& app) {
       ->check(CLI::IsMember(navstack::MethodNames()));
   fly->add_option("--clock", args->spec.clock, "virtual (sim-time EDF) or emulated (throttled cgroup)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"virtual", "emulated"}));
+      ->check(CLI::IsMember(std::vector<std::string>(api::kClocks.begin(), api::kClocks.end())));
   fly->add_option("--dilation", args->dilation,
                   "emulated clock: 1 sim second = K wall seconds, quota divided by K (default: the smallest "
                   "multiple of 0.25 at which the board fits this host)")
@@ -179,7 +179,7 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_flag("!--emulation-no-fifo", args->emulation.simulator_fifo)->group("");
   fly->add_option("--cost", args->spec.cost, "virtual clock cost mode: model (work counts) or measured (host CPU)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"model", "measured"}));
+      ->check(CLI::IsMember(std::vector<std::string>(api::kCostModes.begin(), api::kCostModes.end())));
   fly->add_option("--timeout", args->spec.timeout_s, "episode timeout in sim seconds (0: from the distance)")
       ->check(CLI::Range(0.0, api::kMaxTimeoutS));
   fly->add_option("--policy", args->spec.policy, "E-Navi frequency-adapter policy (default: the shipped one)");
