@@ -1,13 +1,92 @@
 #include "api/episode.h"
 
+#include <optional>
+#include <string>
+#include <vector>
+
 #include <nlohmann/json.hpp>
+
+#include "api/json_read.h"
 
 namespace enavi::api {
 namespace {
 
+// Typed reads through the validated reader: a value of the wrong type names its field.
+void Read(const JsonReader& r, const nlohmann::json& v, const std::string& at, std::string& out) { out = r.String(v, at); }
+void Read(const JsonReader& r, const nlohmann::json& v, const std::string& at, double& out) { out = r.Number(v, at); }
+void Read(const JsonReader& r, const nlohmann::json& v, const std::string& at, bool& out) { out = r.Bool(v, at); }
+void Read(const JsonReader& r, const nlohmann::json& v, const std::string& at, std::uint64_t& out) { out = r.Unsigned(v, at); }
+void Read(const JsonReader& r, const nlohmann::json& v, const std::string& at, std::int64_t& out) { out = r.Integer(v, at); }
+void Read(const JsonReader& r, const nlohmann::json& v, const std::string& at, Vec3& out) {
+  const std::vector<double> p = r.Numbers(v, at, 3);
+  out = {p[0], p[1], p[2]};
+}
+void Read(const JsonReader& r, const nlohmann::json& v, const std::string& at, std::optional<Vec3>& out) {
+  Read(r, v, at, out.emplace());
+}
+void Read(const JsonReader& r, const nlohmann::json& v, const std::string& at, std::vector<double>& out) {
+  out = r.Numbers(v, at);
+}
 template <typename T>
-void GetIf(const nlohmann::json& j, const char* key, T& out) {
-  if (auto it = j.find(key); it != j.end() && !it->is_null()) it->get_to(out);
+void Read(const JsonReader& r, const nlohmann::json& v, const std::string& at, std::vector<T>& out) {
+  r.Array(v, at);
+  out.resize(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) Read(r, v[i], JsonReader::Index(at, i), out[i]);
+}
+template <typename T>
+void Read(const JsonReader& r, const nlohmann::json& v, const std::string& at, std::map<std::string, T>& out) {
+  out.clear();
+  for (const auto& [key, value] : r.Object(v, at).items()) Read(r, value, JsonReader::Join(at, key), out[key]);
+}
+
+// The keys of one JSON object: optional ones keep their default when absent or null.
+class Fields {
+ public:
+  Fields(const JsonReader& r, const nlohmann::json& obj, std::string at) : r_(r), obj_(r.Object(obj, at)), at_(std::move(at)) {}
+  template <typename T>
+  void Optional(const char* key, T& out) const {
+    if (const nlohmann::json* v = r_.Optional(obj_, at_, key)) Read(r_, *v, JsonReader::Join(at_, key), out);
+  }
+  template <typename T>
+  void Required(const char* key, T& out) const {
+    Read(r_, r_.Field(obj_, at_, key), JsonReader::Join(at_, key), out);
+  }
+  /// The object at `key`, or nothing when it is absent or null.
+  std::optional<Fields> Child(const char* key) const {
+    const nlohmann::json* v = r_.Optional(obj_, at_, key);
+    if (!v) return std::nullopt;
+    return Fields(r_, *v, JsonReader::Join(at_, key));
+  }
+  const nlohmann::json* Find(const char* key) const { return r_.Optional(obj_, at_, key); }
+
+ private:
+  const JsonReader& r_;
+  const nlohmann::json& obj_;
+  std::string at_;
+};
+
+// The spec's fields under `f`: each optional (a spec file may name only what differs from the
+// defaults), each checked for its type.
+void ReadSpec(const Fields& f, EpisodeSpec& s) {
+  s = EpisodeSpec{};
+  f.Optional("world", s.world);
+  f.Optional("seed", s.seed);
+  f.Optional("world_params", s.world_params);
+  f.Optional("start", s.start);
+  f.Optional("goal", s.goal);
+  f.Optional("board", s.board);
+  f.Optional("method", s.method);
+  f.Optional("clock", s.clock);
+  f.Optional("cost", s.cost);
+  f.Optional("dilation", s.dilation);
+  f.Optional("timeout_s", s.timeout_s);
+  f.Optional("policy", s.policy);
+  f.Optional("overrides", s.overrides);
+  f.Optional("units", s.units);
+  f.Optional("scale", s.scale);
+  f.Optional("up", s.up);
+  f.Optional("recenter", s.recenter);
+  f.Optional("model_path", s.model_path);
 }
 
 nlohmann::json SpecFields(const EpisodeSpec& s) {
@@ -32,25 +111,8 @@ nlohmann::json SpecFields(const EpisodeSpec& s) {
 void to_json(nlohmann::json& j, const EpisodeSpec& s) { j = SpecFields(s); }
 
 void from_json(const nlohmann::json& j, EpisodeSpec& s) {
-  s = EpisodeSpec{};
-  GetIf(j, "world", s.world);
-  GetIf(j, "seed", s.seed);
-  GetIf(j, "world_params", s.world_params);
-  if (j.contains("start") && !j["start"].is_null()) s.start = j["start"].get<Vec3>();
-  if (j.contains("goal") && !j["goal"].is_null()) s.goal = j["goal"].get<Vec3>();
-  GetIf(j, "board", s.board);
-  GetIf(j, "method", s.method);
-  GetIf(j, "clock", s.clock);
-  GetIf(j, "cost", s.cost);
-  GetIf(j, "dilation", s.dilation);
-  GetIf(j, "timeout_s", s.timeout_s);
-  GetIf(j, "policy", s.policy);
-  GetIf(j, "overrides", s.overrides);
-  GetIf(j, "units", s.units);
-  GetIf(j, "scale", s.scale);
-  GetIf(j, "up", s.up);
-  GetIf(j, "recenter", s.recenter);
-  GetIf(j, "model_path", s.model_path);
+  const JsonReader r("episode spec");
+  ReadSpec(Fields(r, j, ""), s);
 }
 
 nlohmann::json ResultSummaryJson(const EpisodeResult& r) {
@@ -112,60 +174,69 @@ void to_json(nlohmann::json& j, const EpisodeResult& r) {
 
 void from_json(const nlohmann::json& j, EpisodeResult& r) {
   r = EpisodeResult{};
-  if (j.contains("spec")) j.at("spec").get_to(r.spec);
-  GetIf(j, "scenario", r.scenario);
-  GetIf(j, "success", r.success);
-  GetIf(j, "collided", r.collided);
-  GetIf(j, "timed_out", r.timed_out);
-  GetIf(j, "end_reason", r.end_reason);
-  if (j.contains("collision_point") && !j["collision_point"].is_null())
-    r.collision_point = j["collision_point"].get<Vec3>();
-  GetIf(j, "flight_time_s", r.flight_time_s);
-  GetIf(j, "path_length_m", r.path_length_m);
-  GetIf(j, "straight_line_m", r.straight_line_m);
-  GetIf(j, "velocity_mean_mps", r.velocity_mean_mps);
-  GetIf(j, "velocity_std_mps", r.velocity_std_mps);
-  GetIf(j, "accel_peak_mps2", r.accel_peak_mps2);
-  GetIf(j, "nav_cpu_util_pct", r.nav_cpu_util_pct);
-  if (auto it = j.find("task_cpu_util_pct"); it != j.end()) {
-    GetIf(*it, "perception", r.task_cpu_util_pct.perception);
-    GetIf(*it, "planning", r.task_cpu_util_pct.planning);
-    GetIf(*it, "collision", r.task_cpu_util_pct.collision);
-    GetIf(*it, "difference", r.task_cpu_util_pct.difference);
+  const JsonReader reader("episode result");
+  const Fields f(reader, j, "");
+  if (const auto spec = f.Child("spec")) ReadSpec(*spec, r.spec);
+  f.Optional("scenario", r.scenario);
+  f.Required("success", r.success);
+  f.Optional("collided", r.collided);
+  f.Optional("timed_out", r.timed_out);
+  f.Required("end_reason", r.end_reason);
+  f.Optional("collision_point", r.collision_point);
+  f.Optional("flight_time_s", r.flight_time_s);
+  f.Optional("path_length_m", r.path_length_m);
+  f.Optional("straight_line_m", r.straight_line_m);
+  f.Optional("velocity_mean_mps", r.velocity_mean_mps);
+  f.Optional("velocity_std_mps", r.velocity_std_mps);
+  f.Optional("accel_peak_mps2", r.accel_peak_mps2);
+  f.Optional("nav_cpu_util_pct", r.nav_cpu_util_pct);
+  if (const auto t = f.Child("task_cpu_util_pct")) {
+    t->Optional("perception", r.task_cpu_util_pct.perception);
+    t->Optional("planning", r.task_cpu_util_pct.planning);
+    t->Optional("collision", r.task_cpu_util_pct.collision);
+    t->Optional("difference", r.task_cpu_util_pct.difference);
   }
-  GetIf(j, "deadline_miss_ratio", r.deadline_miss_ratio);
-  GetIf(j, "jobs_released", r.jobs_released);
-  GetIf(j, "deadline_misses", r.deadline_misses);
-  GetIf(j, "replans", r.replans);
-  GetIf(j, "replans_by_trigger", r.replans_by_trigger);
-  GetIf(j, "plan_failures", r.plan_failures);
-  GetIf(j, "emergency_stops", r.emergency_stops);
-  GetIf(j, "time_stopped_s", r.time_stopped_s);
-  GetIf(j, "setpoint_lag_p95_m", r.setpoint_lag_p95_m);
-  if (auto it = j.find("eci"); it != j.end()) {
-    GetIf(*it, "min", r.eci.min);
-    GetIf(*it, "mean", r.eci.mean);
-    GetIf(*it, "max", r.eci.max);
+  f.Optional("deadline_miss_ratio", r.deadline_miss_ratio);
+  f.Optional("jobs_released", r.jobs_released);
+  f.Optional("deadline_misses", r.deadline_misses);
+  f.Optional("replans", r.replans);
+  f.Optional("replans_by_trigger", r.replans_by_trigger);
+  f.Optional("plan_failures", r.plan_failures);
+  f.Optional("emergency_stops", r.emergency_stops);
+  f.Optional("time_stopped_s", r.time_stopped_s);
+  f.Optional("setpoint_lag_p95_m", r.setpoint_lag_p95_m);
+  if (const auto e = f.Child("eci")) {
+    e->Optional("min", r.eci.min);
+    e->Optional("mean", r.eci.mean);
+    e->Optional("max", r.eci.max);
   }
-  GetIf(j, "eci_time_ms_mean", r.eci_time_ms_mean);
-  GetIf(j, "adapter_time_ms_mean", r.adapter_time_ms_mean);
-  GetIf(j, "sim_time_s", r.sim_time_s);
-  GetIf(j, "notes", r.notes);
-  if (auto it = j.find("events"); it != j.end()) {
-    for (const auto& e : *it) r.events.push_back({e.at("t"), e.at("kind"), e.at("detail")});
+  f.Optional("eci_time_ms_mean", r.eci_time_ms_mean);
+  f.Optional("adapter_time_ms_mean", r.adapter_time_ms_mean);
+  f.Optional("sim_time_s", r.sim_time_s);
+  f.Optional("notes", r.notes);
+  if (const nlohmann::json* events = f.Find("events")) {
+    reader.Array(*events, "events");
+    for (std::size_t i = 0; i < events->size(); ++i) {
+      const Fields e(reader, (*events)[i], JsonReader::Index("events", i));
+      EpisodeEvent ev;
+      e.Required("t", ev.t);
+      e.Required("kind", ev.kind);
+      e.Required("detail", ev.detail);
+      r.events.push_back(std::move(ev));
+    }
   }
-  if (auto it = j.find("series"); it != j.end()) {
+  if (const auto series = f.Child("series")) {
     TimeSeries& s = r.series;
-    GetIf(*it, "t", s.t);
-    GetIf(*it, "position", s.position);
-    GetIf(*it, "velocity", s.velocity);
-    GetIf(*it, "eci", s.eci);
-    GetIf(*it, "f_per", s.f_per);
-    GetIf(*it, "f_col", s.f_col);
-    GetIf(*it, "f_dif", s.f_dif);
-    GetIf(*it, "res", s.res);
-    GetIf(*it, "utilisation", s.utilisation);
-    GetIf(*it, "events", s.events);
+    series->Optional("t", s.t);
+    series->Optional("position", s.position);
+    series->Optional("velocity", s.velocity);
+    series->Optional("eci", s.eci);
+    series->Optional("f_per", s.f_per);
+    series->Optional("f_col", s.f_col);
+    series->Optional("f_dif", s.f_dif);
+    series->Optional("res", s.res);
+    series->Optional("utilisation", s.utilisation);
+    series->Optional("events", s.events);
   }
 }
 

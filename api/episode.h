@@ -16,7 +16,7 @@ namespace enavi::api {
 
 using Vec3 = std::array<double, 3>;
 
-/// Clocks and cost modes the farm knows (README.md, "The board: time"). Methods come from the registry
+/// Clocks and cost modes the farm knows (docs/design.md, "Time: two clocks"). Methods come from the registry
 /// (navstack/methods), handed to job validation as a MethodCatalog.
 inline constexpr std::array<const char*, 2> kClocks = {"virtual", "emulated"};
 inline constexpr std::array<const char*, 2> kCostModes = {"model", "measured"};

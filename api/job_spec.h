@@ -1,6 +1,6 @@
 #pragma once
 // Job specs: a matrix of boards x scenarios x methods x seeds in YAML, validated and expanded
-// deterministically into EpisodeSpecs (README.md, "One episode"; docs/farm.md).
+// deterministically into EpisodeSpecs (docs/design.md, "One episode"; docs/farm.md).
 //
 //   name: tx2-city                # optional; default: the file's stem
 //   boards: [tx2, pi4b]           # pi4b tx2 nx opi5 x86 host

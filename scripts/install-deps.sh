@@ -9,7 +9,7 @@ packages=(
   cyclonedds-dev cyclonedds-tools
   libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev liblbfgs-dev
   libboost-program-options-dev
-  libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libsqlite3-dev sqlite3
+  libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev libsqlite3-dev sqlite3
   libcpp-httplib-dev libssl-dev libpng-dev libcairo2-dev fonts-dejavu-core
   libassimp-dev libsdformat-dev
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -36,7 +36,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "navstack/methods/method.h"
+#include "navstack/methods/registry.h"
 #include "navstack/common/cpu_time.h"
 #include "navstack/control/controller.h"
 #include "navstack/eci/eci.h"

@@ -3,7 +3,7 @@
 // constraint status, task frequencies, UAV motion, workload utilisation, target).
 //
 // Feature vector (kPolicyStateDim = 16), every entry bounded, most in [0, 1]:
-//   0  eci            eci as computed (already normalised to [0, 1], README.md, "E-Navi (our reading of the paper)")
+//   0  eci            eci as computed (already normalised to [0, 1], docs/design.md, "Our reading of the paper")
 //   1  abs_d_eci      tanh(|d eci| / d_eci_scale): per-frame change, squashed to [0, 1)
 //   2  c1_holds       1 if C1 holds for the running configuration, else 0
 //   3  c2_holds       same for C2

@@ -1,6 +1,6 @@
 #pragma once
 // Work counts: what a navstack job did, in units the board cost model prices
-// (time = sum(count x ns_per_unit[board]), README.md, "The board: time"). Counting, not timing, is what
+// (time = sum(count x ns_per_unit[board]), docs/design.md, "Time: two clocks"). Counting, not timing, is what
 // makes the virtual clock bit-reproducible on any host.
 
 #include <array>

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-// Why the occlusion rule (EciOptions::count_occluded): with the normalisation of README.md, "E-Navi (our reading of the paper)"
+// Why the occlusion rule (EciOptions::count_occluded): with the normalisation of docs/design.md, "Our reading of the paper"
 // eci = sum(w Occ) / sum(w) and Occ taken only from the pixels inside each zone and layer, a
 // wall filling the view at range r occupies one layer only, and layer 0 = [0, d0) is empty by
 // construction (d0 is the nearest return). So a wall at 0.4 m scores 0.28 while one at 2 m
@@ -302,7 +302,7 @@ EciResult ComputeEciWith(const Kernels& kernels, const DepthImage& depth,
   const double d0 = std::clamp(nearest, options.d_min, d_per);
   // Lay = floor((d_per - d0) / (2 d0)) + 1 (paper Eq. 2), but at least 2: layer 0 = [0, d0) is
   // empty by construction, so the layer holding the nearest obstacle must exist, or every
-  // obstacle beyond d_per / 3 would score 0 (our reading, README.md, "E-Navi (our reading of the paper)").
+  // obstacle beyond d_per / 3 would score 0 (our reading, docs/design.md, "Our reading of the paper").
   const int lay = std::max(2, static_cast<int>(std::floor((d_per - d0) / (2.0 * d0))) + 1);
   result.d0 = d0;
   result.d_ahead = d0;

@@ -1,5 +1,5 @@
 #pragma once
-// Environment-adaptive spatial Complexity Index, eci (paper Sec. IV; README.md, "E-Navi (our reading of the paper)").
+// Environment-adaptive spatial Complexity Index, eci (paper Sec. IV; docs/design.md, "Our reading of the paper").
 
 #include <cstdint>
 #include <vector>

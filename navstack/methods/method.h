@@ -1,14 +1,13 @@
 #pragma once
 // Navigation methods as plug-ins (STYLE.md rule 13, after MuJoCo's engine plugins): a method is
 // one MethodInfo of name, scheduler, tunables and factory, registered once by name. Every list a
-// user sees (CLI choices, job validation, tables, bench_episode) reads this registry.
+// user sees (CLI choices, job validation, tables, bench_episode) reads the registry (registry.h).
 //
 // Adding a method: a folder under navstack/methods/ with a function returning its MethodInfo,
 // and one line in BuiltinMethods() (registry.cc); a test or a tool may also RegisterMethod() at
 // run time.
 
 #include <array>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <string>
@@ -60,17 +59,5 @@ struct MethodInfo {
   /// Builds the method on `executor`; the vehicle hovers at `initial` until its first plan.
   std::function<std::unique_ptr<Navigator>(const NavStackOptions&, TaskExecutor*, const VehicleState&)> make;
 };
-
-/// Every registered method, built-ins first, in registration order.
-const std::deque<MethodInfo>& Methods();
-std::vector<std::string> MethodNames();
-/// The method called `name`, or null.
-const MethodInfo* FindMethod(std::string_view name);
-/// Adds a method. @throws std::invalid_argument for a duplicate or empty name, a missing
-/// factory, or a tunable whose default lies outside its range.
-void RegisterMethod(MethodInfo method);
-
-/// Options for method `info`: configure(), then its tunables' defaults in options->params.
-void ConfigureMethod(const MethodInfo& info, const MethodSetup& setup, NavStackOptions* options);
 
 }  // namespace enavi::navstack

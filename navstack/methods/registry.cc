@@ -3,7 +3,7 @@
 #include <stdexcept>
 
 #include "navstack/methods/ego_planner/ego_planner_method.h"
-#include "navstack/methods/method.h"
+#include "navstack/methods/registry.h"
 #include "navstack/stack/stack_methods.h"
 
 namespace enavi::navstack {

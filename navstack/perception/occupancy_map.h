@@ -1,7 +1,7 @@
 #pragma once
 // Probabilistic occupancy map of the perception task: an OctoMap octree fed by depth frames,
 // updated in two phases so the simulated scheduler can apply a job's output at its finish time
-// (README.md, "The board: time"), and rebuilt when the resolution adapter changes `res` (paper Sec. V.A).
+// (docs/design.md, "Time: two clocks"), and rebuilt when the resolution adapter changes `res` (paper Sec. V.A).
 
 #include <cstdint>
 #include <deque>

@@ -1,5 +1,5 @@
 #pragma once
-// Depth image -> world-frame points: the first stage of the perception task (README.md, "One episode").
+// Depth image -> world-frame points: the first stage of the perception task (docs/design.md, "One episode").
 
 #include <cstdint>
 #include <vector>

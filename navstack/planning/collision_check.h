@@ -1,6 +1,6 @@
 #pragma once
 // Check of the current trajectory against a newer map snapshot: the replan trigger of the
-// collision task (README.md, "One episode", f_col).
+// collision task (docs/design.md, "One episode", f_col).
 
 #include <Eigen/Core>
 

@@ -1,54 +1,25 @@
 #pragma once
-// Internal: validated reads from parsed JSON, with errors that name the source and the field
-// (std::invalid_argument "<source>: <field>: <reason>"). Not part of the public API.
+// Internal: the validated JSON reader of api/json_read.h with the Eigen reads and writes the
+// policy, checkpoint and rollout files need. Not part of the public API.
 
-#include <cstdint>
 #include <string>
-#include <vector>
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "api/json_read.h"
+
 namespace enavi::navstack::rl::detail {
 
-class JsonReader {
+using api::ParseJson;
+using api::ReadJsonFile;
+
+class JsonReader : public api::JsonReader {
  public:
-  explicit JsonReader(std::string source) : source_(std::move(source)) {}
-  const std::string& source() const { return source_; }
-
-  [[noreturn]] void Fail(const std::string& field, const std::string& reason) const;
-
-  /// obj[key], which must exist; `field` is obj's own path ("" for the root).
-  const nlohmann::json& Field(const nlohmann::json& obj, const std::string& field,
-                              const std::string& key) const;
-  double Number(const nlohmann::json& j, const std::string& field) const;  ///< finite
-  std::int64_t Integer(const nlohmann::json& j, const std::string& field) const;
-  bool Bool(const nlohmann::json& j, const std::string& field) const;
-  std::string String(const nlohmann::json& j, const std::string& field) const;
-  const nlohmann::json& Array(const nlohmann::json& j, const std::string& field) const;
-  const nlohmann::json& Object(const nlohmann::json& j, const std::string& field) const;
+  using api::JsonReader::JsonReader;
   /// Array of finite numbers; expected < 0 accepts any length.
-  Eigen::VectorXd Vector(const nlohmann::json& j, const std::string& field,
-                         Eigen::Index expected = -1) const;
-
-  static std::string Join(const std::string& parent, const std::string& key) {
-    return parent.empty() ? key : parent + "." + key;
-  }
-  static std::string Index(const std::string& parent, std::size_t i) {
-    return parent + "[" + std::to_string(i) + "]";
-  }
-
- private:
-  std::string source_;
+  Eigen::VectorXd Vector(const nlohmann::json& j, const std::string& field, Eigen::Index expected = -1) const;
 };
-
-/// Parses text, turning a syntax error into invalid_argument naming the source and byte offset.
-nlohmann::json ParseJson(const std::string& text, const std::string& source);
-/// Reads and parses a file. @throws std::invalid_argument when it cannot be opened or parsed.
-nlohmann::json ReadJsonFile(const std::string& path, const std::string& what);
-/// Writes text atomically (temporary file in the same directory, then rename).
-/// @throws std::runtime_error on I/O failure.
-void WriteFileAtomic(const std::string& path, const std::string& text);
 
 /// Vector as a JSON array (doubles are written in shortest round-trip form).
 nlohmann::json ToJson(const Eigen::Ref<const Eigen::VectorXd>& v);

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "api/atomic_file.h"
 #include "navstack/adapt/policy_state.h"
 #include "navstack/rl/json_read.h"
 
@@ -218,7 +219,7 @@ PolicyFile PolicyFromJson(const json& j, const std::string& source) {
 }
 
 void SavePolicyFile(const std::string& path, const PolicyFile& policy) {
-  detail::WriteFileAtomic(path, PolicyToJson(policy).dump(1) + "\n");
+  api::WriteFileAtomic(path, PolicyToJson(policy).dump(1) + "\n");
 }
 
 PolicyFile LoadPolicyFile(const std::string& path) {

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "api/atomic_file.h"
 #include "navstack/rl/json_read.h"
 
 namespace enavi::navstack::rl {
@@ -438,7 +439,7 @@ PpoTrainer PpoTrainer::FromCheckpointJson(const json& j, const std::string& sour
 }
 
 void PpoTrainer::SaveCheckpoint(const std::string& path) const {
-  detail::WriteFileAtomic(path, CheckpointToJson().dump() + "\n");
+  api::WriteFileAtomic(path, CheckpointToJson().dump() + "\n");
 }
 
 PpoTrainer PpoTrainer::LoadCheckpoint(const std::string& path) {

@@ -1,5 +1,5 @@
 #pragma once
-// How long a job takes on the emulated board (README.md, "The board: time").
+// How long a job takes on the emulated board (docs/design.md, "Time: two clocks").
 
 #include <array>
 #include <string>

@@ -1,6 +1,6 @@
 #pragma once
 // TaskExecutor: runs the navigation stack's jobs under an emulated onboard computer
-// (README.md, "The board: time"). Deadlines equal periods (paper Sec. III.A).
+// (docs/design.md, "Time: two clocks"). Deadlines equal periods (paper Sec. III.A).
 
 #include <array>
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-// Per-thread CPU utilisation read from /proc, the paper's psutil figure (README.md, "The board: time"
+// Per-thread CPU utilisation read from /proc, the paper's psutil figure (docs/design.md, "Time: two clocks"
 // and 8): percent of ONE core over an interval, 100 % = one core busy the whole interval,
 // so a process can exceed 100 % on a multi-core machine (psutil Process.cpu_percent).
 

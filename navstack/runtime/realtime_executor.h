@@ -1,5 +1,5 @@
 #pragma once
-// The emulated clock's TaskExecutor (README.md, "The board: time"): the navigation stack's jobs run in
+// The emulated clock's TaskExecutor (docs/design.md, "Time: two clocks"): the navigation stack's jobs run in
 // real time on `threads` worker threads. Periodic and sporadic releases follow sim time, which
 // is wall time / dilation since Start(); ready jobs are dispatched without preemption, earliest
 // deadline first (global EDF over the workers) or first released first served (a ROS node's

@@ -1,5 +1,5 @@
 #pragma once
-// Linux real-time scheduling for the navstack's periodic tasks (README.md, "The board: time", emulated
+// Linux real-time scheduling for the navstack's periodic tasks (docs/design.md, "Time: two clocks", emulated
 // clock): SCHED_DEADLINE through sched_setattr(2) with a fallback to SCHED_OTHER. The emulated
 // clock's RealtimeExecutor puts each of its worker threads (one board core) under a speed server.
 //

@@ -1,4 +1,4 @@
-// `enavi calibrate`: fits the board cost model to this host (README.md, "The board: time").
+// `enavi calibrate`: fits the board cost model to this host (docs/design.md, "Time: two clocks").
 #include <sys/utsname.h>
 
 #include <unistd.h>
@@ -44,7 +44,7 @@ std::string CpuModel() {
 }
 
 
-// --- Host calibration file and board emulation table (emulated clock, README.md, "The board: time") ---
+// --- Host calibration file and board emulation table (emulated clock, docs/design.md, "Time: two clocks") ---
 
 // Host CPUs an emulation may use: this process's CPUs minus what the simulator keeps.
 double EmulationCpusFree() {

@@ -8,6 +8,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "api/atomic_file.h"
 #include "server/cli/commands.h"
 #include "server/cli/farm_flags.h"
 #include "server/http/http_api.h"
@@ -38,9 +39,7 @@ void RunDashboard(const DashboardFlags& f) {
   api.Start();
   std::cerr << "enavi dashboard: " << api.url() << "/ (read-only, " << f.db << "; Ctrl-C to stop)\n";
   if (!f.ready_file.empty()) {
-    const std::string tmp = f.ready_file + ".tmp";
-    std::ofstream(tmp) << api.url() << "\n";
-    std::filesystem::rename(tmp, f.ready_file);
+    api::WriteFileAtomic(f.ready_file, api.url() + "\n");
   }
   signals.Wait();
   api.Stop();

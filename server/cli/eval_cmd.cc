@@ -10,6 +10,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "navstack/methods/registry.h"
 #include "server/cli/commands.h"
 #include "server/cli/farm_flags.h"
 #include "server/eval/eval.h"

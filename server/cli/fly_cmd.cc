@@ -4,16 +4,18 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
+#include "api/atomic_file.h"
 #include "api/episode.h"
 #include "api/job_spec.h"
+#include "server/cli/cli_values.h"
 #include "server/cli/commands.h"
 #include "server/report/flight_report.h"
 #include "workers/board/board_profile.h"
+#include "navstack/methods/registry.h"
 #include "navstack/rl/rollout.h"
 #include "workers/sim/episode.h"
 #include "workers/sim/episode_config.h"
@@ -35,28 +37,6 @@ struct FlyArgs {
   std::string calibration;
   sim::EmulationOptions emulation;  // experiments: hidden flags
 };
-
-api::Vec3 ParseVec3(const std::string& text, const char* flag) {
-  api::Vec3 v{};
-  std::istringstream in(text);
-  char comma1 = 0, comma2 = 0;
-  if (!(in >> v[0] >> comma1 >> v[1] >> comma2 >> v[2]) || comma1 != ',' || comma2 != ',' || !in.eof())
-    throw std::invalid_argument(std::string(flag) + ": expected x,y,z in metres, got '" + text + "'");
-  return v;
-}
-
-std::pair<std::string, std::string> SplitKeyValue(const std::string& kv, const char* flag) {
-  const auto eq = kv.find('=');
-  if (eq == std::string::npos || eq == 0)
-    throw std::invalid_argument(std::string(flag) + ": expected key=value, got '" + kv + "'");
-  return {kv.substr(0, eq), kv.substr(eq + 1)};
-}
-
-void WriteText(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write " + path.string());
-}
 
 // A spec file is one JSON object of EpisodeSpec fields: anything else (an array, a misspelt
 // field) would otherwise fly the default spec instead of the one meant.
@@ -86,11 +66,16 @@ void Run(FlyArgs args) {
   if (!args.spec_file.empty()) {
     std::ifstream in(args.spec_file);
     if (!in) throw std::invalid_argument(args.spec_file + ": cannot read the spec file");
+    nlohmann::json j;
     try {
-      const nlohmann::json j = nlohmann::json::parse(in);
-      CheckSpecFields(j, args.spec_file);
-      spec = j.get<api::EpisodeSpec>();
+      j = nlohmann::json::parse(in);
     } catch (const nlohmann::json::exception& e) {
+      throw std::invalid_argument(args.spec_file + ": not an episode spec: " + e.what());
+    }
+    CheckSpecFields(j, args.spec_file);
+    try {
+      spec = j.get<api::EpisodeSpec>();
+    } catch (const std::invalid_argument& e) {  // a field of the wrong type, named by the reader
       throw std::invalid_argument(args.spec_file + ": not an episode spec: " + e.what());
     }
     if (!(spec.timeout_s >= 0 && spec.timeout_s <= api::kMaxTimeoutS))
@@ -98,19 +83,10 @@ void Run(FlyArgs args) {
                                   std::to_string(static_cast<int>(api::kMaxTimeoutS)) + "] s (got " +
                                   nlohmann::json(spec.timeout_s).dump() + ")");
   } else {
-    if (!args.start.empty()) spec.start = ParseVec3(args.start, "--start");
-    if (!args.goal.empty()) spec.goal = ParseVec3(args.goal, "--goal");
-    for (const auto& p : args.params) spec.world_params.insert(SplitKeyValue(p, "--param"));
-    for (const auto& o : args.overrides) {
-      const auto [k, v] = SplitKeyValue(o, "--set");
-      try {
-        std::size_t used = 0;
-        spec.overrides[k] = std::stod(v, &used);
-        if (used != v.size()) throw std::invalid_argument(v);
-      } catch (const std::exception&) {
-        throw std::invalid_argument("--set " + k + ": '" + v + "' is not a number");
-      }
-    }
+    if (!args.start.empty()) spec.start = ParsePoint("--start", args.start);
+    if (!args.goal.empty()) spec.goal = ParsePoint("--goal", args.goal);
+    spec.world_params = ParseNameValues("--param", args.params);
+    for (const auto& [k, v] : ParseNameValues("--set", args.overrides)) spec.overrides[k] = ParseNumber("--set", k, v);
   }
 
   sim::EpisodeOptions options;
@@ -132,20 +108,20 @@ void Run(FlyArgs args) {
   const api::EpisodeResult result = sim::RunEpisode(spec, *world, options);
   if (tty) std::fprintf(stderr, "\n");
 
-  if (!args.result_file.empty()) WriteText(args.result_file, nlohmann::json(result).dump() + "\n");
+  if (!args.result_file.empty()) api::WriteFileAtomic(args.result_file, nlohmann::json(result).dump() + "\n");
   if (!args.rollout_file.empty()) {
     rollout.id = spec.world + "-" + std::to_string(spec.seed) + "-" + spec.board;
     rollout.info = {{"success", result.success ? 1.0 : 0.0}, {"collided", result.collided ? 1.0 : 0.0},
                     {"flight_time_s", result.flight_time_s}, {"nav_cpu_util_pct", result.nav_cpu_util_pct}};
-    WriteText(args.rollout_file, navstack::rl::SerializeRollout(rollout));
+    api::WriteFileAtomic(args.rollout_file, navstack::rl::SerializeRollout(rollout));
   }
   if (!args.out_dir.empty()) {
     const std::filesystem::path dir(args.out_dir);
     std::filesystem::create_directories(dir);
     nlohmann::json full = result;
     full.erase("series");
-    WriteText(dir / "result.json", full.dump(2) + "\n");
-    WriteText(dir / "timeseries.csv", report::TimeSeriesCsv(result.series));
+    api::WriteFileAtomic(dir / "result.json", full.dump(2) + "\n");
+    api::WriteFileAtomic(dir / "timeseries.csv", report::TimeSeriesCsv(result.series));
     report::WriteFlightPlots(result, world->world, dir.string());
   }
   if (args.json) {
@@ -187,7 +163,7 @@ void RegisterFlyCommand(CLI::App& app) {
       ->check(CLI::IsMember(navstack::MethodNames()));
   fly->add_option("--clock", args->spec.clock, "virtual (sim-time EDF) or emulated (throttled cgroup)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"virtual", "emulated"}));
+      ->check(CLI::IsMember(std::vector<std::string>(api::kClocks.begin(), api::kClocks.end())));
   fly->add_option("--dilation", args->dilation,
                   "emulated clock: 1 sim second = K wall seconds, quota divided by K (default: the smallest "
                   "multiple of 0.25 at which the board fits this host)")
@@ -203,7 +179,7 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_flag("!--emulation-no-fifo", args->emulation.simulator_fifo)->group("");
   fly->add_option("--cost", args->spec.cost, "virtual clock cost mode: model (work counts) or measured (host CPU)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"model", "measured"}));
+      ->check(CLI::IsMember(std::vector<std::string>(api::kCostModes.begin(), api::kCostModes.end())));
   fly->add_option("--timeout", args->spec.timeout_s, "episode timeout in sim seconds (0: from the distance)")
       ->check(CLI::Range(0.0, api::kMaxTimeoutS));
   fly->add_option("--policy", args->spec.policy, "E-Navi frequency-adapter policy (default: the shipped one)");

@@ -7,6 +7,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "api/atomic_file.h"
 #include "server/cli/commands.h"
 #include "server/cli/farm_flags.h"
 #include "server/http/http_api.h"
@@ -30,15 +31,6 @@ struct ServeFlags {
   BusFlags bus;
 };
 
-// Written once serving, atomically, so a script or test can wait for it and read the URL.
-void WriteReadyFile(const std::string& path, const std::string& url) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << url << "\n";
-  }
-  std::filesystem::rename(tmp, path);
-}
 
 void RunServe(const ServeFlags& f) {
   StopSignals signals;
@@ -67,7 +59,8 @@ void RunServe(const ServeFlags& f) {
   api.Start();
   spdlog::info("enavi serve: {} (db {}, DDS domain {}, partition {}, pid {})", api.url(), f.db,
                options.bus.domain_id, options.bus.partition, getpid());
-  if (!f.ready_file.empty()) WriteReadyFile(f.ready_file, api.url());
+  // Written once serving, atomically, so a script or test can wait for it and read the URL.
+  if (!f.ready_file.empty()) api::WriteFileAtomic(f.ready_file, api.url() + "\n");
 
   const int sig = signals.Wait();
   spdlog::info("enavi serve: signal {}, stopping", sig);

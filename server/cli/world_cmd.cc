@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "server/cli/cli_values.h"
 #include "server/cli/commands.h"
 #include "server/report/top_down.h"
 #include "worlds/generators.h"
@@ -25,32 +26,11 @@
 namespace enavi::cli {
 namespace {
 
-std::optional<Eigen::Vector3d> ParsePoint(const std::string& flag, const std::string& text) {
+// An optional point flag: absent when empty.
+std::optional<Eigen::Vector3d> PointFlag(const std::string& flag, const std::string& text) {
   if (text.empty()) return std::nullopt;
-  Eigen::Vector3d p;
-  std::size_t pos = 0;
-  for (int i = 0; i < 3; ++i) {
-    const std::size_t comma = text.find(',', pos);
-    const bool last = i == 2;
-    if (last != (comma == std::string::npos) ||
-        !worlds::ParseFiniteDouble(text.substr(pos, last ? std::string::npos : comma - pos), &p[i])) {
-      throw std::invalid_argument(flag + ": expected x,y,z in metres (got '" + text + "')");
-    }
-    pos = comma + 1;
-  }
-  return p;
-}
-
-std::map<std::string, std::string> ParseParams(const std::vector<std::string>& items) {
-  std::map<std::string, std::string> params;
-  for (const auto& item : items) {
-    const std::size_t eq = item.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      throw std::invalid_argument("--param: expected name=value (got '" + item + "')");
-    }
-    params[item.substr(0, eq)] = item.substr(eq + 1);
-  }
-  return params;
+  const api::Vec3 p = ParsePoint(flag, text);
+  return Eigen::Vector3d(p[0], p[1], p[2]);
 }
 
 std::string Vec(const Eigen::Vector3d& v) {
@@ -82,9 +62,9 @@ struct WorldFlags {
     worlds::WorldRequest r;
     r.world = world;
     r.seed = seed;
-    r.params = ParseParams(params);
-    r.start = ParsePoint("--start", start);
-    r.goal = ParsePoint("--goal", goal);
+    r.params = ParseNameValues("--param", params);
+    r.start = PointFlag("--start", start);
+    r.goal = PointFlag("--goal", goal);
     r.placement = worlds::ParsePlacement(units, scale, up, recenter);
     r.model_path.assign(model_path.begin(), model_path.end());
     return r;
@@ -148,7 +128,7 @@ void RegisterWorldCommands(CLI::App& app) {
   gen->add_option("--param", flags->params, param_help);
   gen->add_option("--out", flags->out, "Output world file (.yaml)")->required();
   gen->callback([flags] {
-    const worlds::World w = worlds::Generate(flags->scenario, flags->seed, ParseParams(flags->params));
+    const worlds::World w = worlds::Generate(flags->scenario, flags->seed, ParseNameValues("--param", flags->params));
     worlds::SaveWorldFile(w, flags->out);
     std::printf("wrote %s: %s\n", flags->out.c_str(), Summary(w).c_str());
   });

@@ -4,6 +4,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "api/atomic_file.h"
 #include "navstack/rl/json_read.h"
 #include "navstack/adapt/policy_state.h"
 #include "navstack/rl/rollout.h"
@@ -186,7 +187,7 @@ ExportSummary ExportDataset(const std::vector<api::StoredRollout>& records, cons
   schema["steps"] = summary.steps;
   schema["shards"] = shards;
   schema["episode_table"] = episodes;
-  navstack::rl::detail::WriteFileAtomic((options.out / "schema.json").string(), schema.dump(1) + "\n");
+  api::WriteFileAtomic(options.out / "schema.json", schema.dump(1) + "\n");
   return summary;
 }
 

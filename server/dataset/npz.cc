@@ -1,5 +1,6 @@
 #include "server/dataset/npz.h"
 
+#include "api/atomic_file.h"
 #include "navstack/rl/json_read.h"
 
 #include <array>
@@ -120,7 +121,7 @@ void WriteNpz(const std::filesystem::path& path, const std::vector<NpyArray>& ar
   Put(&zip, central_offset);
   Put(&zip, std::uint16_t{0});
 
-  navstack::rl::detail::WriteFileAtomic(path.string(), zip);
+  api::WriteFileAtomic(path, zip);
 }
 
 }  // namespace enavi::dataset

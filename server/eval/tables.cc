@@ -10,16 +10,13 @@
 #include <tuple>
 #include <vector>
 
+#include "api/fixed.h"
 #include "server/eval/paper_reference.h"
 
 namespace enavi::server {
 namespace {
 
-std::string Fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
-  return buf;
-}
+using api::Fixed;
 
 // Left-aligned first `left` columns, the rest right-aligned.
 std::string Render(const std::vector<std::vector<std::string>>& rows, std::size_t left) {

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "api/atomic_file.h"
 #include "api/client.h"
 #include "api/content_hash.h"
 #include "api/job_spec.h"
@@ -52,16 +53,6 @@ std::string ReadFile(const fs::path& p) {
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();
-}
-
-void WriteFile(const fs::path& p, const std::string& text) {
-  const fs::path tmp = p.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    if (!out) throw std::runtime_error("cannot write " + tmp.string());
-  }
-  fs::rename(tmp, p);
 }
 
 struct Pick {
@@ -276,8 +267,8 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
                        {"mean_flight_time", r.mean_flight_time}, {"policy_loss", r.policy_loss},
                        {"value_loss", r.value_loss}, {"entropy", r.entropy}, {"approx_kl", r.approx_kl},
                        {"episodes_per_s", r.episodes_per_s}});
-    WriteFile(curve_json, curve.dump(1));
-    WriteFile(work / "learning_curve.csv", LearningCurveCsv(log));
+    api::WriteFileAtomic(curve_json, curve.dump(1));
+    api::WriteFileAtomic(work / "learning_curve.csv", LearningCurveCsv(log));
     SaveCurvePng(log, work / "learning_curve.png");
 
     if (options.progress) {

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "navstack/methods/method.h"
+#include "navstack/methods/registry.h"
 #include "navstack/planning/planner.h"
 #include "tests/integration/loop_test_util.h"
 #include "workers/sim/episode.h"

@@ -1,5 +1,5 @@
 #pragma once
-// Quota arithmetic of the emulated clock (README.md, "The board: time"): how much host CPU a board gets,
+// Quota arithmetic of the emulated clock (docs/design.md, "Time: two clocks"): how much host CPU a board gets,
 // as a whole and per thread, so that both the board's capacity AND its per-core speed are
 // emulated.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// Host calibration of the board cost model (README.md, "The board: time", `enavi calibrate`): the host
+// Host calibration of the board cost model (docs/design.md, "Time: two clocks", `enavi calibrate`): the host
 // CPU time of many real navstack jobs against their work counts, fitted to nanoseconds per work
 // unit by non-negative least squares.
 

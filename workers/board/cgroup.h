@@ -1,5 +1,5 @@
 #pragma once
-// cgroup control for the emulated clock (README.md, "The board: time"): one `enavi` parent group, one
+// cgroup control for the emulated clock (docs/design.md, "Time: two clocks"): one `enavi` parent group, one
 // group per episode under it sized to the board, one child per thread for the per-core speed,
 // admission against the host's free CPU, RAII removal and reaping of groups left by crashed
 // workers. Only directories named `enavi` / `ep-<pid>-<start>-<n>` / `t-<tid>` that this code

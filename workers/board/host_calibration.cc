@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "api/atomic_file.h"
 #include "workers/board/board_quota.h"
 
 namespace enavi::board {
@@ -65,15 +66,11 @@ void SaveHostCalibration(const HostCalibration& c, const std::string& path) {
   const std::filesystem::path p(path);
   std::error_code ec;
   if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path(), ec);
-  // Write then rename: a reader never sees half a file.
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << j.dump(2) << "\n";
-    if (!out) throw std::runtime_error("host calibration: cannot write " + tmp);
+  try {
+    api::WriteFileAtomic(p, j.dump(2) + "\n");
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(std::string("host calibration: ") + e.what());
   }
-  std::filesystem::rename(tmp, p, ec);
-  if (ec) throw std::runtime_error("host calibration: cannot write " + path + ": " + ec.message());
 }
 
 HostCalibration LoadHostCalibration(const std::string& path) {

@@ -1,5 +1,5 @@
 #pragma once
-// The host calibration file (README.md, "The board: time", `enavi calibrate`): how fast THIS machine's
+// The host calibration file (docs/design.md, "Time: two clocks", `enavi calibrate`): how fast THIS machine's
 // cores are relative to the reference core the board profiles are expressed against, the
 // cost-model coefficients fitted here, and the worst job times seen in the calibration flights.
 // The emulated clock needs it to size a board's quota (speed = board speed / host speed);

@@ -1,6 +1,6 @@
 #pragma once
 // Shared-memory channel between the simulator process and the navstack process of an emulated
-// episode (README.md, "The board: time": the navstack runs throttled in its own process, the simulator
+// episode (docs/design.md, "Time: two clocks": the navstack runs throttled in its own process, the simulator
 // outside). One memfd mapping holds:
 //   - depth frames, simulator -> navstack: a triple buffer (3 slots). The writer always has a
 //     free slot and never waits; the reader always gets the newest complete frame without a

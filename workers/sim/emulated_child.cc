@@ -19,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "api/fixed.h"
 #include "navstack/runtime/realtime_executor.h"
 #include "navstack/runtime/sched_deadline.h"
 #include "workers/board/shm_channel.h"
@@ -29,11 +30,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using navstack::TaskId;
 
-std::string Fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
+using api::Fixed;
 
 void NameThread(const char* name) { pthread_setname_np(pthread_self(), name); }
 

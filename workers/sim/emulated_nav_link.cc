@@ -28,6 +28,7 @@
 #include <thread>
 #include <vector>
 
+#include "api/fixed.h"
 #include "navstack/runtime/proc_stat.h"
 #include "navstack/runtime/realtime_executor.h"
 #include "navstack/runtime/sched_deadline.h"
@@ -55,11 +56,7 @@ using emulated::PrepareChildProcess;
 using emulated::RunNavstackChild;
 
 
-std::string Fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
+using api::Fixed;
 
 std::int64_t ToNs(Clock::time_point t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();

@@ -1,5 +1,5 @@
 #pragma once
-// The emulated clock's link (`--clock emulated`, README.md, "The board: time", issue 5): the navigation
+// The emulated clock's link (`--clock emulated`, docs/design.md, "Time: two clocks", issue 5): the navigation
 // stack runs in its own process inside the board's cgroup, the simulator stays outside and is
 // paced to wall-clock time times the dilation k (1 sim second = k wall seconds).
 //

@@ -1,5 +1,5 @@
 #pragma once
-// Knobs of the emulated clock (`--clock emulated`, README.md, "The board: time") that are not part of an
+// Knobs of the emulated clock (`--clock emulated`, docs/design.md, "Time: two clocks") that are not part of an
 // episode spec: where the host calibration is, and what tests need to provoke fallbacks.
 
 #include <sys/types.h>

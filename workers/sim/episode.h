@@ -1,5 +1,5 @@
 #pragma once
-// One flight episode (README.md, "One episode"): world -> depth camera -> navigation stack under the
+// One flight episode (docs/design.md, "One episode"): world -> depth camera -> navigation stack under the
 // board's executor -> controller -> physics, in sim time, with the measured results.
 
 #include <functional>

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "navstack/methods/registry.h"
 #include "navstack/rl/policy_io.h"
 
 namespace enavi::sim {

@@ -8,6 +8,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "api/atomic_file.h"
 #include "api/content_hash.h"
 #include "api/job_spec.h"
 #include "workers/worker/process.h"
@@ -210,16 +211,12 @@ void Worker::HandlePolicy(const api::PolicyBlob& policy) {
     spdlog::warn("policy {} does not match its hash: ignored", policy.hash);
     return;
   }
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << policy.json;
-    if (!out) {
-      spdlog::error("cannot cache policy {} in {}", policy.hash, tmp.string());
-      return;
-    }
+  try {
+    api::WriteFileAtomic(path, policy.json);
+  } catch (const std::runtime_error& e) {
+    spdlog::error("cannot cache policy {}: {}", policy.hash, e.what());
+    return;
   }
-  fs::rename(tmp, path);
   spdlog::info("cached policy {} ({} bytes)", policy.hash.substr(0, 12), policy.json.size());
 }
 

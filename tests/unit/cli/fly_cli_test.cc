@@ -58,13 +58,18 @@ TEST(FlyCliInputTest, MalformedStartOrGoalIsRefused) {
   ExpectRefused(Fly(dir, "--world empty --start 1,2"), {"--start", "x,y,z", "'1,2'"}, "two coordinates");
   ExpectRefused(Fly(dir, "--world empty --start 1,2,x"), {"--start", "'1,2,x'"}, "not a number");
   ExpectRefused(Fly(dir, "--world empty --goal '1;2;3'"), {"--goal", "'1;2;3'"}, "wrong separator");
+  // One parser for every subcommand (server/cli/cli_values.h): a name given twice is ambiguous.
+  ExpectRefused(Fly(dir, "--world forest --param length=5 --param length=6"), {"--param", "'length' given twice"},
+                "duplicate --param");
+  ExpectRefused(Fly(dir, "--world empty --set planner.v_max=1 --set planner.v_max=2"),
+                {"--set", "'planner.v_max' given twice"}, "duplicate --set");
 }
 
 TEST(FlyCliInputTest, SetOfAnUnknownTunableListsTheKnownOnes) {
   TempDir dir;
   ExpectRefused(Fly(dir, "--world empty --set planner.vmax=1"),
                 {"planner.vmax", "unknown parameter", "planner.v_max", "map.resolution"}, "misspelt tunable");
-  ExpectRefused(Fly(dir, "--world empty --set planner.v_max"), {"--set", "key=value"}, "no value");
+  ExpectRefused(Fly(dir, "--world empty --set planner.v_max"), {"--set", "name=value"}, "no value");
   ExpectRefused(Fly(dir, "--world empty --set planner.v_max=fast"), {"--set planner.v_max", "'fast'", "not a number"},
                 "value not a number");
 }

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "navstack/methods/ego_planner/ego_planner_node.h"
-#include "navstack/methods/method.h"
+#include "navstack/methods/registry.h"
 #include "navstack/runtime/virtual_executor.h"
 
 namespace enavi::navstack {

@@ -1,11 +1,11 @@
-// The emulated clock's executor with fake jobs: dispatch order, overrun skips, locking, costs.
-// Orders are made deterministic by a gate job that holds the only worker while the test
-// releases the others; nothing here asserts on durations.
+// The emulated clock's executor with fake jobs: what only it does (locking, measured costs, sim
+// time from wall time, failures). The rules both clocks keep (EDF and FIFO order, overrun skips,
+// trigger coalescing, cores, deadlines) are in executor_contract_test.cc. Nothing here asserts on
+// durations.
 #include "navstack/runtime/realtime_executor.h"
 
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -14,146 +14,12 @@
 #include <gtest/gtest.h>
 
 #include "navstack/common/cpu_time.h"
+#include "tests/unit/runtime/test_gate.h"
 
 namespace enavi::navstack {
 namespace {
 
 using namespace std::chrono_literals;
-
-// A one-shot latch the test opens.
-class Gate {
- public:
-  void Open() {
-    std::lock_guard l(m_);
-    open_ = true;
-    cv_.notify_all();
-  }
-  void Wait() {
-    std::unique_lock l(m_);
-    cv_.wait(l, [this] { return open_; });
-  }
-
- private:
-  std::mutex m_;
-  std::condition_variable cv_;
-  bool open_ = false;
-};
-
-// Polls `done` for up to 10 s (a bound against hangs, not a timing assertion).
-template <typename F>
-bool Eventually(F done) {
-  for (int i = 0; i < 10'000; ++i) {
-    if (done()) return true;
-    std::this_thread::sleep_for(1ms);
-  }
-  return done();
-}
-
-struct OrderLog {
-  std::mutex m;
-  std::vector<TaskId> order;
-  void Add(TaskId t) {
-    std::lock_guard l(m);
-    order.push_back(t);
-  }
-  std::vector<TaskId> Get() {
-    std::lock_guard l(m);
-    return order;
-  }
-};
-
-// The gate job (perception) holds the single worker; then collision, difference and planning
-// are triggered in that order with deadlines 0.3, 0.1 and 0.2 s; the gate opens.
-std::vector<TaskId> RunOrderScenario(SchedulingPolicy policy) {
-  RealtimeExecutorOptions o;
-  o.threads = 1;
-  o.policy = policy;
-  RealtimeExecutor ex(o);
-  Gate gate;
-  std::atomic<bool> gate_running{false};
-  OrderLog log;
-  ex.Register(TaskId::kPerception, [&] {
-    gate_running = true;
-    gate.Wait();
-    return JobOutput{};
-  });
-  for (TaskId t : {TaskId::kCollision, TaskId::kDifference, TaskId::kPlanning})
-    ex.Register(t, [&log, t] {
-      log.Add(t);
-      return JobOutput{};
-    });
-  ex.Start(std::chrono::steady_clock::now());
-  ex.Trigger(TaskId::kPerception, 1.0);
-  EXPECT_TRUE(Eventually([&] { return gate_running.load(); }));
-  ex.Trigger(TaskId::kCollision, 0.3);
-  std::this_thread::sleep_for(2ms);  // distinct release instants
-  ex.Trigger(TaskId::kDifference, 0.1);
-  std::this_thread::sleep_for(2ms);
-  ex.Trigger(TaskId::kPlanning, 0.2);
-  gate.Open();
-  EXPECT_TRUE(Eventually([&] { return log.Get().size() == 3; }));
-  ex.Stop();
-  return log.Get();
-}
-
-TEST(RealtimeExecutorTest, EdfRunsTheEarliestDeadlineFirst) {
-  const std::vector<TaskId> order = RunOrderScenario(SchedulingPolicy::kGlobalEdf);
-  EXPECT_EQ(order, (std::vector<TaskId>{TaskId::kDifference, TaskId::kPlanning, TaskId::kCollision}))
-      << "deadlines 0.1 (difference) < 0.2 (planning) < 0.3 (collision)";
-}
-
-TEST(RealtimeExecutorTest, FifoRunsTheEarliestReleaseFirst) {
-  const std::vector<TaskId> order = RunOrderScenario(SchedulingPolicy::kFifoNonPreemptive);
-  EXPECT_EQ(order, (std::vector<TaskId>{TaskId::kCollision, TaskId::kDifference, TaskId::kPlanning}))
-      << "released in the order collision, difference, planning";
-}
-
-TEST(RealtimeExecutorTest, OverrunningTaskSkipsReleasesAndFinishesLate) {
-  RealtimeExecutorOptions o;
-  o.threads = 1;
-  RealtimeExecutor ex(o);
-  Gate gate;
-  std::atomic<int> runs{0};
-  ex.Register(TaskId::kPerception, [&] {
-    if (runs.fetch_add(1) == 0) gate.Wait();  // the first job overruns until the test opens the gate
-    return JobOutput{};
-  });
-  ex.SetRate(TaskId::kPerception, 200.0);
-  ex.Start(std::chrono::steady_clock::now());
-  ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPerception).skipped >= 3; }))
-      << "releases of a task whose job is still running must be dropped";
-  gate.Open();
-  ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPerception).completed >= 3; }));
-  ex.Stop();
-  const TaskStats s = ex.stats(TaskId::kPerception);
-  EXPECT_GE(s.late, 1) << "the overrunning job finished after its deadline";
-  const std::int64_t pending = s.released - s.completed - s.skipped;
-  EXPECT_GE(pending, 0);
-  EXPECT_LE(pending, 1) << "every release ran or was skipped; at most one job waited when the executor stopped";
-  EXPECT_EQ(s.misses(), s.late + s.skipped);
-}
-
-TEST(RealtimeExecutorTest, TriggerDuringAJobRunsOnceMoreAfterIt) {
-  RealtimeExecutorOptions o;
-  o.threads = 1;
-  RealtimeExecutor ex(o);
-  Gate gate;
-  std::atomic<int> runs{0};
-  ex.Register(TaskId::kPlanning, [&] {
-    if (runs.fetch_add(1) == 0) gate.Wait();
-    return JobOutput{};
-  });
-  ex.Start(std::chrono::steady_clock::now());
-  ex.Trigger(TaskId::kPlanning, 0.5);
-  ASSERT_TRUE(Eventually([&] { return runs.load() == 1; }));
-  ex.Trigger(TaskId::kPlanning, 0.5);  // coalesced: kept, not queued twice
-  ex.Trigger(TaskId::kPlanning, 0.5);
-  gate.Open();
-  ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPlanning).completed == 2; }));
-  ex.Stop();
-  EXPECT_EQ(runs.load(), 2);
-  EXPECT_EQ(ex.stats(TaskId::kPlanning).skipped, 0);
-}
 
 TEST(RealtimeExecutorTest, CommitsRunUnderTheExclusiveLockWhileNoJobRuns) {
   RealtimeExecutorOptions o;

@@ -1,3 +1,5 @@
+// The virtual clock: exact sim-time schedules (finish instants, preemption, rate changes, costs).
+// The rules both clocks keep are in executor_contract_test.cc.
 #include "navstack/runtime/virtual_executor.h"
 
 #include <vector>
@@ -73,21 +75,6 @@ TEST(VirtualExecutorTest, OverrunSkipsReleasesAndCountsMisses) {
   EXPECT_NEAR(s.busy_s, 0.75, 1e-9) << "15 finished jobs x 50 ms; the 16th starts at t = 1 s";
 }
 
-TEST(VirtualExecutorTest, EarliestDeadlineRunsFirstOnOneCore) {
-  const auto cost = MillisecondPerPixel();
-  VirtualExecutor ex(1, cost);
-  std::vector<double> plan_commits, col_commits;
-  ex.Register(TaskId::kPlanning, FixedCost(20, nullptr, &plan_commits, &ex));
-  ex.Register(TaskId::kCollision, FixedCost(5, nullptr, &col_commits, &ex));
-  ex.Trigger(TaskId::kPlanning, 0.100);
-  ex.Trigger(TaskId::kCollision, 0.010);
-  AdvanceInSteps(ex, 0.05);
-  ASSERT_EQ(col_commits.size(), 1u);
-  ASSERT_EQ(plan_commits.size(), 1u);
-  EXPECT_NEAR(col_commits[0], 0.005, 1e-9);
-  EXPECT_NEAR(plan_commits[0], 0.025, 1e-9);
-}
-
 TEST(VirtualExecutorTest, ShortDeadlineJobPreemptsLongJob) {
   const auto cost = MillisecondPerPixel();
   VirtualExecutor ex(1, cost);
@@ -120,54 +107,6 @@ TEST(VirtualExecutorTest, FifoPolicyNeverPreempts) {
   EXPECT_NEAR(plan_commits[0], 0.030, 1e-9) << "planning keeps the core";
   EXPECT_NEAR(col_commits[0], 0.035, 1e-9) << "the collision check waits and misses its deadline";
   EXPECT_EQ(ex.stats(TaskId::kCollision).late, 1);
-}
-
-TEST(VirtualExecutorTest, FifoPolicyServesInReleaseOrder) {
-  const auto cost = MillisecondPerPixel();
-  VirtualExecutor ex(1, cost, SchedulingPolicy::kFifoNonPreemptive);
-  std::vector<double> a, b, c;
-  ex.Register(TaskId::kPlanning, FixedCost(10, nullptr, &a, &ex));
-  ex.Register(TaskId::kPerception, FixedCost(10, nullptr, &b, &ex));
-  ex.Register(TaskId::kCollision, FixedCost(10, nullptr, &c, &ex));
-  ex.Trigger(TaskId::kPlanning, 1.0);
-  ex.AdvanceTo(0.001);
-  ex.Trigger(TaskId::kPerception, 0.5);
-  ex.AdvanceTo(0.002);
-  ex.Trigger(TaskId::kCollision, 0.1);  // earliest deadline, but released last
-  AdvanceInSteps(ex, 0.1);
-  EXPECT_NEAR(a.at(0), 0.010, 1e-9);
-  EXPECT_NEAR(b.at(0), 0.020, 1e-9);
-  EXPECT_NEAR(c.at(0), 0.030, 1e-9);
-}
-
-TEST(VirtualExecutorTest, TwoCoresRunTwoJobsInParallel) {
-  const auto cost = MillisecondPerPixel();
-  VirtualExecutor ex(2, cost);
-  std::vector<double> a, b;
-  ex.Register(TaskId::kPlanning, FixedCost(20, nullptr, &a, &ex));
-  ex.Register(TaskId::kPerception, FixedCost(20, nullptr, &b, &ex));
-  ex.Trigger(TaskId::kPlanning, 0.1);
-  ex.Trigger(TaskId::kPerception, 0.05);
-  AdvanceInSteps(ex, 0.05);
-  ASSERT_EQ(a.size(), 1u);
-  ASSERT_EQ(b.size(), 1u);
-  EXPECT_NEAR(a[0], 0.020, 1e-9);
-  EXPECT_NEAR(b[0], 0.020, 1e-9);
-}
-
-TEST(VirtualExecutorTest, TriggerWhileActiveIsCoalescedIntoOneMoreJob) {
-  const auto cost = MillisecondPerPixel();
-  VirtualExecutor ex(1, cost);
-  std::vector<double> starts;
-  ex.Register(TaskId::kPlanning, FixedCost(10, &starts, nullptr, &ex));
-  ex.Trigger(TaskId::kPlanning, 0.1);
-  ex.AdvanceTo(0.002);
-  ex.Trigger(TaskId::kPlanning, 0.1);
-  ex.Trigger(TaskId::kPlanning, 0.1);
-  AdvanceInSteps(ex, 0.1);
-  ASSERT_EQ(starts.size(), 2u);
-  EXPECT_NEAR(starts[1], 0.010, 1e-9) << "the coalesced job starts when the first finishes";
-  EXPECT_EQ(ex.stats(TaskId::kPlanning).skipped, 0);
 }
 
 TEST(VirtualExecutorTest, RateChangeAppliesFromNextRelease) {

@@ -55,6 +55,9 @@ TEST(WorldCliTest, GenRefusesBadInputWithExitCodeTwo) {
   r = Enavi(dir, "world gen --scenario s1 --param length --out " + out);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--param: expected name=value"), std::string::npos) << r.err;
+  r = Enavi(dir, "world gen --scenario forest --param length=5 --param length=6 --out " + out);
+  EXPECT_EQ(r.code, 2) << "a name given twice, as in enavi fly";
+  EXPECT_NE(r.err.find("--param: 'length' given twice"), std::string::npos) << r.err;
   r = Enavi(dir, "world gen --scenario s1 --bogus --out " + out);
   EXPECT_EQ(r.code, 2) << "unknown flag";
   r = Enavi(dir, "world gen --out " + out);

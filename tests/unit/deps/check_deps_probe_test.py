@@ -1,0 +1,85 @@
+#!/usr/bin/env python3
+"""scripts/check_deps.py fails on a planted upward include in a navstack probe and passes on a
+clean one, through both of its routes: the source scan and the compiler's dependency output
+(the probe is run through the compiler with -M, as the build does with -MD).
+
+Usage: check_deps_probe_test.py --checker PY --compiler CXX --source-dir REPO [--system-include DIR]...
+"""
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+
+LAYERS = ("api", "worlds", "navstack", "workers", "server")
+
+
+def make_tree(root, repo, probe_text):
+    """A tree laid out like the repository: its layers linked in, navstack/probe/probe.cc added."""
+    for layer in LAYERS:
+        if layer != "navstack":
+            os.symlink(os.path.join(repo, layer), os.path.join(root, layer))
+    os.makedirs(os.path.join(root, "navstack", "probe"))
+    for entry in os.listdir(os.path.join(repo, "navstack")):
+        os.symlink(os.path.join(repo, "navstack", entry), os.path.join(root, "navstack", entry))
+    with open(os.path.join(root, "navstack", "probe", "probe.cc"), "w") as f:
+        f.write(probe_text)
+
+
+def depfile_of(root, compiler, system_includes):
+    """The compiler's dependency output for the probe (headers it cannot find count as generated)."""
+    out = os.path.join(root, "probe.cc.o.d")
+    cmd = [compiler, "-std=c++20", "-M", "-MG", "-MT", "probe.cc.o", "-MF", out, "-I", root]
+    for d in system_includes:
+        cmd += ["-isystem", d]
+    cmd.append(os.path.join(root, "navstack", "probe", "probe.cc"))
+    subprocess.run(cmd, check=True, cwd=root)
+    return out
+
+
+def run_checker(checker, root, only, depfile=None):
+    cmd = [sys.executable, checker, "--source-dir", root, "--only", only]
+    if depfile:
+        cmd += ["--depfile", depfile]
+    return subprocess.run(cmd, capture_output=True, text=True)
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--checker", required=True)
+    parser.add_argument("--compiler", required=True)
+    parser.add_argument("--source-dir", required=True)
+    parser.add_argument("--system-include", action="append", default=[])
+    args = parser.parse_args()
+    repo = os.path.abspath(args.source_dir)
+
+    # (probe, expected exit code, text the report must contain)
+    cases = [
+        ('#include "workers/sim/episode.h"\n', 1, "workers/sim/episode.h"),
+        ('#include "server/cli/commands.h"\n', 1, "server/cli/commands.h"),
+        ("#include <btBulletDynamicsCommon.h>\n", 1, "Bullet"),
+        ("#include <embree3/rtcore.h>\n", 1, "Embree"),
+        ('#include "api/dds.h"\n', 1, "api/dds.h"),
+        ('#include "navstack/runtime/task.h"\n#include "api/episode.h"\n', 0, "clean"),
+    ]
+    failures = []
+    for probe, expected, needle in cases:
+        with tempfile.TemporaryDirectory() as root:
+            make_tree(root, repo, probe)
+            depfile = depfile_of(root, args.compiler, args.system_include)
+            for only in ("sources", "depfiles"):
+                r = run_checker(args.checker, root, only, depfile if only == "depfiles" else None)
+                report = r.stdout + r.stderr
+                ok = r.returncode == expected and needle in report
+                print(f"{'ok  ' if ok else 'FAIL'} {only:8} exit {r.returncode} (want {expected}) for {probe.strip()!r}")
+                if not ok:
+                    failures.append(f"{only}: {probe.strip()!r}: exit {r.returncode}, wanted {expected} "
+                                    f"and '{needle}' in:\n{report}")
+    for f in failures:
+        print(f, file=sys.stderr)
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

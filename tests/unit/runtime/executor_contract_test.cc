@@ -1,0 +1,272 @@
+// The rules every TaskExecutor keeps (navstack/runtime/executor.h, docs/design.md "Time: two
+// clocks"), one typed suite for both clocks: VirtualExecutor (sim-time schedule, cost model) and
+// RealtimeExecutor (worker threads, wall time). Each executor gets a harness with a "holding"
+// job: on the virtual clock it costs 100 ms of board time, on the real-time one it blocks on a
+// gate the test opens. Orders are made by releases while the hold keeps the only core busy, so
+// nothing here asserts on durations.
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <type_traits>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "navstack/runtime/realtime_executor.h"
+#include "navstack/runtime/virtual_executor.h"
+#include "tests/unit/runtime/test_gate.h"
+
+namespace enavi::navstack {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Task starts in the order the executor started them.
+class StartLog {
+ public:
+  void Add(TaskId t) {
+    std::lock_guard l(m_);
+    order_.push_back(t);
+  }
+  std::vector<TaskId> Get() const {
+    std::lock_guard l(m_);
+    return order_;
+  }
+
+ private:
+  mutable std::mutex m_;
+  std::vector<TaskId> order_;
+};
+
+constexpr double kHoldBoardMs = 100;  // virtual clock: what a holding job costs
+
+// Prices one kPixel as 1 ms of board time, so a virtual job costs exactly what it reports.
+WorkCountCostModel MillisecondPerPixel() {
+  WorkCountCostModel::Coefficients c;
+  c.ns_per_unit[static_cast<int>(WorkUnit::kPixel)] = 1e6;
+  return WorkCountCostModel(c);
+}
+
+class VirtualHarness {
+ public:
+  VirtualHarness(int cores, SchedulingPolicy policy) : cost_(MillisecondPerPixel()), ex_(cores, cost_, policy) {}
+  TaskExecutor& ex() { return ex_; }
+  /// The task's first job holds a core (100 ms of board time); later jobs take 1 ms.
+  void RegisterHolding(TaskId task, StartLog* log) {
+    auto first = std::make_shared<bool>(true);
+    ex_.Register(task, [this, task, log, first] {
+      if (log) log->Add(task);
+      if (*first) ++holding_;
+      JobOutput out;
+      out.work.Add(WorkUnit::kPixel, *first ? static_cast<std::int64_t>(kHoldBoardMs) : 1);
+      *first = false;
+      return out;
+    });
+  }
+  /// 1 ms jobs that log their start.
+  void RegisterShort(TaskId task, StartLog* log) {
+    ex_.Register(task, [task, log] {
+      log->Add(task);
+      JobOutput out;
+      out.work.Add(WorkUnit::kPixel, 1);
+      return out;
+    });
+  }
+  void Start() {}
+  /// Until `n` holding jobs have started.
+  bool WaitHolding(int n) { return RunUntil([&] { return holding_ >= n; }); }
+  /// A distinct release instant.
+  void Tick() { ex_.AdvanceTo(ex_.now() + 0.001); }
+  /// Holding jobs end by themselves once their board time has passed.
+  void ReleaseHolds() {}
+  /// Until sim time has passed `t`.
+  void PassSimTime(double t) { RunUntil([&] { return ex_.now() > t; }); }
+  template <typename F>
+  bool RunUntil(F done) {
+    for (int i = 0; i < 10'000 && !done(); ++i) ex_.AdvanceTo(ex_.now() + 0.001);
+    return done();
+  }
+  void Stop() {}
+
+ private:
+  WorkCountCostModel cost_;
+  VirtualExecutor ex_;
+  int holding_ = 0;
+};
+
+class RealtimeHarness {
+ public:
+  RealtimeHarness(int cores, SchedulingPolicy policy) : ex_(Options(cores, policy)) {}
+  ~RealtimeHarness() {
+    gate_.Open();
+    ex_.Stop();
+  }
+  TaskExecutor& ex() { return ex_; }
+  /// The task's first job holds a worker until ReleaseHolds(); later jobs return at once.
+  void RegisterHolding(TaskId task, StartLog* log) {
+    auto first = std::make_shared<std::atomic<bool>>(true);
+    ex_.Register(task, [this, task, log, first] {
+      if (log) log->Add(task);
+      if (first->exchange(false)) {
+        ++holding_;
+        gate_.Wait();
+      }
+      return JobOutput{};
+    });
+  }
+  void RegisterShort(TaskId task, StartLog* log) {
+    ex_.Register(task, [task, log] {
+      log->Add(task);
+      return JobOutput{};
+    });
+  }
+  void Start() { ex_.Start(std::chrono::steady_clock::now()); }
+  bool WaitHolding(int n) { return RunUntil([&] { return holding_.load() >= n; }); }
+  void Tick() { std::this_thread::sleep_for(2ms); }
+  void ReleaseHolds() { gate_.Open(); }
+  void PassSimTime(double t) { RunUntil([&] { return ex_.now() > t; }); }
+  template <typename F>
+  bool RunUntil(F done) {
+    return Eventually(done);
+  }
+  void Stop() { ex_.Stop(); }
+
+ private:
+  static RealtimeExecutorOptions Options(int cores, SchedulingPolicy policy) {
+    RealtimeExecutorOptions o;
+    o.threads = cores;
+    o.policy = policy;
+    return o;
+  }
+  RealtimeExecutor ex_;
+  Gate gate_;
+  std::atomic<int> holding_{0};
+};
+
+template <typename H>
+class ExecutorContractTest : public ::testing::Test {};
+
+using Harnesses = ::testing::Types<VirtualHarness, RealtimeHarness>;
+class HarnessNames {
+ public:
+  template <typename T>
+  static std::string GetName(int) {
+    return std::is_same_v<T, VirtualHarness> ? "Virtual" : "Realtime";
+  }
+};
+TYPED_TEST_SUITE(ExecutorContractTest, Harnesses, HarnessNames);
+
+// The hold (perception, the earliest deadline of all, so no executor preempts it) keeps the only
+// core; collision, difference and planning are released in that order with deadlines 0.3, 0.1
+// and 0.2 s; then the hold ends.
+template <typename H>
+std::vector<TaskId> OrderAfterHold(SchedulingPolicy policy) {
+  H h(1, policy);
+  StartLog log;
+  h.RegisterHolding(TaskId::kPerception, nullptr);
+  for (TaskId t : {TaskId::kCollision, TaskId::kDifference, TaskId::kPlanning}) h.RegisterShort(t, &log);
+  h.Start();
+  h.ex().Trigger(TaskId::kPerception, 0.05);
+  EXPECT_TRUE(h.WaitHolding(1));
+  h.ex().Trigger(TaskId::kCollision, 0.3);
+  h.Tick();
+  h.ex().Trigger(TaskId::kDifference, 0.1);
+  h.Tick();
+  h.ex().Trigger(TaskId::kPlanning, 0.2);
+  h.ReleaseHolds();
+  EXPECT_TRUE(h.RunUntil([&] { return log.Get().size() == 3; }));
+  h.Stop();
+  return log.Get();
+}
+
+TYPED_TEST(ExecutorContractTest, EdfRunsTheEarliestDeadlineFirst) {
+  EXPECT_EQ(OrderAfterHold<TypeParam>(SchedulingPolicy::kGlobalEdf),
+            (std::vector<TaskId>{TaskId::kDifference, TaskId::kPlanning, TaskId::kCollision}))
+      << "deadlines 0.1 (difference) < 0.2 (planning) < 0.3 (collision)";
+}
+
+TYPED_TEST(ExecutorContractTest, FifoRunsTheEarliestReleaseFirst) {
+  EXPECT_EQ(OrderAfterHold<TypeParam>(SchedulingPolicy::kFifoNonPreemptive),
+            (std::vector<TaskId>{TaskId::kCollision, TaskId::kDifference, TaskId::kPlanning}))
+      << "released in the order collision, difference, planning";
+}
+
+TYPED_TEST(ExecutorContractTest, OverrunningTaskSkipsReleasesAndFinishesLate) {
+  TypeParam h(1, SchedulingPolicy::kGlobalEdf);
+  h.RegisterHolding(TaskId::kPerception, nullptr);
+  h.ex().SetRate(TaskId::kPerception, 200.0);  // 5 ms period; the first job overruns it
+  h.Start();
+  ASSERT_TRUE(h.RunUntil([&] { return h.ex().stats(TaskId::kPerception).skipped >= 3; }))
+      << "releases of a task whose job is still running must be dropped";
+  h.ReleaseHolds();
+  ASSERT_TRUE(h.RunUntil([&] { return h.ex().stats(TaskId::kPerception).completed >= 3; }));
+  h.ex().SetRate(TaskId::kPerception, 0);
+  h.Stop();
+  const TaskStats s = h.ex().stats(TaskId::kPerception);
+  EXPECT_GE(s.late, 1) << "the overrunning job finished after its deadline";
+  const std::int64_t pending = s.released - s.completed - s.skipped;
+  EXPECT_GE(pending, 0);
+  EXPECT_LE(pending, 1) << "every release ran or was skipped; at most one job is still open";
+  EXPECT_EQ(s.misses(), s.late + s.skipped);
+}
+
+TYPED_TEST(ExecutorContractTest, TriggersDuringAJobAreCoalescedIntoOneMore) {
+  TypeParam h(1, SchedulingPolicy::kGlobalEdf);
+  StartLog log;
+  h.RegisterHolding(TaskId::kPlanning, &log);
+  h.Start();
+  h.ex().Trigger(TaskId::kPlanning, 0.5);
+  ASSERT_TRUE(h.WaitHolding(1));
+  EXPECT_TRUE(h.ex().active(TaskId::kPlanning));
+  h.ex().Trigger(TaskId::kPlanning, 0.5);  // kept, not queued twice
+  h.ex().Trigger(TaskId::kPlanning, 0.5);
+  h.ReleaseHolds();
+  ASSERT_TRUE(h.RunUntil([&] { return h.ex().stats(TaskId::kPlanning).completed == 2; }));
+  h.PassSimTime(h.ex().now() + 0.05);  // room for a third job, which must not come
+  h.Stop();
+  EXPECT_EQ(log.Get().size(), 2u);
+  EXPECT_EQ(h.ex().stats(TaskId::kPlanning).released, 2);
+  EXPECT_EQ(h.ex().stats(TaskId::kPlanning).skipped, 0);
+}
+
+TYPED_TEST(ExecutorContractTest, EachCoreRunsAJobAtTheSameTime) {
+  TypeParam h(2, SchedulingPolicy::kGlobalEdf);
+  h.RegisterHolding(TaskId::kPerception, nullptr);
+  h.RegisterHolding(TaskId::kPlanning, nullptr);
+  EXPECT_EQ(h.ex().cores(), 2);
+  h.Start();
+  h.ex().Trigger(TaskId::kPerception, 1.0);
+  h.ex().Trigger(TaskId::kPlanning, 1.0);
+  EXPECT_TRUE(h.WaitHolding(2)) << "two cores: the second holding job starts while the first holds";
+  h.ReleaseHolds();
+  ASSERT_TRUE(h.RunUntil([&] {
+    return h.ex().stats(TaskId::kPerception).completed == 1 && h.ex().stats(TaskId::kPlanning).completed == 1;
+  }));
+  h.Stop();
+}
+
+TYPED_TEST(ExecutorContractTest, AJobFinishingAfterItsDeadlineIsLateAndOneBeforeIsNot) {
+  TypeParam h(1, SchedulingPolicy::kGlobalEdf);
+  StartLog log;
+  h.RegisterHolding(TaskId::kPlanning, nullptr);
+  h.RegisterShort(TaskId::kCollision, &log);
+  h.Start();
+  h.ex().Trigger(TaskId::kPlanning, 0.02);  // held past its 20 ms deadline
+  ASSERT_TRUE(h.WaitHolding(1));
+  h.PassSimTime(0.03);
+  h.ReleaseHolds();
+  ASSERT_TRUE(h.RunUntil([&] { return h.ex().stats(TaskId::kPlanning).completed == 1; }));
+  h.ex().Trigger(TaskId::kCollision, 5.0);  // ample time
+  ASSERT_TRUE(h.RunUntil([&] { return h.ex().stats(TaskId::kCollision).completed == 1; }));
+  h.Stop();
+  EXPECT_EQ(h.ex().stats(TaskId::kPlanning).late, 1);
+  EXPECT_EQ(h.ex().stats(TaskId::kPlanning).misses(), 1);
+  EXPECT_EQ(h.ex().stats(TaskId::kCollision).late, 0);
+  EXPECT_EQ(h.ex().stats(TaskId::kCollision).misses(), 0);
+}
+
+}  // namespace
+}  // namespace enavi::navstack
