@@ -54,7 +54,7 @@ constexpr const char* kNftMode = "nftables (no sch_netem in this kernel: loss on
 
 ChaosNet::ChaosNet(const std::vector<std::string>& nodes, fs::path log_dir)
     : log_dir_(std::move(log_dir)), prefix_("enavi-fault-" + std::to_string(getpid()) + "-") {
-  RemoveNamespaces(prefix_);  // left by a killed run of a process with our pid
+  RemoveOrphans();
   const std::string hub = Namespace("hub");
   Run({"ip", "netns", "add", hub});
   Run({"ip", "-n", hub, "link", "add", "br0", "type", "bridge"});
@@ -124,6 +124,17 @@ std::vector<std::string> ChaosNet::ListNamespaces(const std::string& prefix) {
     if (name.rfind(prefix, 0) == 0) names.push_back(name);
   }
   return names;
+}
+
+void ChaosNet::RemoveOrphans() {
+  // A run killed before its destructor left its namespaces: remove those of dead processes.
+  const std::string family = "enavi-fault-";
+  for (const auto& name : ListNamespaces(family)) {
+    const std::string pid = name.substr(family.size(), name.find('-', family.size()) - family.size());
+    if (pid == std::to_string(getpid()) || !fs::exists("/proc/" + pid)) {
+      RemoveNamespaces(family + pid + "-");
+    }
+  }
 }
 
 int ChaosNet::RemoveNamespaces(const std::string& prefix) {

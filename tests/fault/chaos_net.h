@@ -5,8 +5,8 @@
 // node's veth; on a kernel without sch_netem, loss alone comes from an nftables rule (numgen
 // random) and `mode()` says jitter is unavailable. A partition drops everything on a node's link
 // (nftables) until healed. Every namespace carries the prefix "enavi-fault-<pid>-"; the
-// destructor deletes them all, also after a failure, and a new run first removes any a killed
-// run of the same pid left.
+// destructor deletes them all, also after a failure, and a new run first removes those a killed
+// run left (their pid is gone).
 
 #include <sys/types.h>
 
@@ -45,6 +45,7 @@ class ChaosNet {
   static std::vector<std::string> ListNamespaces(const std::string& prefix);
 
  private:
+  static void RemoveOrphans();
   void Run(const std::vector<std::string>& argv);
   bool TryRun(const std::vector<std::string>& argv);
 

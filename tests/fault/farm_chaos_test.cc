@@ -20,6 +20,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <ctime>
+#include <iomanip>
 #include <optional>
 #include <random>
 
@@ -57,7 +59,8 @@ struct ChaosTally {
   int integrity_checks = 0, integrity_failures = 0;
   std::vector<double> release_delays_s;  // lease releases of killed or partitioned workers
   int releases_not_timed = 0;            // the server died meanwhile: no delay to measure
-  int server_starts = 0, worker_starts = 0;
+  int server_starts = 0, worker_starts = 0, fresh_workers = 0;
+  int gone_for_silence = 0;  // "worker gone (no heartbeat)" in the server logs
   double wall_s = 0;
   std::string link_mode;
   int server_deaths() const { return server_sigkills + server_self_kills; }
@@ -144,6 +147,7 @@ using Leases = std::set<std::pair<std::string, int>>;
 
 // A worker killed or partitioned, until its leases are released (and it is restarted or healed).
 struct LostWorker {
+  std::string id;  // its worker id
   Clock::time_point since;
   Leases leases;
   bool timed = false;         // its release has been recorded
@@ -195,6 +199,7 @@ class ChaosFarm : public FarmFixture {
     std::vector<std::string> env;
     if (kill_after_steps > 0) env.push_back("ENAVI_TEST_KILL_AFTER_SQLITE_STEPS=" + std::to_string(kill_after_steps));
     server_log_ = dir_ / ("server-" + run + ".log");
+    Note("server start " + run + (kill_after_steps > 0 ? " armed: " + std::to_string(kill_after_steps) + " steps" : ""));
     worker::ChildProcess& server = Start("server", argv, env, "server-" + run);
     const bool up = Eventually([&] { return fs::exists(ready) || server.Poll().has_value(); }, 30s);
     if (!up) ADD_FAILURE() << "server start " << run << " did not serve within 30 s";
@@ -208,6 +213,7 @@ class ChaosFarm : public FarmFixture {
   // After the server died (killed, or by its hook): check the database, note how it died.
   void ServerDied(bool self_kill) {
     Process("server").Wait(10s);
+    Note(self_kill ? "server killed itself" : "server SIGKILLed");
     if (self_kill) {
       ++tally_.server_self_kills;
       if (ReadText(server_log_).find("SIGKILL at step") == std::string::npos) {
@@ -229,9 +235,25 @@ class ChaosFarm : public FarmFixture {
     client_.reset();
   }
 
-  void StartChaosWorker(const std::string& name, const ChaosPlan& plan) {
-    ++tally_.worker_starts;
-    StartWorker(name, plan.slots, /*episode_s=*/0.05, FakeEpisode().string());
+  // Starts the worker of host `node`: again under its id, on its spool (so it re-sends what it
+  // had not got acknowledged), or `fresh`: a new worker with a new id and an empty spool, as
+  // when a machine is replaced.
+  void StartChaosWorker(const std::string& node, const ChaosPlan& plan, bool fresh) {
+    std::string& id = worker_ids_[node];
+    const std::string run = std::to_string(++tally_.worker_starts);
+    if (id.empty()) id = node;
+    if (fresh) {
+      id = node + "-" + run;
+      ++tally_.fresh_workers;
+    }
+    std::vector<std::string> argv = {EnaviBinary().string(), "worker", "--id", id, "--slots",
+                                     std::to_string(plan.slots), "--domain", std::to_string(domain_),
+                                     "--partition", partition_, "--spool", (dir_ / id / "spool").string(),
+                                     "--work-dir", (dir_ / id / "work").string(), "--episode-cmd",
+                                     FakeEpisode().string()};
+    for (const auto& a : BusArgs(node)) argv.push_back(a);
+    Note("worker start " + id + " on " + node);
+    Start(node, argv, {"FAKE_EPISODE_LOG=" + (dir_ / "episodes.txt").string()}, id + "-" + run);
   }
 
   // The leases `worker` holds, from the episodes list.
@@ -254,6 +276,19 @@ class ChaosFarm : public FarmFixture {
     return true;
   }
 
+  // One line of the run's timeline (chaos-events.log in the test directory), wall-clock stamped
+  // like the farm's own logs, so a failure can be read against them.
+  void Note(const std::string& text) {
+    const auto now = std::chrono::system_clock::now();
+    const std::time_t t = std::chrono::system_clock::to_time_t(now);
+    const int ms = static_cast<int>(
+        std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000);
+    char stamp[32];
+    std::strftime(stamp, sizeof stamp, "%H:%M:%S", std::gmtime(&t));
+    std::ofstream(dir_ / "chaos-events.log", std::ios::app)
+        << "[" << stamp << "." << std::setw(3) << std::setfill('0') << ms << "] " << text << "\n";
+  }
+
   void Run(const ChaosPlan& plan);
   void Verify(const ChaosPlan& plan, const std::string& job);
   void PrintSummary(const ChaosPlan& plan) const;
@@ -263,7 +298,8 @@ class ChaosFarm : public FarmFixture {
   std::unique_ptr<api::FarmClient> client_;
   fs::path server_log_;
   std::set<std::string> cgroups_before_;
-  std::map<std::string, LostWorker> lost_;  // killed (or partitioned) workers
+  std::map<std::string, LostWorker> lost_;  // by host: killed (or partitioned) workers
+  std::map<std::string, std::string> worker_ids_;  // host -> id of its current worker
   ChaosTally tally_;
 };
 
@@ -286,7 +322,7 @@ void ChaosFarm::Run(const ChaosPlan& plan) {
   netns_ = std::make_unique<NetnsGuard>(net_->Namespace("server"));  // the HTTP API is there
 
   ASSERT_TRUE(StartChaosServer(plan, 0));
-  for (const auto& w : workers) StartChaosWorker(w, plan);
+  for (const auto& w : workers) StartChaosWorker(w, plan, /*fresh=*/false);
   ASSERT_TRUE(Eventually([&] { return client_->Workers().size() == workers.size(); }, 60s))
       << "workers in their namespaces were not discovered";
   const std::string spec = "name: chaos\nboards: [tx2, pi4b]\nscenarios: [s1]\nmethods: [baseline, enavi]\n"
@@ -338,7 +374,8 @@ void ChaosFarm::Run(const ChaosPlan& plan) {
       progress = client_->Status(job);
       episodes = client_->Episodes(job);
       seen = client_->Workers();
-    } catch (const std::exception&) {
+    } catch (const std::exception& e) {
+      Note(std::string("poll failed: ") + e.what());
       continue;  // busy or dying: look again
     }
 
@@ -346,14 +383,17 @@ void ChaosFarm::Run(const ChaosPlan& plan) {
     for (auto it = lost_.begin(); it != lost_.end();) {
       const std::string& name = it->first;
       LostWorker& lost = it->second;
-      if (!lost.timed && (Released(episodes, name, lost.leases) || now - lost.since > lease + 5s)) {
+      if (!lost.timed && (Released(episodes, lost.id, lost.leases) || now - lost.since > lease + 5s)) {
         lost.timed = true;
+        const double delay_s = std::chrono::duration<double>(now - lost.since).count();
+        Note(lost.id + ": " + std::to_string(lost.leases.size()) + " leases released after " +
+             std::to_string(delay_s) + " s" + (lost.server_died ? " (server died meanwhile)" : ""));
         if (lost.leases.empty()) {
           // Nothing held: no release to time.
         } else if (lost.server_died) {
           ++tally_.releases_not_timed;
         } else {
-          tally_.release_delays_s.push_back(std::chrono::duration<double>(now - lost.since).count());
+          tally_.release_delays_s.push_back(delay_s);
         }
         const bool partition = partitioned && *partitioned == name;
         const auto earliest = partition ? lost.since + lease + 2s : now;
@@ -362,10 +402,11 @@ void ChaosFarm::Run(const ChaosPlan& plan) {
       }
       if (lost.timed && now >= lost.resume_at) {
         if (partitioned && *partitioned == name) {
+          Note("heal " + name);
           net_->Heal(name);  // its late result must not become a second copy
           partitioned.reset();
         } else {
-          StartChaosWorker(name, plan);
+          StartChaosWorker(name, plan, /*fresh=*/coin(0.3));
         }
         it = lost_.erase(it);
       } else {
@@ -388,13 +429,14 @@ void ChaosFarm::Run(const ChaosPlan& plan) {
       if (other == actions.end()) continue;
       std::iter_swap(actions.begin() + next, other);
     }
+    // Hosts whose current worker is alive, and what it is doing.
     std::vector<std::string> live, acking, running;
     for (const auto& w : seen) {
-      const std::string id = w["worker_id"];
-      if (!w["alive"].get<bool>() || lost_.count(id)) continue;
-      live.push_back(id);
-      if (w["unacked_results"].get<int>() > 0) acking.push_back(id);
-      if (!w["running"].empty()) running.push_back(id);
+      const std::string id = w["worker_id"], node = id.substr(0, id.find('-'));
+      if (!w["alive"].get<bool>() || worker_ids_[node] != id || lost_.count(node)) continue;
+      live.push_back(node);
+      if (w["unacked_results"].get<int>() > 0) acking.push_back(node);
+      if (!w["running"].empty()) running.push_back(node);
     }
     auto pick = [&](const std::vector<std::string>& from) {
       return from[std::uniform_int_distribution<std::size_t>(0, from.size() - 1)(rng)];
@@ -415,14 +457,16 @@ void ChaosFarm::Run(const ChaosPlan& plan) {
       }
       Process(victim).Signal(SIGKILL);
       Process(victim).Wait(10s);
-      lost_[victim] = LostWorker{Clock::now(), LeasesOf(episodes, victim)};
+      Note("worker SIGKILLed: " + worker_ids_[victim]);
+      lost_[victim] = LostWorker{worker_ids_[victim], Clock::now(), LeasesOf(episodes, worker_ids_[victim])};
       ++tally_.worker_kills;
     } else if (action == 'p') {
       if (partitioned || running.empty()) continue;
       const std::string victim = pick(running);
       net_->Partition(victim);
+      Note("partition " + victim + " (" + worker_ids_[victim] + ")");
       partitioned = victim;
-      lost_[victim] = LostWorker{Clock::now(), LeasesOf(episodes, victim)};
+      lost_[victim] = LostWorker{worker_ids_[victim], Clock::now(), LeasesOf(episodes, worker_ids_[victim])};
       ++tally_.partitions;
     } else {
       Process("server").Signal(SIGKILL);
@@ -513,6 +557,16 @@ void ChaosFarm::Verify(const ChaosPlan& plan, const std::string& job) {
   netns_.reset();
   net_.reset();
   EXPECT_TRUE(ChaosNet::ListNamespaces(prefix).empty()) << "stray namespaces " << prefix << "*";
+  // Lost workers are normally seen gone through DDS liveliness (4 s); silence for the 6 s worker
+  // timeout means the server heard nothing for that long (a partition, or a stalled loop).
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    if (entry.path().filename().string().rfind("server-", 0) != 0) continue;
+    const std::string text = ReadText(entry.path());
+    for (std::size_t at = text.find("(no heartbeat)"); at != std::string::npos;
+         at = text.find("(no heartbeat)", at + 1)) {
+      ++tally_.gone_for_silence;
+    }
+  }
   PrintSummary(plan);
 }
 
@@ -537,7 +591,9 @@ void ChaosFarm::PrintSummary(const ChaosPlan& plan) const {
   std::printf("  %-44s %zu timed, worst %.2f s (limit %.1f s); %d not timed (server died meanwhile)\n",
               "lease releases of lost workers", t.release_delays_s.size(), t.worst_release_s(),
               plan.lease_s + 1, t.releases_not_timed);
-  std::printf("  %-44s %d server, %d worker\n", "process starts", t.server_starts, t.worker_starts);
+  std::printf("  %-44s %d\n", "workers declared gone for 6 s of silence", t.gone_for_silence);
+  std::printf("  %-44s %d server, %d worker (%d of them new workers on an empty spool)\n",
+              "process starts", t.server_starts, t.worker_starts, t.fresh_workers);
   std::printf("  %-44s %.1f s\n", "wall time", t.wall_s);
   std::fflush(stdout);
 }
