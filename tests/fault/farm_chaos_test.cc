@@ -585,8 +585,10 @@ void ChaosFarm::PrintSummary(const ChaosPlan& plan) const {
   std::printf("  %-44s %d SIGKILL + %d self-kills at a SQLite step (%d inside a transaction)\n",
               "server kills", t.server_sigkills, t.server_self_kills, t.self_kills_in_transaction);
   std::printf("  %-44s %d (each longer than the %.0f s lease)\n", "partitions", t.partitions, plan.lease_s);
-  std::printf("  %-44s %d %% loss, %d ms jitter on every worker link: %s\n", "link faults",
-              plan.loss_percent, plan.jitter_ms, t.link_mode.c_str());
+  const bool netem = t.link_mode == "netem";
+  std::printf("  %-44s %d %% loss, %s on every worker link: %s\n", "link faults", plan.loss_percent,
+              netem ? (std::to_string(plan.jitter_ms) + " ms jitter").c_str() : "no jitter",
+              t.link_mode.c_str());
   std::printf("  %-44s %d, %d failed\n", "integrity checks", t.integrity_checks, t.integrity_failures);
   std::printf("  %-44s %zu timed, worst %.2f s (limit %.1f s); %d not timed (server died meanwhile)\n",
               "lease releases of lost workers", t.release_delays_s.size(), t.worst_release_s(),
