@@ -29,6 +29,14 @@ void FarmServer::Start() {
   HandleReleased(store_->ExpireLeases(NowMs()), NowMs());
   // Workers need the policies of every running collection job.
   for (const auto& [hash, json] : store_->ActivePolicies()) bus_->Publish(api::PolicyBlob{hash, json});
+  // An assignment lives in the DDS writer of the server that made it: one its worker had not yet
+  // received when that server died was lost, and the worker would neither run nor renew it (the
+  // lease ran out, an attempt spent, its slot idle meanwhile). Re-send every lease still held; a
+  // worker ignores the replay of one it already runs or has finished.
+  for (const Lease& l : store_->HeldLeases()) {
+    bus_->Publish(api::Assignment{l.worker, l.episode_id, l.attempt, l.job_id, l.deadline_ms,
+                                  options_.lease.count(), l.spec, CollectionHash(l.job_id)});
+  }
   stop_ = false;
   thread_ = std::thread([this] { Loop(); });
 }

@@ -33,6 +33,11 @@ struct FakeWorker {
   void Pump() {
     auto in = bus.Wait(20ms);
     for (auto& a : in.assignments) {
+      // Like the real worker: the replay of an attempt it already has is ignored.
+      const bool known = std::any_of(assignments.begin(), assignments.end(), [&](const api::Assignment& b) {
+        return b.episode_id == a.episode_id && b.attempt == a.attempt;
+      });
+      if (known) continue;
       running.push_back(a);
       assignments.push_back(std::move(a));
     }
@@ -260,6 +265,28 @@ TEST_F(FarmServerTest, ARestartedServerKeepsLeasesItsWorkersStillRun) {
   ASSERT_TRUE(Drive(w, [&] { return store_->Progress(job, NowMs())->state == "done"; }));
   EXPECT_EQ(store_->Results(job).size(), 2u);
   EXPECT_EQ(store_->Progress(job, NowMs())->failed, 0);
+}
+
+// The server died before its worker received an assignment: the restarted server re-sends it,
+// so the lease is run under its first attempt instead of running out unrun.
+TEST_F(FarmServerTest, ARestartedServerResendsAnAssignmentItsWorkerNeverReceived) {
+  options_.lease = 5000ms;
+  StartServer();
+  FakeWorker w(options_.bus, "w1", 1);
+  const std::string job = SubmitEpisodes(1);
+  ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }));
+  const api::Assignment lost = w.assignments[0];
+  w.assignments.clear();  // it never arrived
+  w.running.clear();
+  server_.reset();
+  StartServer();
+  ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }, 3000ms))
+      << "the held lease was not re-sent";
+  EXPECT_EQ(w.assignments[0].episode_id, lost.episode_id);
+  EXPECT_EQ(w.assignments[0].attempt, 1) << "no attempt spent";
+  w.Finish(w.assignments[0]);
+  ASSERT_TRUE(Drive(w, [&] { return store_->Progress(job, NowMs())->state == "done"; }));
+  EXPECT_EQ(store_->Episodes(job)[0].attempts, 1);
 }
 
 }  // namespace
