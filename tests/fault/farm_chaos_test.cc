@@ -350,7 +350,7 @@ void ChaosFarm::Run(const ChaosPlan& plan) {
   // Starts the server after a death; the restart is armed while self-kills are still planned.
   auto restart_server = [&] {
     while (Clock::now() < deadline) {
-      armed = tally_.server_self_kills < self_kills_planned && coin(0.7);
+      armed = tally_.server_self_kills < self_kills_planned;
       const long steps = std::uniform_int_distribution<long>(10, 150)(rng);
       std::this_thread::sleep_for(std::chrono::milliseconds(std::uniform_int_distribution<int>(0, 1000)(rng)));
       if (StartChaosServer(plan, armed ? steps : 0)) return;
@@ -415,7 +415,8 @@ void ChaosFarm::Run(const ChaosPlan& plan) {
     }
 
     const bool all_done = progress.terminal();
-    if (next == actions.size() && lost_.empty() && all_done) {
+    if (next == actions.size() && lost_.empty() && all_done &&
+        tally_.server_self_kills == self_kills_planned) {
       finished = true;
       break;
     }
@@ -529,6 +530,21 @@ void ChaosFarm::Verify(const ChaosPlan& plan, const std::string& job) {
   EXPECT_EQ(tally_.over_attempts, 0) << "attempts above --max-attempts " << plan.max_attempts;
   EXPECT_EQ(p.done, tally_.done);
   EXPECT_EQ(p.failed, tally_.failed);
+
+  // Every result the running workers hold was acknowledged in the end, the late ones of healed
+  // partitions included: their spools empty out (re-sends are bounded by the worker's backoff).
+  auto spooled = [&] {
+    int n = 0;
+    for (const auto& [node, id] : worker_ids_) {
+      std::error_code ec;
+      for (auto it = fs::directory_iterator(dir_ / id / "spool", ec); !ec && it != fs::directory_iterator(); ++it) {
+        n += it->path().string().find(".result.json") != std::string::npos ? 1 : 0;
+      }
+    }
+    return n;
+  };
+  EXPECT_TRUE(Eventually([&] { return spooled() == 0; }, 30s))
+      << spooled() << " results still unacknowledged in the running workers' spools";
 
   // The plan was carried out.
   EXPECT_EQ(tally_.worker_kills, plan.worker_kills);
