@@ -62,7 +62,17 @@ std::string CycloneConfigXml(const DdsNetwork& network) {
   x << "<Peers>";
   for (const auto& p : peers) x << "<Peer address=\"" << p << "\"/>";
   x << "</Peers>";
+  // A dead or unreachable peer stays matched until its participant lease ends (Cyclone's
+  // default: 10 s); reliable writers keep every sample it has not acknowledged until then.
+  x << "<LeaseDuration>" << kParticipantLeaseS << "s</LeaseDuration>";
   x << "</Discovery>";
+  // Those unacknowledged samples count against the writer's history-cache high-water mark, and a
+  // writer above it blocks in dds_write (Cyclone's default: adaptive, from 30 kB up to 500 kB).
+  // On lossy links a killed worker then froze the server's loop (and a killed server every
+  // worker's) for the whole lease: no heartbeats handled, healthy workers declared gone, their
+  // leases re-queued. A fixed, generous mark keeps writes from blocking while a lost peer ages out.
+  x << "<Internal><Watermarks><WhcHigh>" << kWhcHighBytes / 1024
+    << "kB</WhcHigh><WhcAdaptive>false</WhcAdaptive></Watermarks></Internal>";
   if (!network.trace_file.empty()) {
     if (network.trace_file.find_first_of("<>&\"'") != std::string::npos) {
       throw std::invalid_argument("trace_file: '" + network.trace_file +

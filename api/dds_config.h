@@ -2,6 +2,7 @@
 // Cyclone DDS configuration for the farm: one private loopback farm on a host, or many hosts
 // that find each other through a peer list (no multicast assumed). docs/farm.md shows the XML.
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,14 @@ struct DdsNetwork {
   /// Optional Cyclone trace file (Tracing/OutputFile with verbosity "config"); empty: none.
   std::string trace_file;
 };
+
+/// Participant lease: how long a silent peer (killed, or cut off) stays matched. Just above the
+/// farm's 4 s writer liveliness (BusOptions::liveliness_lease), which detects lost workers first.
+inline constexpr int kParticipantLeaseS = 5;
+/// Writer history-cache high-water mark: room for every sample a lost peer leaves
+/// unacknowledged during its lease (thousands of results, assignments and acks), so no write
+/// blocks on it.
+inline constexpr std::size_t kWhcHighBytes = std::size_t{16} << 20;
 
 /// Cyclone DDS XML for `network`. Throws std::invalid_argument naming the field when a peer or
 /// interface holds characters that cannot appear in a host name or address.

@@ -14,7 +14,7 @@ packages=(
   libassimp-dev libsdformat-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-dev pybind11-dev python3-numpy python3-torch
-  iproute2 procps util-linux
+  iproute2 procps util-linux nftables
   munge slurmctld slurmd slurm-client python3-jsonschema python3-yaml
   chromium chromium-driver python3-selenium libxml2-utils
 )

@@ -25,6 +25,8 @@ struct ServeFlags {
   std::vector<std::string> world_roots;
   int max_attempts = 3;
   double lease_s = 15;
+  server::HttpOptions limits;                 // the HTTP limits' defaults
+  server::FarmServerOptions result_limits;    // the result and rollout size limits' defaults
   std::string ready_file;
   std::vector<std::string> unchecked_override_prefixes;
   bool verbose = false;
@@ -44,9 +46,11 @@ void RunServe(const ServeFlags& f) {
   server::FarmServerOptions options;
   options.bus = ResolveBus(f.bus);
   options.lease = std::chrono::milliseconds(static_cast<std::int64_t>(f.lease_s * 1000));
+  options.max_result_bytes = f.result_limits.max_result_bytes;
+  options.max_rollout_bytes = f.result_limits.max_rollout_bytes;
   server::FarmServer farm(&store, options);
 
-  server::HttpOptions http;
+  server::HttpOptions http = f.limits;
   http.host = host;
   http.port = port;
   http.token = f.token;
@@ -87,6 +91,33 @@ void RegisterServeCommand(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--lease", f->lease_s, "lease length in seconds (renewed by worker heartbeats)")
       ->check(CLI::Range(2.0, 3600.0))
+      ->capture_default_str();
+  // Limits that protect the server (docs/farm.md, "Limits").
+  sub->add_option("--max-body-bytes", f->limits.max_body_bytes,
+                  "largest HTTP request body (job specs); larger: HTTP 413")
+      ->check(CLI::Range(std::size_t{1} << 10, std::size_t{1} << 30))
+      ->capture_default_str();
+  sub->add_option("--max-policy-bytes", f->limits.max_policy_bytes,
+                  "largest policy upload (POST /api/policies); larger: HTTP 413")
+      ->check(CLI::Range(std::size_t{1} << 10, std::size_t{1} << 30))
+      ->capture_default_str();
+  sub->add_option("--max-job-episodes", f->limits.max_job_episodes,
+                  "most episodes one job may have; more: HTTP 413")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1000000}))
+      ->capture_default_str();
+  sub->add_option("--max-jobs-per-minute", f->limits.max_jobs_per_minute,
+                  "job submissions per client address and minute (0: no limit); more: HTTP 429")
+      ->check(CLI::Range(0, 1000000))
+      ->capture_default_str();
+  sub->add_option("--max-result-bytes", f->result_limits.max_result_bytes,
+                  "largest episode result from a worker (series, events, error); larger: refused, "
+                  "logged, the attempt fails")
+      ->check(CLI::Range(std::size_t{1} << 10, std::size_t{1} << 30))
+      ->capture_default_str();
+  sub->add_option("--max-rollout-bytes", f->result_limits.max_rollout_bytes,
+                  "largest rollout from a worker (at most the bus's one-sample limit); larger: "
+                  "refused, logged, the attempt fails")
+      ->check(CLI::Range(std::size_t{1} << 10, api::kMaxRolloutBytes))
       ->capture_default_str();
   sub->add_option("--ready-file", f->ready_file, "write the HTTP URL here once serving");
   sub->add_option("--unchecked-overrides", f->unchecked_override_prefixes,

@@ -24,9 +24,6 @@
 namespace enavi::server {
 namespace {
 
-constexpr std::size_t kMaxPolicyBytes = 64u << 20;
-
-
 void Reply(httplib::Response& res, int status, const nlohmann::json& body) {
   res.status = status;
   res.set_content(body.dump(), "application/json");
@@ -34,6 +31,12 @@ void Reply(httplib::Response& res, int status, const nlohmann::json& body) {
 
 void Error(httplib::Response& res, int status, const std::string& message) {
   Reply(res, status, {{"error", message}});
+}
+
+// A refusal by one of the server's limits names it, so a client can tell which one to raise.
+void LimitError(httplib::Response& res, int status, const std::string& limit,
+                const std::string& message) {
+  Reply(res, status, {{"error", message + " (enavi serve --" + limit + ")"}, {"limit", limit}});
 }
 
 // Constant-time comparison: the token check must not leak how much of a guess was right.
@@ -166,6 +169,22 @@ AccessDecision CheckAccess(const HttpOptions& options, const AccessRequest& r) {
   return d;
 }
 
+bool RateLimiter::Allow(const std::string& key, std::chrono::steady_clock::time_point now) {
+  if (limit_ <= 0) return true;
+  std::lock_guard lock(mutex_);
+  // Bounded memory under many clients: drop those with nothing left in their window.
+  if (events_.size() > 1024) {
+    for (auto it = events_.begin(); it != events_.end();) {
+      it = it->second.back() <= now - window_ ? events_.erase(it) : std::next(it);
+    }
+  }
+  auto& stamps = events_[key];
+  while (!stamps.empty() && stamps.front() <= now - window_) stamps.pop_front();
+  if (stamps.size() >= static_cast<std::size_t>(limit_)) return false;
+  stamps.push_back(now);
+  return true;
+}
+
 bool IsLoopbackHost(const std::string& host) {
   if (host == "localhost" || host == "::1") return true;
   in_addr addr{};
@@ -182,12 +201,26 @@ HttpApi::HttpApi(Store* store, HttpOptions options) : HttpApi(store, nullptr, st
 
 HttpApi::HttpApi(Store* store, FarmServer* farm, HttpOptions options)
     : store_(store), farm_(farm), options_(std::move(options)),
-      server_(std::make_unique<httplib::Server>()) {
+      server_(std::make_unique<httplib::Server>()),
+      submissions_(options_.max_jobs_per_minute, std::chrono::minutes(1)) {
   if (!IsLoopbackHost(options_.host) && options_.token.empty()) {
     throw std::invalid_argument("--token: required when --http binds a non-loopback address ('" +
                                 options_.host + "')");
   }
+  // httplib refuses a declared Content-Length above this before reading the body; the POST
+  // handler applies the per-route limit to what was read.
   server_->set_payload_max_length(std::max(options_.max_body_bytes, options_.max_policy_bytes));
+  // Make httplib's own refusals (an empty 413) as explicit as ours.
+  using Handled = httplib::Server::HandlerResponse;
+  server_->set_error_handler(httplib::Server::HandlerWithResponse(
+      [this](const httplib::Request&, httplib::Response& res) {
+    if (res.status != 413 || !res.body.empty()) return Handled::Unhandled;
+    LimitError(res, 413, "max-body-bytes",
+               "request body above the server's limit of " +
+                   std::to_string(std::max(options_.max_body_bytes, options_.max_policy_bytes)) +
+                   " bytes");
+    return Handled::Handled;
+  }));
   Routes();
 }
 
@@ -269,22 +302,40 @@ void HttpApi::Routes() {
            {"stats",
             {{"results_received", st.results_received}, {"results_stored", st.results_stored},
              {"duplicates", st.duplicates}, {"assignments", st.assignments},
-             {"leases_lost", st.leases_lost}}}});
+             {"leases_lost", st.leases_lost}, {"oversized", st.oversized}}}});
   });
 
   s.Post(".*", [this, &store](const httplib::Request& req, httplib::Response& res) {
     if (!farm_) return Error(res, 405, "read-only dashboard: this server accepts no changes");
     // Job specs are small; a policy (the shipped one is 1.8 MB of JSON) has a limit of its own.
-    const std::size_t limit = req.path == "/api/policies" ? kMaxPolicyBytes : options_.max_body_bytes;
+    const bool policy = req.path == "/api/policies";
+    const std::size_t limit = policy ? options_.max_policy_bytes : options_.max_body_bytes;
     if (req.body.size() > limit) {
-      return Error(res, 413, "request body of " + std::to_string(req.body.size()) + " bytes, above " +
-                                 std::to_string(limit));
+      return LimitError(res, 413, policy ? "max-policy-bytes" : "max-body-bytes",
+                        "request body of " + std::to_string(req.body.size()) +
+                            " bytes, above the server's limit of " + std::to_string(limit));
     }
     if (req.path == "/api/jobs") {
       const std::string file = req.has_header("X-Enavi-File") ? req.get_header_value("X-Enavi-File")
                                                               : std::string("job.yaml");
-      // Validation failures are bad input: 400 with the FILE:LINE: field: reason message.
-      const api::JobSpec job = api::ParseJobSpec(req.body, file, options_.job_spec);
+      // One client must not flood the store with jobs. Clients are told apart by address: a
+      // farm has one token, shared by all its clients, and an unchecked header could be varied.
+      if (!submissions_.Allow(req.remote_addr, std::chrono::steady_clock::now())) {
+        return LimitError(res, 429, "max-jobs-per-minute",
+                          "more than " + std::to_string(options_.max_jobs_per_minute) +
+                              " jobs in one minute from this client; try again later");
+      }
+      // Validation failures are bad input: 400 with the FILE:LINE: field: reason message. The
+      // parser's own cap only bounds the expansion; this server's limit is checked below.
+      api::JobSpecOptions spec_options = options_.job_spec;
+      spec_options.max_episodes = std::max(spec_options.max_episodes, options_.max_job_episodes);
+      const api::JobSpec job = api::ParseJobSpec(req.body, file, spec_options);
+      if (job.MatrixSize() > options_.max_job_episodes) {
+        return LimitError(res, 413, "max-job-episodes",
+                          file + ": " + std::to_string(job.MatrixSize()) +
+                              " episodes, above the server's limit of " +
+                              std::to_string(options_.max_job_episodes) + " per job");
+      }
       const std::string id = farm_->Submit(job, req.body);
       const auto progress = store.Progress(id, NowMs());
       return Reply(res, 201, {{"job_id", id}, {"name", job.name}, {"episodes", progress ? progress->total : 0}});

@@ -5,7 +5,11 @@
 // state-changing request needs it wherever the server is bound. Without a farm (a read-only
 // store: `enavi dashboard --db FILE`) it serves the read routes only.
 
+#include <chrono>
+#include <deque>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 
@@ -24,8 +28,28 @@ struct HttpOptions {
   /// Required on state-changing requests when non-empty ("Authorization: Bearer TOKEN").
   std::string token;
   api::JobSpecOptions job_spec;  ///< allowed roots and limits for submitted jobs
-  std::size_t max_body_bytes = 1 << 20;     ///< job specs
+  // Limits that protect the server (docs/farm.md, "Limits"); each refusal is a JSON
+  // {"error": ..., "limit": NAME} with HTTP 413 (too large) or 429 (too often).
+  std::size_t max_body_bytes = 1 << 20;     ///< every request body but a policy (job specs)
   std::size_t max_policy_bytes = 32 << 20;  ///< POST /api/policies (a policy file is ~2 MB)
+  std::size_t max_job_episodes = api::kMaxJobEpisodes;  ///< episodes one job may expand to
+  int max_jobs_per_minute = 60;  ///< job submissions per client (peer address) and minute; 0: none
+};
+
+/// Sliding-window rate limit: at most `limit` events per `window` for each key (a client).
+/// Thread-safe; keeps memory bounded by forgetting keys whose window is empty.
+class RateLimiter {
+ public:
+  RateLimiter(int limit, std::chrono::steady_clock::duration window) : limit_(limit), window_(window) {}
+  /// Counts an event for `key` at `now` and returns true, or returns false (nothing counted)
+  /// when `key` already has `limit` events in the window ending at `now`. limit 0: always true.
+  bool Allow(const std::string& key, std::chrono::steady_clock::time_point now);
+
+ private:
+  int limit_;
+  std::chrono::steady_clock::duration window_;
+  std::mutex mutex_;
+  std::map<std::string, std::deque<std::chrono::steady_clock::time_point>> events_;
 };
 
 /// Cookie that carries the token for the dashboard's pages (set by opening /?token=TOKEN).
@@ -77,6 +101,7 @@ class HttpApi {
   FarmServer* farm_;  // null: read-only
   HttpOptions options_;
   std::unique_ptr<httplib::Server> server_;
+  RateLimiter submissions_;
   std::thread thread_;
   int port_ = 0;
 };

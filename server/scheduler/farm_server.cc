@@ -29,6 +29,14 @@ void FarmServer::Start() {
   HandleReleased(store_->ExpireLeases(NowMs()), NowMs());
   // Workers need the policies of every running collection job.
   for (const auto& [hash, json] : store_->ActivePolicies()) bus_->Publish(api::PolicyBlob{hash, json});
+  // An assignment lives in the DDS writer of the server that made it: one its worker had not yet
+  // received when that server died was lost, and the worker would neither run nor renew it (the
+  // lease ran out, an attempt spent, its slot idle meanwhile). Re-send every lease still held; a
+  // worker ignores the replay of one it already runs or has finished.
+  for (const Lease& l : store_->HeldLeases()) {
+    bus_->Publish(api::Assignment{l.worker, l.episode_id, l.attempt, l.job_id, l.deadline_ms,
+                                  options_.lease.count(), l.spec, CollectionHash(l.job_id)});
+  }
   stop_ = false;
   thread_ = std::thread([this] { Loop(); });
 }
@@ -235,11 +243,43 @@ std::string FarmServer::CollectionHash(const std::string& job_id) {
   return collect_hash_[job_id] = c ? c->policy_hash : std::string();
 }
 
+std::size_t ResultPayloadBytes(const api::ResultMessage& m) {
+  const api::TimeSeries& s = m.result.series;
+  std::size_t doubles = s.t.size() + 3 * s.position.size() + 3 * s.velocity.size() + s.eci.size() +
+                        s.f_per.size() + s.f_col.size() + s.f_dif.size() + s.res.size() +
+                        s.utilisation.size();
+  std::size_t bytes = doubles * sizeof(double) + m.error.size();
+  for (const auto& e : m.result.events) bytes += sizeof(double) + e.kind.size() + e.detail.size();
+  return bytes;
+}
+
 void FarmServer::HandleResults(const std::vector<api::ResultMessage>& input,
                                std::int64_t now_ms) {
-  // A rollout that does not decode is the episode's error, not data.
   std::vector<api::ResultMessage> results = input;
   for (api::ResultMessage& m : results) {
+    // Above a size limit: the attempt's error, nothing of it stored.
+    const std::size_t result_bytes = ResultPayloadBytes(m);
+    std::string refused;
+    if (result_bytes > options_.max_result_bytes) {
+      refused = "result of " + std::to_string(result_bytes) + " bytes, above the server's limit of " +
+                std::to_string(options_.max_result_bytes) + " (enavi serve --max-result-bytes)";
+    } else if (m.rollout.size() > options_.max_rollout_bytes) {
+      refused = "rollout of " + std::to_string(m.rollout.size()) +
+                " bytes, above the server's limit of " + std::to_string(options_.max_rollout_bytes) +
+                " (enavi serve --max-rollout-bytes)";
+    }
+    if (!refused.empty()) {
+      spdlog::warn("refused {} attempt {} from worker {}: {}", m.episode_id, m.attempt, m.worker_id,
+                   refused);
+      m.status = api::ResultStatus::kError;
+      m.error = refused;
+      m.result = api::EpisodeResult{};
+      m.rollout.clear();
+      std::lock_guard lock(mutex_);
+      ++stats_.oversized;
+      continue;
+    }
+    // A rollout that does not decode is the episode's error, not data.
     if (m.rollout.empty()) continue;
     try {
       navstack::rl::DecodeRollout(m.rollout, "rollout of " + m.episode_id);

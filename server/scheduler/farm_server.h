@@ -32,7 +32,14 @@ struct FarmServerOptions {
   std::chrono::milliseconds tick{200};
   /// Results ingested per SQLite transaction at most.
   std::size_t ingest_batch = 512;
+  /// A result (time series, events, error text: ResultPayloadBytes) or rollout above these is
+  /// refused: logged with worker and episode, not stored, and counted as a failed attempt.
+  std::size_t max_result_bytes = std::size_t{16} << 20;
+  std::size_t max_rollout_bytes = api::kMaxRolloutBytes;
 };
+
+/// The bytes a result carries beyond its fixed summary: its series samples, events and error.
+std::size_t ResultPayloadBytes(const api::ResultMessage& m);
 
 /// What the server knows about one worker.
 struct WorkerView {
@@ -48,6 +55,7 @@ struct FarmServerStats {
   std::uint64_t duplicates = 0;
   std::uint64_t assignments = 0;
   std::uint64_t leases_lost = 0;
+  std::uint64_t oversized = 0;  ///< results or rollouts refused by a size limit
 };
 
 class FarmServer {

@@ -1,9 +1,35 @@
 #include "server/store/sqlite.h"
 
+#include <signal.h>
 #include <sqlite3.h>
+
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
 
 namespace enavi::server {
 namespace {
+
+// Test hook of the fault tests (tests/fault, docs/reliability.md): with
+// ENAVI_TEST_KILL_AFTER_SQLITE_STEPS=N the process SIGKILLs itself at its N-th SQLite step
+// (sqlite3_step or sqlite3_exec: a statement, a row, a COMMIT) inside a transaction, so the kill
+// lands in the middle of a store transition. Unset (the default): off.
+long KillAfterSteps() {
+  static const long n = [] {
+    const char* v = std::getenv("ENAVI_TEST_KILL_AFTER_SQLITE_STEPS");
+    return v != nullptr && *v != '\0' ? std::atol(v) : 0L;
+  }();
+  return n;
+}
+
+void CountStep(sqlite3* db) {
+  static std::atomic<long> steps{0};
+  if (KillAfterSteps() <= 0 || sqlite3_get_autocommit(db) || ++steps != KillAfterSteps()) return;
+  std::fprintf(stderr, "ENAVI_TEST_KILL_AFTER_SQLITE_STEPS: SIGKILL at step %ld inside a transaction\n",
+               steps.load());
+  std::fflush(stderr);
+  raise(SIGKILL);
+}
 
 [[noreturn]] void Fail(sqlite3* db, int rc, const std::string& what) {
   const char* msg = db != nullptr ? sqlite3_errmsg(db) : sqlite3_errstr(rc);
@@ -57,6 +83,7 @@ Statement& Statement::BindNull(int index) {
 }
 
 bool Statement::Step() {
+  CountStep(db_);
   const int rc = sqlite3_step(stmt_);
   if (rc == SQLITE_ROW) return true;
   if (rc == SQLITE_DONE) return false;
@@ -106,6 +133,7 @@ Database::~Database() {
 }
 
 void Database::Exec(const std::string& sql) {
+  CountStep(db_);
   char* err = nullptr;
   const int rc = sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &err);
   if (rc != SQLITE_OK) {

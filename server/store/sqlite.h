@@ -1,6 +1,8 @@
 #pragma once
 // A thin RAII layer over the SQLite C API for the store: a connection, cached prepared
 // statements and IMMEDIATE transactions. Errors throw StoreError naming the SQL.
+// Fault tests only: ENAVI_TEST_KILL_AFTER_SQLITE_STEPS=N makes the process SIGKILL itself at its
+// N-th step inside a transaction (docs/reliability.md); unset, nothing happens.
 
 #include <cstdint>
 #include <filesystem>

@@ -543,6 +543,7 @@ std::vector<Lease> Store::LeaseEpisodes(const std::string& worker_id, int count,
     l.episode_id = pending.Text(0);
     l.job_id = pending.Text(1);
     l.attempt = static_cast<int>(pending.Int(2)) + 1;
+    l.worker = worker_id;
     l.deadline_ms = deadline_ms;
     l.spec = nlohmann::json::parse(pending.Text(3)).get<api::EpisodeSpec>();
     leases.push_back(std::move(l));
@@ -633,6 +634,25 @@ std::vector<ReleasedLease> Store::ReleaseWhere(const std::string& where, const s
 std::vector<ReleasedLease> Store::ExpireLeases(std::int64_t now_ms) {
   std::lock_guard lock(mutex_);
   return ReleaseWhere("lease_deadline_ms < ?", "", now_ms, "lease expired", now_ms);
+}
+
+std::vector<Lease> Store::HeldLeases() {
+  std::lock_guard lock(mutex_);
+  std::vector<Lease> leases;
+  Statement& q = db_->Prepare(
+      "SELECT id, job_id, lease_owner, attempts, lease_deadline_ms, spec_json FROM episodes "
+      "WHERE state = 'leased'");
+  while (q.Step()) {
+    Lease l;
+    l.episode_id = q.Text(0);
+    l.job_id = q.Text(1);
+    l.worker = q.Text(2);
+    l.attempt = static_cast<int>(q.Int(3));
+    l.deadline_ms = q.Int(4);
+    l.spec = nlohmann::json::parse(q.Text(5)).get<api::EpisodeSpec>();
+    leases.push_back(std::move(l));
+  }
+  return leases;
 }
 
 std::vector<ReleasedLease> Store::ReleaseWorker(const std::string& worker_id,

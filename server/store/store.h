@@ -50,6 +50,7 @@ struct StoreOptions {
 struct Lease {
   std::string episode_id;
   std::string job_id;
+  std::string worker;  ///< the worker it is leased to
   int attempt = 0;
   std::int64_t deadline_ms = 0;
   api::EpisodeSpec spec;
@@ -146,6 +147,8 @@ class Store {
                   std::int64_t deadline_ms);
   /// Ends every lease whose deadline passed: back to pending, or failed when out of attempts.
   std::vector<ReleasedLease> ExpireLeases(std::int64_t now_ms);
+  /// Every lease held now, in no particular order.
+  std::vector<Lease> HeldLeases();
   /// Ends every lease held by a worker that is gone.
   std::vector<ReleasedLease> ReleaseWorker(const std::string& worker_id, const std::string& reason,
                                            std::int64_t now_ms);

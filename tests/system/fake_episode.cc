@@ -11,11 +11,15 @@
 //   fake.hang           / FAKE_EPISODE_HANG            never finish
 //   fake.garbage        / FAKE_EPISODE_GARBAGE         write a result file that is not JSON
 //   fake.series_len     / FAKE_EPISODE_SERIES_LEN      time series samples (default 50)
+//   fake.random_sleep_s / FAKE_EPISODE_RANDOM_SLEEP_S  sleep a further random [0, this) seconds
+//   fake.crash_percent  / FAKE_EPISODE_CRASH_PERCENT   abort() on this share of attempts
+// The random draws hash (episode id, attempt), so a re-run of an attempt behaves the same.
 // It appends "<episode id> <attempt>\n" to $FAKE_EPISODE_LOG (if set) when it starts.
 #include <unistd.h>
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -35,6 +39,13 @@ double Setting(const enavi::api::EpisodeSpec& spec, const char* key, const char*
   if (auto it = spec.overrides.find(key); it != spec.overrides.end()) return it->second;
   if (const char* v = std::getenv(env); v != nullptr && *v != '\0') return std::atof(v);
   return fallback;
+}
+
+// Uniform in [0, 1) from FNV-1a of `text`: stable across runs, machines and libraries.
+double Draw(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+  return static_cast<double>(h >> 11) / static_cast<double>(1ull << 53);
 }
 
 }  // namespace
@@ -63,7 +74,10 @@ int main(int argc, char** argv) {
     std::ofstream(log, std::ios::app) << (episode ? episode : "?") << " " << attempt << "\n";
   }
 
-  const double sleep_s = Setting(spec, "fake.sleep_s", "FAKE_EPISODE_SLEEP_S", 0.0);
+  const std::string draw_key = std::string(episode ? episode : "?") + "/" + std::to_string(attempt);
+  const double sleep_s = Setting(spec, "fake.sleep_s", "FAKE_EPISODE_SLEEP_S", 0.0) +
+                         Setting(spec, "fake.random_sleep_s", "FAKE_EPISODE_RANDOM_SLEEP_S", 0.0) *
+                             Draw(draw_key + "/sleep");
   if (Setting(spec, "fake.hang", "FAKE_EPISODE_HANG", 0.0) > 0) {
     while (true) std::this_thread::sleep_for(std::chrono::hours(1));
   }
@@ -76,7 +90,9 @@ int main(int argc, char** argv) {
       for (int i = 0; i < 10000; ++i) sink = sink + std::sqrt(static_cast<double>(i));
     }
   }
-  if (attempt <= Setting(spec, "fake.crash_attempts", "FAKE_EPISODE_CRASH_ATTEMPTS", 0.0)) {
+  const bool random_crash = 100 * Draw(draw_key + "/crash") <
+                            Setting(spec, "fake.crash_percent", "FAKE_EPISODE_CRASH_PERCENT", 0.0);
+  if (random_crash || attempt <= Setting(spec, "fake.crash_attempts", "FAKE_EPISODE_CRASH_ATTEMPTS", 0.0)) {
     std::cerr << "fake_episode: crashing on attempt " << attempt << " as asked\n";
     std::abort();
   }

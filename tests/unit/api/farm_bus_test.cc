@@ -265,6 +265,9 @@ TEST(CycloneConfigTest, LoopbackConfigUsesOnlyTheLoopbackInterface) {
   EXPECT_EQ(xml.find("ignored.example"), std::string::npos) << xml;
   EXPECT_NE(xml.find("<AllowMulticast>false</AllowMulticast>"), std::string::npos);
   EXPECT_NE(xml.find("<ParticipantIndex>auto</ParticipantIndex>"), std::string::npos);
+  // A lost peer ages out in 5 s, and no writer blocks on what it leaves unacknowledged.
+  EXPECT_NE(xml.find("<LeaseDuration>5s</LeaseDuration>"), std::string::npos) << xml;
+  EXPECT_NE(xml.find("<WhcHigh>16384kB</WhcHigh><WhcAdaptive>false</WhcAdaptive>"), std::string::npos) << xml;
 }
 
 TEST(CycloneConfigTest, PeersAndInterfaceAreWrittenAndLocalhostAdded) {

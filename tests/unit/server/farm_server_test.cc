@@ -33,6 +33,11 @@ struct FakeWorker {
   void Pump() {
     auto in = bus.Wait(20ms);
     for (auto& a : in.assignments) {
+      // Like the real worker: the replay of an attempt it already has is ignored.
+      const bool known = std::any_of(assignments.begin(), assignments.end(), [&](const api::Assignment& b) {
+        return b.episode_id == a.episode_id && b.attempt == a.attempt;
+      });
+      if (known) continue;
       running.push_back(a);
       assignments.push_back(std::move(a));
     }
@@ -136,6 +141,62 @@ TEST_F(FarmServerTest, ResultIsStoredBeforeItIsAcknowledgedAndDuplicatesAreAcked
   EXPECT_EQ(server_->stats().duplicates, 1u);
 }
 
+// A rogue or broken worker's oversized result: refused, logged, not stored, the attempt failed.
+TEST_F(FarmServerTest, ResultAboveTheSizeLimitIsRefusedAndNotStored) {
+  options_.max_result_bytes = 1024;
+  StartServer();
+  FakeWorker w(options_.bus, "w1", 1);
+  const std::string job = SubmitEpisodes(1);
+  ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }));
+  api::ResultMessage m;
+  m.episode_id = w.assignments[0].episode_id;
+  m.attempt = w.assignments[0].attempt;
+  m.worker_id = "w1";
+  m.job_id = job;
+  m.result.spec = w.assignments[0].spec;
+  m.result.series.t.assign(200, 0.5);  // 1600 bytes of samples
+  EXPECT_EQ(ResultPayloadBytes(m), 1600u);
+  w.running.clear();
+  w.bus.Publish(m);
+  ASSERT_TRUE(Drive(w, [&] { return !w.acks.empty(); }));
+  EXPECT_EQ(w.acks[0].status, api::AckStatus::kRecorded) << "the worker may forget it";
+  EXPECT_TRUE(store_->Results(job).empty()) << "an oversized result must not be stored";
+  const auto episodes = store_->Episodes(job);
+  ASSERT_EQ(episodes.size(), 1u);
+  EXPECT_NE(episodes[0].last_error.find("result of 1600 bytes, above the server's limit of 1024"),
+            std::string::npos)
+      << episodes[0].last_error;
+  EXPECT_EQ(server_->stats().oversized, 1u);
+}
+
+TEST_F(FarmServerTest, RolloutAboveTheSizeLimitIsRefusedAndNotStored) {
+  options_.max_rollout_bytes = 1024;
+  StartServer();
+  FakeWorker w(options_.bus, "w1", 1);
+  const std::string job = SubmitEpisodes(1);
+  ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }));
+  api::ResultMessage m;
+  m.episode_id = w.assignments[0].episode_id;
+  m.attempt = w.assignments[0].attempt;
+  m.worker_id = "w1";
+  m.job_id = job;
+  m.result.spec = w.assignments[0].spec;
+  m.policy_hash = std::string(64, 'a');
+  m.rollout = std::string(2000, 'r');
+  w.running.clear();
+  w.bus.Publish(m);
+  ASSERT_TRUE(Drive(w, [&] { return !w.acks.empty(); }));
+  EXPECT_EQ(w.acks[0].status, api::AckStatus::kRecorded);
+  EXPECT_TRUE(store_->Results(job).empty());
+  EXPECT_TRUE(store_->Rollouts(job).empty());
+  const auto episodes = store_->Episodes(job);
+  ASSERT_EQ(episodes.size(), 1u);
+  EXPECT_NE(episodes[0].last_error.find("rollout of 2000 bytes, above the server's limit of 1024"),
+            std::string::npos)
+      << episodes[0].last_error;
+  EXPECT_EQ(server_->stats().oversized, 1u);
+}
+
 TEST_F(FarmServerTest, VanishedWorkersEpisodeIsRunAgainElsewhere) {
   StartServer();
   auto w1 = std::make_unique<FakeWorker>(options_.bus, "w1", 1);
@@ -204,6 +265,28 @@ TEST_F(FarmServerTest, ARestartedServerKeepsLeasesItsWorkersStillRun) {
   ASSERT_TRUE(Drive(w, [&] { return store_->Progress(job, NowMs())->state == "done"; }));
   EXPECT_EQ(store_->Results(job).size(), 2u);
   EXPECT_EQ(store_->Progress(job, NowMs())->failed, 0);
+}
+
+// The server died before its worker received an assignment: the restarted server re-sends it,
+// so the lease is run under its first attempt instead of running out unrun.
+TEST_F(FarmServerTest, ARestartedServerResendsAnAssignmentItsWorkerNeverReceived) {
+  options_.lease = 5000ms;
+  StartServer();
+  FakeWorker w(options_.bus, "w1", 1);
+  const std::string job = SubmitEpisodes(1);
+  ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }));
+  const api::Assignment lost = w.assignments[0];
+  w.assignments.clear();  // it never arrived
+  w.running.clear();
+  server_.reset();
+  StartServer();
+  ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }, 3000ms))
+      << "the held lease was not re-sent";
+  EXPECT_EQ(w.assignments[0].episode_id, lost.episode_id);
+  EXPECT_EQ(w.assignments[0].attempt, 1) << "no attempt spent";
+  w.Finish(w.assignments[0]);
+  ASSERT_TRUE(Drive(w, [&] { return store_->Progress(job, NowMs())->state == "done"; }));
+  EXPECT_EQ(store_->Episodes(job)[0].attempts, 1);
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 #include <filesystem>
 
 #include <gtest/gtest.h>
+#include <httplib.h>
+#include <nlohmann/json.hpp>
 
 #include "api/client.h"
 #include "tests/unit/api/farm_test_util.h"
@@ -43,8 +45,7 @@ class HttpApiTest : public ::testing::Test {
     store_.reset();
     fs::remove_all(dir_);
   }
-  std::string Serve(const std::string& token = "") {
-    HttpOptions http;
+  std::string Serve(const std::string& token = "", HttpOptions http = {}) {
     http.token = token;
     http.job_spec.allowed_roots = {dir_};
     http.job_spec.catalog = sim::MethodCatalog();
@@ -131,6 +132,85 @@ TEST_F(HttpApiTest, NonLoopbackBindWithoutTokenIsRefused) {
   EXPECT_TRUE(IsLoopbackHost("localhost"));
   EXPECT_FALSE(IsLoopbackHost("10.0.0.1"));
   EXPECT_FALSE(IsLoopbackHost("0.0.0.0"));
+}
+
+// POSTs `body` to `path` of the server at `url`; returns status and parsed JSON body.
+std::pair<int, nlohmann::json> Post(const std::string& url, const std::string& path,
+                                    const std::string& body) {
+  httplib::Client client(url);
+  const auto res = client.Post(path, body, "application/yaml");
+  if (!res) return {-1, nullptr};
+  return {res->status, nlohmann::json::parse(res->body, nullptr, /*allow_exceptions=*/false)};
+}
+
+TEST_F(HttpApiTest, BodiesAboveTheLimitsAreRefusedWith413NamingTheLimit) {
+  HttpOptions limits;
+  limits.max_body_bytes = 2048;
+  limits.max_policy_bytes = 8192;
+  const std::string url = Serve("", limits);
+  // Above the job-spec limit, below httplib's cap (the larger of the two): the route refuses.
+  const std::string padded = std::string(kJob) + "# " + std::string(4000, 'x') + "\n";
+  auto [status, body] = Post(url, "/api/jobs", padded);
+  EXPECT_EQ(status, 413);
+  EXPECT_EQ(body["limit"], "max-body-bytes") << body.dump();
+  EXPECT_NE(body["error"].get<std::string>().find("limit of 2048"), std::string::npos) << body.dump();
+  // Above every limit: httplib refuses before reading, still with the JSON message.
+  std::tie(status, body) = Post(url, "/api/policies", std::string(10000, '{'));
+  EXPECT_EQ(status, 413);
+  EXPECT_EQ(body["limit"], "max-body-bytes") << body.dump();
+  EXPECT_NE(body["error"].get<std::string>().find("8192"), std::string::npos) << body.dump();
+  // A policy between the two limits reaches its own route's check.
+  std::tie(status, body) = Post(url, "/api/policies", std::string(5000, '{'));
+  EXPECT_EQ(status, 400) << body.dump();  // not refused for size: for not being a policy
+  EXPECT_TRUE(store_->ListJobs(0).empty()) << "a refused request must store nothing";
+}
+
+TEST_F(HttpApiTest, JobWithMoreEpisodesThanTheLimitIsRefusedWith413) {
+  HttpOptions limits;
+  limits.max_job_episodes = 3;
+  const std::string url = Serve("", limits);
+  auto [status, body] = Post(url, "/api/jobs", kJob);  // 1 x 1 x 2 x 2 = 4 episodes
+  EXPECT_EQ(status, 413);
+  EXPECT_EQ(body["limit"], "max-job-episodes") << body.dump();
+  EXPECT_NE(body["error"].get<std::string>().find("4 episodes, above the server's limit of 3"),
+            std::string::npos)
+      << body.dump();
+  EXPECT_TRUE(store_->ListJobs(0).empty());
+  limits.max_job_episodes = 4;
+  api_.reset();
+  api::FarmClient client(Serve("", limits));
+  EXPECT_EQ(client.Submit(kJob, "job.yaml").episodes, 4) << "a job at the limit is accepted";
+}
+
+TEST_F(HttpApiTest, ClientSubmittingTooManyJobsInAMinuteIsRefusedWith429) {
+  HttpOptions limits;
+  limits.max_jobs_per_minute = 2;
+  const std::string url = Serve("", limits);
+  api::FarmClient client(url);
+  client.Submit(kJob, "a.yaml");
+  client.Submit(kJob, "b.yaml");
+  auto [status, body] = Post(url, "/api/jobs", kJob);
+  EXPECT_EQ(status, 429);
+  EXPECT_EQ(body["limit"], "max-jobs-per-minute") << body.dump();
+  EXPECT_NE(body["error"].get<std::string>().find("more than 2 jobs in one minute"),
+            std::string::npos)
+      << body.dump();
+  EXPECT_EQ(store_->ListJobs(0).size(), 2u);
+}
+
+TEST(RateLimiterTest, AllowsLimitPerWindowPerKeyAndForgetsOldEvents) {
+  using std::chrono::seconds;
+  const auto t0 = std::chrono::steady_clock::time_point{} + std::chrono::hours(1);
+  RateLimiter limiter(2, seconds(60));
+  EXPECT_TRUE(limiter.Allow("a", t0));
+  EXPECT_TRUE(limiter.Allow("a", t0 + seconds(10)));
+  EXPECT_FALSE(limiter.Allow("a", t0 + seconds(20)));
+  EXPECT_TRUE(limiter.Allow("b", t0 + seconds(20))) << "clients are counted apart";
+  EXPECT_FALSE(limiter.Allow("a", t0 + seconds(59)));
+  EXPECT_TRUE(limiter.Allow("a", t0 + seconds(61))) << "the first event left the window";
+  EXPECT_FALSE(limiter.Allow("a", t0 + seconds(62)));
+  RateLimiter unlimited(0, seconds(60));
+  for (int i = 0; i < 100; ++i) EXPECT_TRUE(unlimited.Allow("a", t0));
 }
 
 TEST(FarmClientTest, UnreachableServerIsAFailureNotBadInput) {
