@@ -766,7 +766,9 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
           nlohmann::json events = nlohmann::json::array();
           for (const auto& e : r.events) events.push_back({{"t", e.t}, {"kind", e.kind}, {"detail", e.detail}});
           j["events"] = std::move(events);
-          return j.dump();
+          // A worker's strings are bytes (DDS does not check UTF-8): replace what is not UTF-8
+          // rather than throw, which failed the whole batch, every worker's results with it.
+          return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
         }();
         insert.Reset()
             .Bind(1, m.episode_id).Bind(2, out.job_id).Bind(3, m.worker_id).Bind(4, m.attempt)
@@ -1050,7 +1052,7 @@ void Store::RecordWorker(const api::WorkerStatus& s, std::int64_t now_ms) {
          "ON CONFLICT (worker_id) DO UPDATE SET host = ?2, version = ?3, calibration_id = ?4, "
          "slots = ?5, boards = ?6, last_seen_ms = ?7")
       .Bind(1, s.worker_id).Bind(2, s.host).Bind(3, s.version).Bind(4, s.calibration_id)
-      .Bind(5, s.slots).Bind(6, nlohmann::json(s.boards).dump()).Bind(7, now_ms).Run();
+      .Bind(5, s.slots).Bind(6, nlohmann::json(s.boards).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)).Bind(7, now_ms).Run();
 }
 
 nlohmann::json Store::KnownWorkers() {
