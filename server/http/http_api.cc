@@ -29,7 +29,8 @@ constexpr std::size_t kMaxPolicyBytes = 64u << 20;
 
 void Reply(httplib::Response& res, int status, const nlohmann::json& body) {
   res.status = status;
-  res.set_content(body.dump(), "application/json");
+  // Stored strings came from workers and users as bytes: invalid UTF-8 is replaced, not a 500.
+  res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), "application/json");
 }
 
 void Error(httplib::Response& res, int status, const std::string& message) {
