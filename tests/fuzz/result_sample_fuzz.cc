@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -100,15 +101,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const server::Lease& lease = leases[0];
 
   // The sample, every field from the input.
-  std::vector<std::string> strings;
-  strings.reserve(8);
+  std::deque<std::string> strings;  // the sample's char* point into these: no reallocation
   const auto text = [&](std::string s) { return strings.emplace_back(std::move(s)).data(); };
   enavi_farm_EpisodeResult c{};
   c.episode_id = text(in.ConsumeBool() ? lease.episode_id : in.ConsumeRandomLengthString(40));
   c.attempt = in.ConsumeBool() ? lease.attempt : in.ConsumeIntegral<std::int32_t>();
   c.worker_id = text(in.ConsumeBool() ? "w1" : in.ConsumeRandomLengthString(16));
   c.job_id = text(job);
-  c.status = static_cast<enavi_farm_ResultStatus>(in.ConsumeIntegralInRange<int>(-1, 3));
+  // Cyclone DDS refuses enum values outside the IDL's on deserialisation; 3 is the one value
+  // past them a C++ enum of three enumerators can hold.
+  c.status = static_cast<enavi_farm_ResultStatus>(in.ConsumeIntegralInRange<int>(0, 3));
   c.error = text(in.ConsumeRandomLengthString(64));
   c.wall_time_s = AnyDouble(&in);
   c.result_json = text(ResultJson(&in, lease.spec));
@@ -131,10 +133,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     m = api::ResultFromSample(c);
   } catch (const std::exception&) {
+    store.CancelJob(job, kNow);
     return 0;  // the bus counts it as a bad sample of its topic and drops it
   }
   const server::IngestOutcome out = store.Ingest({m}, kNow)[0];
   const nlohmann::json stored = store.Results(job);
+  store.CancelJob(job, kNow);  // a re-queued episode must not be the next input's lease
   if (out.ack == api::AckStatus::kStored) {
     fuzz::Check(m.episode_id == lease.episode_id, "stored a result under another episode id");
     fuzz::Check(m.status == api::ResultStatus::kOk, "stored a result that is not ok");
