@@ -16,6 +16,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-dev pybind11-dev python3-numpy python3-torch
   iproute2 procps util-linux
+  munge slurmctld slurmd slurm-client python3-jsonschema python3-yaml
   chromium chromium-driver python3-selenium libxml2-utils
 )
 

@@ -125,7 +125,8 @@ class RayCaster {
 
   // Visits the voxels from the one containing `from` up to, but excluding, the one containing
   // `to` (`to_key`). Always ends exactly in to_key's voxel: an axis stops stepping once it has
-  // reached its target index, so rounding cannot overshoot. Returns the voxels visited.
+  // reached its target index, so rounding cannot overshoot. Stops after a voxel for which
+  // `visit` returns false. Returns the voxels visited.
   template <class Visit>
   std::int64_t Cast(const Eigen::Vector3d& from, const Eigen::Vector3i& from_key,
                     const Eigen::Vector3d& to, const Eigen::Vector3i& to_key, Visit&& visit) const {
@@ -157,7 +158,7 @@ class RayCaster {
     }
     Eigen::Vector3i k = from_key;
     for (std::int64_t i = 0; i < n; ++i) {
-      visit(Pack(k));
+      if (!visit(Pack(k))) return i + 1;
       int a = t_max[0] <= t_max[1] ? 0 : 1;
       if (t_max[2] < t_max[a]) a = 2;
       k[a] += step[a];
@@ -229,8 +230,20 @@ MapUpdate OccupancyMap::ComputeUpdate(std::shared_ptr<const ScanPoints> scan,
                            (options_.clear_no_return ? scan->no_return_W.size() : 0);
   KeySet occupied(scan->hits_W.size());
   KeySet free(rays * 2);
-  KeySet free_ends(options_.discretize_endpoints ? rays : 0);
-  auto mark_free = [&free](std::uint64_t key) { free.Insert(key); };
+  const bool stop = options_.stop_at_traversed;
+  KeySet free_ends(options_.discretize_endpoints || stop ? rays : 0);
+  auto mark_free = [&free](std::uint64_t key) {
+    free.Insert(key);
+    return true;
+  };
+  // stop_at_traversed: from the end voxel back to the sensor, until a voxel already cleared.
+  if (stop) free.Insert(RayCaster::Pack(o_key));
+  auto cast_back = [&](const Eigen::Vector3d& end, const Eigen::Vector3i& end_key, bool end_is_free) {
+    const std::uint64_t end_packed = RayCaster::Pack(end_key);
+    update.ray_steps += caster.Cast(end, end_key, o, o_key, [&](std::uint64_t key) {
+      return key == end_packed && !end_is_free ? true : free.Insert(key);
+    });
+  };
 
   // Fraction of the segment o -> p inside the local update box centred on the sensor.
   const Eigen::Vector3d& h = options_.local_half_extent;
@@ -246,6 +259,10 @@ MapUpdate OccupancyMap::ComputeUpdate(std::shared_ptr<const ScanPoints> scan,
   auto cast_free = [&](const Eigen::Vector3d& end) {
     Eigen::Vector3i key;
     if (!caster.KeyOf(end, &key)) return;
+    if (stop) {
+      if (free_ends.Insert(RayCaster::Pack(key))) cast_back(end, key, true);
+      return;
+    }
     Eigen::Vector3d target = end;
     if (options_.discretize_endpoints) {
       if (!free_ends.Insert(RayCaster::Pack(key))) return;
@@ -265,7 +282,9 @@ MapUpdate OccupancyMap::ComputeUpdate(std::shared_ptr<const ScanPoints> scan,
     Eigen::Vector3i key;
     if (!caster.KeyOf(p, &key)) continue;
     const bool new_end = occupied.Insert(RayCaster::Pack(key));
-    if (options_.discretize_endpoints) {
+    if (stop) {
+      if (new_end) cast_back(p, key, false);
+    } else if (options_.discretize_endpoints) {
       if (!new_end) continue;
       update.ray_steps += caster.Cast(o, o_key, caster.CenterOf(key), key, mark_free);
     } else {

@@ -43,6 +43,11 @@ struct MapOptions {
   /// Cast one ray per distinct end voxel (to its centre) instead of one per point, as OctoMap's
   /// discretised insertion does: far returns share voxels, so this cuts ray steps several-fold.
   bool discretize_endpoints = true;
+  /// Ego-Planner's raycast (plan_env/grid_map.cpp, raycastProcess): one ray per distinct end
+  /// voxel, cast from the end point back towards the sensor, stopping at the first voxel a ray of
+  /// the same frame has already cleared. Rays converge at the sensor, so most stop a few voxels
+  /// from their end; a voxel that only the skipped part of a ray crossed stays as it was.
+  bool stop_at_traversed = false;
 
   /// Throws std::invalid_argument naming the field and its allowed range.
   void Validate() const;

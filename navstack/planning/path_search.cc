@@ -236,10 +236,15 @@ ClearanceRule MakeClearanceRule(const ClearanceMap& map, const Vec3& p_start,
   ClearanceRule rule;
   rule.required = options.robot_radius + options.search_margin;
   rule.escape_center = p_start;
-  const double c0 = map.Clearance(p_start, rule.required);
+  double c0 = map.Clearance(p_start, rule.required);
+  // The map's validity test may be stricter than its exact clearance (InflatedOccupancy's cube
+  // test near a corner): relax to the largest clearance the test itself accepts at the start, or
+  // the search would refuse a start the escape ball was not made for.
+  const double res = map.resolution();
+  while (c0 > 0.0 && !map.IsClear(p_start, std::min(c0, rule.required))) c0 -= res;
   if (c0 < rule.required) {
-    rule.escape_radius = (rule.required - std::max(c0, 0.0)) + 2.0 * map.resolution();
-    rule.escape_required = c0 - 0.5 * map.resolution();
+    rule.escape_radius = (rule.required - std::max(c0, 0.0)) + 2.0 * res;
+    rule.escape_required = c0 - 0.5 * res;
   }
   return rule;
 }

@@ -17,6 +17,9 @@ class CostModel {
   virtual double JobSeconds(TaskId task, const WorkCounts& work, double host_cpu_seconds) const = 0;
   /// "model" or "measured".
   virtual std::string mode() const = 0;
+  /// Whether JobSeconds reads host_cpu_seconds: reading the thread's CPU clock is a system call,
+  /// too slow to make at every search step when the answer is ignored.
+  virtual bool uses_host_cpu() const = 0;
 };
 
 /// model: time = fixed per-job overhead + sum(count x ns_per_unit). Bit-reproducible.
@@ -33,6 +36,7 @@ class WorkCountCostModel final : public CostModel {
     return ns * 1e-9;
   }
   std::string mode() const override { return "model"; }
+  bool uses_host_cpu() const override { return false; }
   const Coefficients& coefficients() const { return c_; }
 
  private:
@@ -47,6 +51,7 @@ class MeasuredCostModel final : public CostModel {
     return host_cpu_seconds * scale_;
   }
   std::string mode() const override { return "measured"; }
+  bool uses_host_cpu() const override { return true; }
 
  private:
   double scale_;

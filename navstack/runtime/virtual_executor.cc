@@ -94,7 +94,7 @@ void VirtualExecutor::Start(TaskId task) {
 }
 
 double VirtualExecutor::JobElapsed(TaskId task, const WorkCounts& work_so_far, double) const {
-  return cost_.JobSeconds(task, work_so_far, ThreadCpuSeconds() - job_cpu0_);
+  return cost_.JobSeconds(task, work_so_far, cost_.uses_host_cpu() ? ThreadCpuSeconds() - job_cpu0_ : 0.0);
 }
 
 void VirtualExecutor::Finish(TaskId task) {

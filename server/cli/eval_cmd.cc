@@ -1,6 +1,7 @@
 // enavi eval: the embedded farm (server + local workers + SQLite), table at the end.
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <future>
 #include <iostream>
@@ -12,6 +13,7 @@
 #include "server/cli/commands.h"
 #include "server/cli/farm_flags.h"
 #include "server/eval/eval.h"
+#include "server/eval/paper_reference.h"
 #include "server/eval/tables.h"
 #include "workers/sim/episode_config.h"
 
@@ -29,9 +31,32 @@ struct EvalFlags {
   bool verbose = false;
   bool dashboard = false;
   std::string http = "127.0.0.1:0";
+  std::string preset;  ///< "paper" or empty
 };
 
-void RunEvalCommand(EvalFlags f, const CLI::App& root) {
+// --preset paper: the paper's HIL matrix (5 boards x S1-S5 x E-Navi and the baseline, 3 seeds
+// unless --seeds says otherwise). --methods may add methods (e.g. fixed, for the gap split) but
+// must keep both of the paper's; boards and scenarios are the preset's.
+void ApplyPreset(EvalFlags* f, const CLI::App& sub) {
+  if (f->preset.empty()) return;
+  server::EvalOptions& o = f->options;
+  for (const char* flag : {"--boards", "--scenarios"}) {
+    if (sub.count(flag) > 0) {
+      throw CLI::ValidationError(std::string("--preset paper fixes the boards and scenarios; drop ") + flag);
+    }
+  }
+  o.boards = server::PaperBoards();
+  o.scenarios = server::PaperScenarios();
+  if (sub.count("--seeds") == 0) o.seeds = 3;
+  for (const char* m : {"baseline", "enavi"}) {
+    if (std::find(o.methods.begin(), o.methods.end(), m) == o.methods.end()) {
+      throw CLI::ValidationError(std::string("--preset paper compares baseline and enavi; --methods lacks ") + m);
+    }
+  }
+}
+
+void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
+  ApplyPreset(&f, sub);
   RequireFlyUnlessEpisodeCmd(root, f.options.episode_command);
   StopSignals signals;
   SetupLogging(f.verbose);
@@ -50,6 +75,7 @@ void RunEvalCommand(EvalFlags f, const CLI::App& root) {
       std::cout << report.results.dump(2) << "\n";
     } else {
       std::cout << server::PaperTable(report.results);
+      if (f.preset == "paper") std::cout << server::PaperComparison(report.results);
     }
     std::cout.flush();
   };
@@ -127,7 +153,11 @@ void RegisterEvalCommand(CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--json", f->json, "print the result objects as JSON instead of the table");
   sub->add_flag("-v,--verbose", f->verbose, "server log on stderr");
-  sub->callback([f, &app] { RunEvalCommand(*f, app); });
+  sub->add_option("--preset", f->preset,
+                  "paper: the paper's HIL matrix (boards pi4b,tx2,nx,opi5,x86 x s1-s5 x baseline,enavi; "
+                  "--seeds default 3), our table beside the paper's with the difference of each cell")
+      ->check(CLI::IsMember({"paper"}));
+  sub->callback([f, &app, sub] { RunEvalCommand(*f, app, *sub); });
 }
 
 }  // namespace enavi::cli

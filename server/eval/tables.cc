@@ -1,12 +1,16 @@
 #include "server/eval/tables.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <set>
 #include <sstream>
+#include <tuple>
 #include <vector>
+
+#include "server/eval/paper_reference.h"
 
 namespace enavi::server {
 namespace {
@@ -236,6 +240,97 @@ std::string PaperTable(const nlohmann::json& results) {
   out += "\n(flight time and path length: mean over successful episodes; cpu %: navigation "
          "tasks, % of one board core, mean over all episodes)\n";
   return out;
+}
+
+std::string PaperComparison(const nlohmann::json& results) {
+  const std::vector<std::string>& scenarios = PaperScenarios();
+  // Ours, by (board, method, scenario): the same means as PaperTable.
+  struct Cell {
+    Mean cpu, flight, path;
+  };
+  std::map<std::tuple<std::string, std::string, std::string>, Cell> ours;
+  for (const auto& r : results) {
+    Cell& c = ours[{r.value("board", ""), r.value("method", ""), r.value("scenario", "")}];
+    c.cpu.Add(r.value("nav_cpu_util_pct", 0.0));
+    if (r.value("success", false)) {
+      c.flight.Add(r.value("flight_time_s", 0.0));
+      c.path.Add(r.value("path_length_m", 0.0));
+    }
+  }
+  auto our_cell = [&](const std::string& b, const std::string& m, std::size_t s) -> const Cell* {
+    auto it = ours.find({b, m, scenarios[s]});
+    return it == ours.end() ? nullptr : &it->second;
+  };
+  // Scenario-averaged mean of one metric, "-"-safe: NaN when a scenario has no value.
+  auto average = [](const std::array<double, 5>& v) {
+    double sum = 0;
+    for (double x : v) sum += x;
+    return sum / static_cast<double>(v.size());
+  };
+  using Metric = Mean Cell::*;
+  auto ours_of = [&](const std::string& b, const std::string& m, Metric metric) {
+    std::array<double, 5> v{};
+    for (std::size_t s = 0; s < scenarios.size(); ++s) {
+      const Cell* c = our_cell(b, m, s);
+      v[s] = c == nullptr ? std::nan("") : (c->*metric).value();
+    }
+    return v;
+  };
+
+  std::string out;
+  struct Block {
+    const char* title;
+    Metric metric;
+    std::array<double, 5> PaperRow::*paper;
+  };
+  const Block blocks[] = {{"nav cpu % of one core", &Cell::cpu, &PaperRow::cpu_pct},
+                          {"flight time s", &Cell::flight, &PaperRow::flight_time_s},
+                          {"path m", &Cell::path, &PaperRow::path_m}};
+  auto text = [](double v, int digits) { return std::isnan(v) ? std::string("-") : Fixed(v, digits); };
+  for (const Block& block : blocks) {
+    std::vector<std::string> head1 = {"", ""}, head2 = {"board", "method"};
+    for (const auto& s : scenarios) {
+      head1.insert(head1.end(), {s, "", ""});
+      head2.insert(head2.end(), {"ours", "paper", "diff"});
+    }
+    std::vector<std::vector<std::string>> rows = {head1, head2};
+    for (const std::string& b : PaperBoards()) {
+      for (const char* m : {"baseline", "enavi"}) {
+        const PaperRow* paper = FindPaperRow(b, m);
+        const std::array<double, 5> mine = ours_of(b, m, block.metric);
+        std::vector<std::string> line = {b, m};
+        bool any = false;
+        for (std::size_t s = 0; s < scenarios.size(); ++s) {
+          const double p = (paper->*block.paper)[s];
+          any = any || !std::isnan(mine[s]);
+          line.insert(line.end(), {text(mine[s], 1), Fixed(p, 1), text(mine[s] - p, 1)});
+        }
+        if (any) rows.push_back(line);
+      }
+    }
+    if (rows.size() > 2) out += std::string("\n") + block.title + ": ours beside the paper's HIL table\n" + Render(rows, 2);
+  }
+
+  std::vector<std::vector<std::string>> red = {
+      {"board", "cpu reduction ours", "paper", "flight time reduction ours", "paper"}};
+  for (const std::string& b : PaperBoards()) {
+    auto reduction = [&](Metric metric, std::array<double, 5> PaperRow::*paper, bool mine) {
+      const double base = mine ? average(ours_of(b, "baseline", metric)) : average(FindPaperRow(b, "baseline")->*paper);
+      const double enavi = mine ? average(ours_of(b, "enavi", metric)) : average(FindPaperRow(b, "enavi")->*paper);
+      return std::isnan(base) || std::isnan(enavi) || base == 0 ? std::string("-")
+                                                                 : Fixed(100.0 * (base - enavi) / base, 1) + "%";
+    };
+    const std::string cpu_ours = reduction(&Cell::cpu, &PaperRow::cpu_pct, true);
+    const std::string time_ours = reduction(&Cell::flight, &PaperRow::flight_time_s, true);
+    if (cpu_ours == "-" && time_ours == "-") continue;
+    red.push_back({b, cpu_ours, reduction(&Cell::cpu, &PaperRow::cpu_pct, false), time_ours,
+                   reduction(&Cell::flight, &PaperRow::flight_time_s, false)});
+  }
+  if (red.size() > 1) {
+    out += "\nE-Navi vs baseline, mean of the scenario means (a board's reduction needs all of S1-S5)\n" +
+           Render(red, 1);
+  }
+  return out.empty() ? "no results on the paper's boards and scenarios\n" : out;
 }
 
 std::string ProgressLine(const api::JobProgress& p, bool bar) {

@@ -23,6 +23,13 @@ std::string ResultsCsv(const nlohmann::json& results);
 /// flight time); CPU % and velocity std average all episodes.
 std::string PaperTable(const nlohmann::json& results);
 
+/// `enavi eval --preset paper`: for every board x method the paper reports (E-Navi, baseline),
+/// our per-scenario means of nav CPU %, flight time and path length beside the paper's HIL
+/// table and their difference (ours - paper), then the average reductions per board (mean
+/// over the scenarios of each method, E-Navi vs baseline) beside the paper's. Cells with no
+/// result (or, for flight and path, no success) print "-".
+std::string PaperComparison(const nlohmann::json& results);
+
 /// "[########------] 12/40 done  1 failed  3.2 ep/s  ETA 9s" (bar when `bar`, else plain).
 std::string ProgressLine(const api::JobProgress& p, bool bar);
 

@@ -112,6 +112,50 @@ TEST_F(FarmFixture, EvalStoresEveryResultAndPrintsThePaperTable) {
   EXPECT_EQ(store.Results(jobs[0].id).size(), 4u);
 }
 
+TEST_F(FarmFixture, EvalPresetPaperRunsThePapersMatrixAndPrintsOursBesideIt) {
+  const fs::path db = dir_ / "paper.db";
+  worker::SpawnOptions o;
+  o.argv = {EnaviBinary().string(), "eval", "--preset", "paper", "--seeds", "1", "--db", db.string(),
+            "--workers", "2", "--slots", "2", "--episode-cmd", EpisodeCommand(), "--domain",
+            std::to_string(domain_)};
+  o.stdout_file = dir_ / "paper.out";
+  o.stderr_file = dir_ / "paper.log";
+  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
+  const auto status = eval.Wait(std::chrono::seconds(240));
+  ASSERT_TRUE(status.has_value()) << "enavi eval --preset paper did not finish";
+  EXPECT_TRUE(status->ok()) << status->Describe() << "\n" << ReadText(dir_ / "paper.log");
+  const std::string out = ReadText(dir_ / "paper.out");
+  for (const char* title : {"nav cpu % of one core: ours beside the paper's HIL table",
+                            "flight time s: ours beside the paper's HIL table", "path m: ours beside the paper's HIL table"}) {
+    EXPECT_NE(out.find(title), std::string::npos) << out;
+  }
+  // The paper's x86 S1 CPU cells (baseline 42.5, E-Navi 38.2) are printed beside ours.
+  EXPECT_NE(out.find("42.5"), std::string::npos) << out;
+  EXPECT_NE(out.find("38.2"), std::string::npos) << out;
+  for (const char* board : {"pi4b ", "tx2 ", "nx ", "opi5 ", "x86 "}) {
+    const std::size_t reductions = out.find("E-Navi vs baseline, mean of the scenario means");
+    ASSERT_NE(reductions, std::string::npos) << out;
+    EXPECT_NE(out.find(std::string("\n") + board, reductions), std::string::npos) << board << "\n" << out;
+  }
+  server::Store store(db);
+  const auto jobs = store.ListJobs(0);
+  ASSERT_EQ(jobs.size(), 1u);
+  EXPECT_EQ(store.Results(jobs[0].id).size(), 50u) << "5 boards x 5 scenarios x 2 methods x 1 seed";
+}
+
+TEST_F(FarmFixture, EvalPresetPaperRefusesAnotherMatrix) {
+  worker::SpawnOptions o;
+  o.argv = {EnaviBinary().string(), "eval", "--preset", "paper", "--boards", "x86"};
+  o.stderr_file = dir_ / "preset.err";
+  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
+  const auto status = eval.Wait(std::chrono::seconds(60));
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(status->code, 2) << status->Describe();
+  EXPECT_NE(ReadText(dir_ / "preset.err").find("--preset paper fixes the boards and scenarios; drop --boards"),
+            std::string::npos)
+      << ReadText(dir_ / "preset.err");
+}
+
 TEST_F(FarmFixture, BadJobSpecIsRejectedByTheCliWithExitCodeTwo) {
   StartServer();
   std::ofstream(dir_ / "bad.yaml") << "boards: [tx2]\nscenarios: [s1]\nmethods: [enavi]\nseeds: -1\n";

@@ -29,6 +29,7 @@ MethodInfo EgoPlannerMethod() {
       {"ego.emergency_stop", 0, 1, 1, true, "1: a failed safety replan with a hit < emergency_time ahead stops"},
       {"ego.check_two_thirds", 0, 1, 1, true, "1: the safety check samples only the first 2/3 of a trajectory"},
       {"ego.newest_frame_only", 0, 1, 1, true, "1: the occupancy update raycasts only the newest frame"},
+      {"ego.ray_break", 0, 1, 1, true, "1: a ray stops at the first voxel this frame already cleared (grid_map raycast)"},
   };
   m.configure = [](const MethodSetup&, NavStackOptions* o) {
     // Ego-Planner's ESDF-free rebound optimisation (navstack/planning/README.md).
@@ -46,6 +47,7 @@ MethodInfo EgoPlannerMethod() {
   m.make = [](const NavStackOptions& options, TaskExecutor* executor, const VehicleState& initial) {
     NavStackOptions o = options;
     o.map.resolution = o.Param("map.resolution");
+    o.map.stop_at_traversed = o.Param("ego.ray_break") > 0;
     EgoPlannerOptions e;
     e.occupancy_hz = o.Param("ego.occupancy_hz");
     e.safety_hz = o.Param("ego.safety_hz");

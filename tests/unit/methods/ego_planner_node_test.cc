@@ -27,6 +27,7 @@ class PlanCost final : public CostModel {
     return planned ? plan_s_ : 0.0005;
   }
   std::string mode() const override { return "model"; }
+  bool uses_host_cpu() const override { return false; }
 
  private:
   double plan_s_;

@@ -298,6 +298,33 @@ TEST(OccupancyMapTest, WorkCountsScaleWithStride) {
   EXPECT_GT(dfine.Get(WorkUnit::kRayStep), dcoarse.Get(WorkUnit::kRayStep));
 }
 
+TEST(OccupancyMapTest, EgoPlannersRayBreakCutsRayStepsAndKeepsTheMap) {
+  // Every pixel, as the baseline maps (skip_pixel 2 of the 640x480 sensor = stride 1 here).
+  PerceptionOptions every;
+  every.stride = 1;
+  const DepthFrame f = WallFrame();
+  OccupancyMap full;
+  MapOptions o;
+  o.stop_at_traversed = true;
+  OccupancyMap cut(o);
+  WorkCounts w_full, w_cut;
+  const MapUpdate u_full = full.ComputeUpdate(f, kCam, every, &w_full);
+  const MapUpdate u_cut = cut.ComputeUpdate(f, kCam, every, &w_cut);
+  EXPECT_EQ(u_cut.occupied_keys.size(), u_full.occupied_keys.size()) << "every end voxel is kept";
+  EXPECT_LT(5 * w_cut.Get(WorkUnit::kRayStep), w_full.Get(WorkUnit::kRayStep))
+      << "rays converge at the sensor: most stop a few voxels from their end";
+  // The break leaves about a third of the full cast's free voxels cleared (0.33 on this frame):
+  // the others stay unknown, which the planners read as free, as Ego-Planner's does.
+  const double free_ratio = static_cast<double>(u_cut.free_keys.size()) / static_cast<double>(u_full.free_keys.size());
+  EXPECT_GT(free_ratio, 0.25);
+  EXPECT_LT(free_ratio, 0.5);
+  cut.Apply(u_cut);
+  EXPECT_EQ(Name(cut.Query({3.05, 0.0, 0.0})), "occupied");
+  EXPECT_EQ(Name(cut.Query({1.5, 0.0, 0.0})), "free");
+  EXPECT_EQ(Name(cut.Query({2.9, -1.0, 0.5})), "free");
+  EXPECT_EQ(Name(cut.Query({3.9, 0.0, 0.0})), "unknown") << "hidden behind the wall";
+}
+
 TEST(OccupancyMapTest, LocalBoxLimitsTheUpdate) {
   MapOptions o;
   o.local_half_extent = {2.0, 2.0, 2.0};

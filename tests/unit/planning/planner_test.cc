@@ -243,6 +243,20 @@ TEST_P(PlannerContractTest, StartInInflatedSpaceEscapesInsteadOfGivingUp) {
   EXPECT_GE(r.min_clearance, o.robot_radius) << "outside the escape ball";
 }
 
+TEST_P(PlannerContractTest, StartClearByDistanceButInsideTheCubeInflationOfACornerPlans) {
+  // 0.42 m diagonally off the pillar's corner (3.5, 2.5): the exact clearance meets the search's
+  // 0.4 m, the rebound map's cube inflation (Chebyshev 0.3 m) does not. Where a hold after an
+  // emergency stop puts the vehicle, every later plan used to fail as start_in_collision.
+  const AsciiWorld w = PillarWorld();
+  PlanRequest req = RequestFor(w);
+  req.start.p = Eigen::Vector3d(3.5 - 0.42 / std::sqrt(2.0), 2.5 + 0.42 / std::sqrt(2.0), 1.5);
+  const PlannerOptions o = Options();
+  const PlanResult r = Plan(req, o);
+  ASSERT_TRUE(r.ok()) << ToString(r.status) << ": " << r.message;
+  EXPECT_LT((r.trajectory->Sample(req.t_start).p - req.start.p).norm(), 1e-12);
+  ExpectFeasibleAndClear(r, w.grid, o, "from the corner");
+}
+
 TEST_P(PlannerContractTest, StartBelowTheMinimumAltitudeClimbsFirst) {
   const AsciiWorld w = PillarWorld();
   PlanRequest req = RequestFor(w);

@@ -32,6 +32,36 @@ TEST(PaperTableTest, AveragesPerCellAndReportsTheReductionPerBoard) {
 
 TEST(PaperTableTest, NoResultsSaysSo) { EXPECT_EQ(PaperTable(nlohmann::json::array()), "no results\n"); }
 
+TEST(PaperComparisonTest, PrintsOursBesideThePapersCellsAndTheReductions) {
+  // x86 over S1-S5: baseline 50 % / 40 s / 45 m everywhere, E-Navi 25 % / 30 s / 44 m.
+  nlohmann::json results = nlohmann::json::array();
+  for (const char* s : {"s1", "s2", "s3", "s4", "s5"}) {
+    results.push_back(Result("x86", "baseline", s, 1, 50, 40, 45, true));
+    results.push_back(Result("x86", "enavi", s, 1, 25, 30, 44, true));
+  }
+  const std::string out = PaperComparison(results);
+  // Paper x86 S1: baseline 42.5 % / 74.8 s / 49.8 m; E-Navi 38.2 % / 45.8 s / 44.3 m.
+  EXPECT_NE(out.find("x86    baseline  50.0   42.5    7.5"), std::string::npos) << out;
+  EXPECT_NE(out.find("x86    enavi     25.0   38.2  -13.2"), std::string::npos) << out;
+  EXPECT_NE(out.find("x86    baseline  40.0   74.8  -34.8"), std::string::npos) << out;
+  EXPECT_NE(out.find("x86    enavi     44.0   44.3  -0.3"), std::string::npos) << out;
+  // Ours: cpu (50-25)/50 = 50.0 %, time (40-30)/40 = 25.0 %. Paper x86: cpu mean 49.4 -> 42.16
+  // = 14.7 %, flight 69.16 -> 40.5 = 41.4 %.
+  EXPECT_NE(out.find("x86                 50.0%  14.7%                       25.0%  41.4%"), std::string::npos)
+      << out;
+  EXPECT_EQ(out.find("tx2"), std::string::npos) << "boards without results are left out";
+}
+
+TEST(PaperComparisonTest, AReductionNeedsEveryScenario) {
+  nlohmann::json results = nlohmann::json::array();
+  results.push_back(Result("tx2", "baseline", "s1", 1, 50, 40, 45, true));
+  results.push_back(Result("tx2", "enavi", "s1", 1, 25, 30, 44, true));
+  const std::string out = PaperComparison(results);
+  EXPECT_NE(out.find("tx2    enavi     25.0   50.8  -25.8     -   59.2     -"), std::string::npos) << out;
+  EXPECT_EQ(out.find("E-Navi vs baseline"), std::string::npos) << out;
+  EXPECT_EQ(PaperComparison(nlohmann::json::array()), "no results on the paper's boards and scenarios\n");
+}
+
 TEST(ResultsCsvTest, FlattensNestedFieldsAndQuotes) {
   nlohmann::json results = nlohmann::json::array();
   results.push_back(Result("tx2", "enavi", "s1", 1, 60, 30, 45, true));
