@@ -1,7 +1,9 @@
 #include "api/result_metrics.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -26,6 +28,22 @@ void Flatten(const nlohmann::json& j, const std::string& prefix, std::map<std::s
   }
 }
 
+// The first non-finite number under `j`, as its field path ("" when all are finite).
+std::string NonFiniteField(const nlohmann::json& j, const std::string& path) {
+  if (j.is_number_float()) return std::isfinite(j.get<double>()) ? "" : path;
+  if (j.is_object()) {
+    for (const auto& [key, value] : j.items()) {
+      if (std::string f = NonFiniteField(value, path.empty() ? key : path + "." + key); !f.empty()) return f;
+    }
+  }
+  if (j.is_array()) {
+    for (std::size_t i = 0; i < j.size(); ++i) {
+      if (std::string f = NonFiniteField(j[i], path + "[" + std::to_string(i) + "]"); !f.empty()) return f;
+    }
+  }
+  return "";
+}
+
 }  // namespace
 
 std::map<std::string, double> ResultMetrics(const nlohmann::json& record) {
@@ -35,6 +53,44 @@ std::map<std::string, double> ResultMetrics(const nlohmann::json& record) {
   for (const char* k : kIdentity) copy.erase(k);
   Flatten(copy, "", &out);
   return out;
+}
+
+std::string ResultError(const EpisodeResult& r, const EpisodeSpec& expected) {
+  // The identity of the episode: the worker echoes the spec it was given (a collection episode's
+  // policy becomes its hash, so the policy is not compared).
+  const std::pair<const char*, bool> same[] = {
+      {"world", r.spec.world == expected.world},   {"seed", r.spec.seed == expected.seed},
+      {"board", r.spec.board == expected.board},   {"method", r.spec.method == expected.method},
+      {"clock", r.spec.clock == expected.clock}};
+  for (const auto& [field, ok] : same) {
+    if (!ok) return std::string("spec.") + field + ": not this episode's";
+  }
+  if (const std::string f = NonFiniteField(ResultSummaryJson(r), ""); !f.empty()) return f + ": not a finite number";
+  const TimeSeries& s = r.series;
+  const std::pair<const char*, std::size_t> columns[] = {
+      {"position", s.position.size()}, {"velocity", s.velocity.size()}, {"eci", s.eci.size()},
+      {"f_per", s.f_per.size()},       {"f_col", s.f_col.size()},       {"f_dif", s.f_dif.size()},
+      {"res", s.res.size()},           {"utilisation", s.utilisation.size()}, {"events", s.events.size()}};
+  for (const auto& [column, n] : columns) {
+    if (n != 0 && n != s.t.size()) {
+      return std::string("series.") + column + ": " + std::to_string(n) + " samples, t has " +
+             std::to_string(s.t.size());
+    }
+  }
+  const std::pair<const char*, const std::vector<double>*> numbers[] = {
+      {"t", &s.t},         {"eci", &s.eci}, {"f_per", &s.f_per}, {"f_col", &s.f_col},
+      {"f_dif", &s.f_dif}, {"res", &s.res}, {"utilisation", &s.utilisation}};
+  const auto finite = [](double v) { return std::isfinite(v); };
+  for (const auto& [column, values] : numbers) {
+    if (!std::all_of(values->begin(), values->end(), finite)) return std::string("series.") + column + ": not a finite number";
+  }
+  const std::pair<const char*, const std::vector<Vec3>*> vectors[] = {{"position", &s.position}, {"velocity", &s.velocity}};
+  for (const auto& [column, values] : vectors) {
+    for (const Vec3& v : *values) {
+      if (!std::all_of(v.begin(), v.end(), finite)) return std::string("series.") + column + ": not a finite number";
+    }
+  }
+  return "";
 }
 
 }  // namespace enavi::api

@@ -778,7 +778,7 @@ World Generate(const std::string& scenario, std::uint64_t seed, const std::map<s
   Params values;
   for (const auto& p : info.params) values[p.name] = p.default_value;
   for (const auto& [name, text] : params) {
-    const auto it = std::find_if(info.params.begin(), info.params.end(), [&](const auto& p) { return p.name == name; });
+    const auto it = std::find_if(info.params.begin(), info.params.end(), [&name = name](const auto& p) { return p.name == name; });
     if (it == info.params.end()) {
       throw WorldError(scenario, 0, "params." + name, "unknown parameter (allowed: " + AllowedNames(info) + ")");
     }

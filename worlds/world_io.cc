@@ -247,7 +247,17 @@ Object ReadObject(ParseContext* ctx, const YAML::Node& node, const std::string& 
   }
   if (m.Has("scale")) placement.scale = ReadRange(*ctx, m.Get("scale"), m.Field("scale"), 0.0, kMaxScale, true);
   auto cached = ctx->meshes.find(path);
-  if (cached == ctx->meshes.end()) cached = ctx->meshes.emplace(path, ctx->load_mesh(full)).first;
+  if (cached == ctx->meshes.end()) {
+    // The error is the mesh's (its file and line), and says which world entry asked for it: the
+    // user may have run `world check` on the world, not the mesh.
+    try {
+      cached = ctx->meshes.emplace(path, ctx->load_mesh(full)).first;
+    } catch (const WorldError& e) {
+      throw WorldError(e.file(), e.line(), e.field(),
+                       e.reason() + " (mesh of " + ctx->file + ":" + std::to_string(LineOf(m.Get("file"))) + ": " +
+                           m.Field("file") + ")");
+    }
+  }
   MeshObject mesh = PlaceMesh(cached->second, placement, path, full.string());
   mesh.position = ReadPoint(*ctx, m.Get("position"), m.Field("position"));
   if (m.Has("yaw")) mesh.yaw = ReadRange(*ctx, m.Get("yaw"), m.Field("yaw"), -kMaxYaw, kMaxYaw, false);

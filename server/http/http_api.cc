@@ -26,7 +26,8 @@ namespace {
 
 void Reply(httplib::Response& res, int status, const nlohmann::json& body) {
   res.status = status;
-  res.set_content(body.dump(), "application/json");
+  // Stored strings came from workers and users as bytes: invalid UTF-8 is replaced, not a 500.
+  res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), "application/json");
 }
 
 void Error(httplib::Response& res, int status, const std::string& message) {
@@ -130,6 +131,50 @@ Page PageOf(const httplib::Request& req) {
   return p;
 }
 
+// A connection in memory: reads the request bytes, collects the response.
+class MemoryStream final : public httplib::Stream {
+ public:
+  explicit MemoryStream(std::string_view request) : request_(request) {}
+  bool is_readable() const override { return true; }
+  bool is_writable() const override { return true; }
+  ssize_t read(char* ptr, size_t size) override {
+    size = std::min(size, request_.size() - at_);
+    std::copy_n(request_.data() + at_, size, ptr);
+    at_ += size;
+    return static_cast<ssize_t>(size);
+  }
+  ssize_t write(const char* ptr, size_t size) override {
+    response_.append(ptr, size);
+    return static_cast<ssize_t>(size);
+  }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override {
+    ip = "127.0.0.1";
+    port = 0;
+  }
+  void get_local_ip_and_port(std::string& ip, int& port) const override {
+    ip = "127.0.0.1";
+    port = 0;
+  }
+  socket_t socket() const override { return INVALID_SOCKET; }
+  const std::string& response() const { return response_; }
+
+ private:
+  std::string_view request_;
+  std::size_t at_ = 0;
+  std::string response_;
+};
+
+// httplib's per-request entry point is protected: this subclass lends it to HandleRaw.
+class RoutingServer final : public httplib::Server {
+ public:
+  std::string Handle(std::string_view request) {
+    MemoryStream stream(request);
+    bool closed = false;
+    process_request(stream, /*close_connection=*/true, closed, nullptr);
+    return stream.response();
+  }
+};
+
 }  // namespace
 
 // Generated from server/dashboard/* by cmake/EmbedFiles.cmake.
@@ -201,7 +246,7 @@ HttpApi::HttpApi(Store* store, HttpOptions options) : HttpApi(store, nullptr, st
 
 HttpApi::HttpApi(Store* store, FarmServer* farm, HttpOptions options)
     : store_(store), farm_(farm), options_(std::move(options)),
-      server_(std::make_unique<httplib::Server>()),
+      server_(std::make_unique<RoutingServer>()),
       submissions_(options_.max_jobs_per_minute, std::chrono::minutes(1)) {
   if (!IsLoopbackHost(options_.host) && options_.token.empty()) {
     throw std::invalid_argument("--token: required when --http binds a non-loopback address ('" +
@@ -225,6 +270,10 @@ HttpApi::HttpApi(Store* store, FarmServer* farm, HttpOptions options)
 }
 
 HttpApi::~HttpApi() { Stop(); }
+
+std::string HttpApi::HandleRaw(std::string_view request) {
+  return static_cast<RoutingServer&>(*server_).Handle(request);
+}
 
 std::string HttpApi::url() const {
   return "http://" + options_.host + ":" + std::to_string(port_);

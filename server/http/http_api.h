@@ -11,6 +11,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <thread>
 
 #include "api/job_spec.h"
@@ -92,6 +93,10 @@ class HttpApi {
   void Stop();
   int port() const { return port_; }
   std::string url() const;
+  /// One raw HTTP/1.1 request (the bytes a connection reads) through the access checks, routing
+  /// and handlers a connection gets; returns the raw response. No socket, no thread: the fuzz
+  /// harness of the handlers (tests/fuzz/http_fuzz.cc) calls this.
+  std::string HandleRaw(std::string_view request);
 
  private:
   HttpApi(Store* store, FarmServer* farm, HttpOptions options);

@@ -98,7 +98,7 @@ void Chart::Render(Canvas* canvas, double x, double y, double w, double h,
   const double px0 = x + kLeft, px1 = x + w - kRight;
   const double py0 = y + kTop, py1 = y + h - (x_tick_labels ? kBottom : 8.0);
   if (px1 - px0 < 20.0 || py1 - py0 < 20.0) throw std::invalid_argument("chart '" + title_ + "': area too small");
-  auto to_px = [&](double vx, double vy) {
+  auto to_px = [&, x_lo = x_lo, x_hi = x_hi, y_lo = y_lo, y_hi = y_hi](double vx, double vy) {
     return Eigen::Vector2d(px0 + (vx - x_lo) / (x_hi - x_lo) * (px1 - px0),
                            py1 - (vy - y_lo) / (y_hi - y_lo) * (py1 - py0));
   };

@@ -312,6 +312,9 @@ void FarmServer::HandleResults(const std::vector<api::ResultMessage>& input,
     if (m.status == api::ResultStatus::kError && o.ack == api::AckStatus::kRecorded) {
       spdlog::warn("{} attempt {} on {}: {}", m.episode_id, m.attempt, m.worker_id, m.error);
     }
+    if (m.status == api::ResultStatus::kOk && o.ack == api::AckStatus::kRecorded) {
+      spdlog::warn("{} attempt {} on {}: {}", m.episode_id, m.attempt, m.worker_id, o.detail);
+    }
     if (!o.event.empty()) {
       events.push_back({o.job_id, o.event, m.episode_id,
                         m.status == api::ResultStatus::kOk ? "" : m.error});

@@ -705,7 +705,7 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
   std::lock_guard lock(mutex_);
   Transaction tx(*db_);
   Statement& lookup = db_->Prepare(
-      "SELECT e.state, e.attempts, e.lease_owner, e.job_id, j.state, c.policy_hash FROM episodes e "
+      "SELECT e.state, e.attempts, e.lease_owner, e.job_id, j.state, c.policy_hash, e.spec_json FROM episodes e "
       "JOIN jobs j ON j.id = e.job_id LEFT JOIN collect_jobs c ON c.job_id = e.job_id "
       "WHERE e.id = ?");
   Statement& insert_rollout = db_->Prepare(
@@ -738,6 +738,7 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
     out.job_id = lookup.Text(3);
     const std::string job_state = lookup.Text(4);
     const std::string collect_hash = lookup.IsNull(5) ? std::string() : lookup.Text(5);
+    const api::EpisodeSpec spec = nlohmann::json::parse(lookup.Text(6)).get<api::EpisodeSpec>();
     lookup.Reset();
     // A collection episode's result counts only with a rollout of the job's policy: a rollout of
     // another (stale) policy is refused by its hash, and the episode runs again.
@@ -752,6 +753,18 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
                                               ", not the job's " + collect_hash.substr(0, 12) +
                                               " (stale policy)";
       msg = &refused;
+    }
+    // A result of another episode or with non-finite metrics (a rogue or broken worker) is the
+    // attempt's error, not data.
+    if (msg->status == api::ResultStatus::kOk) {
+      std::string why = api::ResultError(m.result, spec);
+      if (why.empty() && !std::isfinite(m.wall_time_s)) why = "wall_time_s: not a finite number";
+      if (!why.empty()) {
+        refused = m;
+        refused.status = api::ResultStatus::kError;
+        refused.error = "result refused: " + why;
+        msg = &refused;
+      }
     }
     const bool current_lease = state == "leased" && attempts == m.attempt && owner == m.worker_id;
 
@@ -773,7 +786,9 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
           nlohmann::json events = nlohmann::json::array();
           for (const auto& e : r.events) events.push_back({{"t", e.t}, {"kind", e.kind}, {"detail", e.detail}});
           j["events"] = std::move(events);
-          return j.dump();
+          // A worker's strings are bytes (DDS does not check UTF-8): replace what is not UTF-8
+          // rather than throw, which failed the whole batch, every worker's results with it.
+          return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
         }();
         insert.Reset()
             .Bind(1, m.episode_id).Bind(2, out.job_id).Bind(3, m.worker_id).Bind(4, m.attempt)
@@ -812,7 +827,7 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
         set_state.Reset().Bind(1, failed ? "failed" : "pending").Bind(2, attempts)
             .Bind(3, reason).Bind(4, now_ms).Bind(5, m.episode_id).Run();
         out.ack = api::AckStatus::kRecorded;
-        out.detail = failed ? "episode failed" : "episode re-queued";
+        out.detail = std::string(msg != &m ? msg->error + ": " : "") + (failed ? "episode failed" : "episode re-queued");
         out.event = failed ? "episode_failed" : "requeued";
         touched_jobs.push_back(out.job_id);
       }
@@ -1057,7 +1072,7 @@ void Store::RecordWorker(const api::WorkerStatus& s, std::int64_t now_ms) {
          "ON CONFLICT (worker_id) DO UPDATE SET host = ?2, version = ?3, calibration_id = ?4, "
          "slots = ?5, boards = ?6, last_seen_ms = ?7")
       .Bind(1, s.worker_id).Bind(2, s.host).Bind(3, s.version).Bind(4, s.calibration_id)
-      .Bind(5, s.slots).Bind(6, nlohmann::json(s.boards).dump()).Bind(7, now_ms).Run();
+      .Bind(5, s.slots).Bind(6, nlohmann::json(s.boards).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)).Bind(7, now_ms).Run();
 }
 
 nlohmann::json Store::KnownWorkers() {

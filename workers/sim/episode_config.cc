@@ -134,14 +134,14 @@ EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
   config.scheduler = {method.scheduler.policy, method.scheduler.threads};
   for (const auto& [name, value] : spec.overrides) {
     const auto common = std::find_if(Setters().begin(), Setters().end(),
-                                     [&](const Setter& s) { return s.tunable.name == name; });
+                                     [&name = name](const Setter& s) { return s.tunable.name == name; });
     if (common != Setters().end()) {
       CheckRange(common->tunable, value);
       common->set(config, value);
       continue;
     }
     const auto own = std::find_if(method.tunables.begin(), method.tunables.end(),
-                                  [&](const Tunable& t) { return t.name == name; });
+                                  [&name = name](const Tunable& t) { return t.name == name; });
     if (own == method.tunables.end())
       throw std::invalid_argument("overrides." + name + ": unknown parameter for method " + method.name +
                                   " (known: " + Known(method) + ")");

@@ -60,6 +60,18 @@ class HttpApiTest : public ::testing::Test {
   std::unique_ptr<HttpApi> api_;
 };
 
+TEST_F(HttpApiTest, HandleRawServesOneRequestWithoutASocket) {
+  HttpOptions http;
+  http.job_spec.catalog = sim::MethodCatalog();
+  HttpApi api(farm_.get(), http);  // never started: no port, no thread
+  const std::string ok = api.HandleRaw("GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
+  EXPECT_EQ(ok.rfind("HTTP/1.1 200", 0), 0u) << ok;
+  EXPECT_NE(ok.find("\"ok\":true"), std::string::npos) << ok;
+  // The access checks apply as on a connection: a foreign Host on loopback is DNS rebinding.
+  const std::string refused = api.HandleRaw("GET /api/health HTTP/1.1\r\nHost: evil.example\r\n\r\n");
+  EXPECT_EQ(refused.rfind("HTTP/1.1 403", 0), 0u) << refused;
+}
+
 TEST_F(HttpApiTest, SubmitStatusEpisodesAndCancelRoundTrip) {
   api::FarmClient client(Serve());
   EXPECT_EQ(client.Health()["ok"], true);

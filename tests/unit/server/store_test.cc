@@ -2,7 +2,10 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
+#include <functional>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -186,6 +189,28 @@ TEST_F(StoreTest, UnknownEpisodeResultIsAcknowledgedAsUnknown) {
   ghost.episode_id = "jdead-00000";
   ghost.attempt = 1;
   EXPECT_EQ(store_->Ingest({Ok(ghost, "w1")}, kNow)[0].ack, api::AckStatus::kUnknown);
+}
+
+TEST_F(StoreTest, RogueResultsAreTheAttemptsErrorAndNeverStored) {
+  // A worker's ok result with a NaN metric, for another board, or with a series column longer
+  // than t: each attempt is recorded as failed with the reason; no result row appears.
+  const std::string job = store_->CreateJob("j", "yaml", Episodes(1), kNow);
+  const std::vector<std::pair<std::string, std::function<void(api::EpisodeResult*)>>> rogues = {
+      {"flight_time_s: not a finite number", [](api::EpisodeResult* r) { r->flight_time_s = std::nan(""); }},
+      {"spec.board: not this episode's", [](api::EpisodeResult* r) { r->spec.board = "x86"; }},
+      {"series.eci: 3 samples, t has 2", [](api::EpisodeResult* r) { r->series.eci.push_back(0.3); }}};
+  for (const auto& [reason, spoil] : rogues) {
+    const auto leases = store_->LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow);
+    ASSERT_EQ(leases.size(), 1u) << reason;
+    api::ResultMessage m = Ok(leases[0], "w1");
+    spoil(&m.result);
+    const auto out = store_->Ingest({m}, kNow);
+    EXPECT_EQ(out[0].ack, api::AckStatus::kRecorded) << reason;
+    EXPECT_NE(out[0].detail.find("result refused: " + reason), std::string::npos) << out[0].detail;
+    EXPECT_NE(store_->Episodes(job)[0].last_error.find(reason), std::string::npos) << reason;
+  }
+  EXPECT_TRUE(store_->Results(job).empty());
+  EXPECT_EQ(Progress(job).failed, 1);
 }
 
 TEST_F(StoreTest, ExpiredLeaseGoesBackToPendingAndIsLeasedAgain) {

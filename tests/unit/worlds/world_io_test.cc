@@ -298,6 +298,9 @@ TEST(WorldIoTest, ErrorsInsideAMeshNameTheObjFileAndLine) {
   EXPECT_EQ(e.file(), (dir.path() / "models/chair.obj").string());
   EXPECT_EQ(e.line(), 3);
   EXPECT_EQ(e.field(), "f");
+  // ... and the world entry that asked for it.
+  EXPECT_NE(std::string(e.what()).find("(mesh of " + path.string() + ":16: objects[3].mesh.file)"), std::string::npos)
+      << e.what();
 }
 
 TEST(WorldIoTest, StartAndGoalMustBeInsideTheBoundsAndClear) {
