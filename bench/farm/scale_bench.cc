@@ -1,7 +1,7 @@
 // How the farm scales with its workers: `enavi serve` in one network namespace and 1, 2, 4, 8
-// `enavi worker`s each in its own (separate hosts, unicast discovery), running fake episodes
-// (tests/system/fake_episode sleeping kEpisodeS: the episodes cost almost no CPU, so what is
-// measured is the farm: assignment, result ingestion, DDS, the worker's child processes).
+// `enavi worker`s, each in a namespace of its own (separate hosts to DDS, unicast discovery).
+// The episodes are tests/system/fake_episode, which sleeps kEpisodeS and costs almost no CPU, so
+// what is measured is the farm: assignment, result ingestion, DDS, the workers' child processes.
 //
 // Counters, over the window from submission to the last stored result (discovery_s: from
 // starting the processes until the server lists every worker):
