@@ -159,5 +159,15 @@ TEST(FlyCliInputTest, HelpListsEveryRegisteredBoardScenarioAndClock) {
     for (const std::string& name : *names) EXPECT_TRUE(Has(r.out, "    " + name + ": ")) << name << " missing from:\n" << r.out;
 }
 
+// `enavi bench raycast` (its core is the enavi::raycast_bench library, outside the simulator's).
+TEST(BenchCliTest, RaycastRendersWithBothRenderersAndPrintsJson) {
+  TempDir dir;
+  const CliRun r = Enavi(dir, "bench raycast --world empty --frames 2 --bullet-frames 1 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(Has(r.out, "\"embree_mrays_per_s_per_core\"")) << r.out;
+  EXPECT_TRUE(Has(r.out, "\"bullet_frames\": 1,")) << r.out;
+  ExpectRefused(Enavi(dir, "bench raycast --world empty --frames 0"), {"--frames"}, "zero frames");
+}
+
 }  // namespace
 }  // namespace enavi::cli
