@@ -256,7 +256,9 @@ class ClockAgreementTest : public ::testing::Test {
     options_.emulation.calibration_file = check.path;
   }
   void TearDown() override {
-    if (geteuid() == 0) EXPECT_TRUE(OwnEpisodeCgroups().empty()) << "left behind: " << Join(OwnEpisodeCgroups());
+    if (geteuid() == 0) {
+      EXPECT_TRUE(OwnEpisodeCgroups().empty()) << "left behind: " << Join(OwnEpisodeCgroups());
+    }
   }
 
   EpisodeOptions options_;
