@@ -50,10 +50,11 @@ struct ResolutionAdapterOptions {
   /// below the threshold, eci at or above high_eci) has come for this long (sim s), whatever
   /// the eci: the paper (Sec. V.A) refines on those events and says nothing of coarsening, and
   /// eci alone keeps a refinement for the rest of a flight wherever it hovers between low_eci
-  /// and high_eci. Default 5 s: twice the time to fly through the mapping range (5 m) at the
-  /// planner's top speed (2 m/s), so the obstacles that raised the last trigger are behind the
-  /// vehicle even at half speed. Range > 0.
-  double quiet_period = 5.0;
+  /// and high_eci. Default 3 s: the time to fly through the mapping range (5 m) at the planner's
+  /// top speed (2 m/s), 2.5 s, after which the obstacles that raised the last trigger are behind
+  /// the vehicle, rounded up to the adapter's other hysteresis periods (coarsen_after,
+  /// refine_hold). Range > 0.
+  double quiet_period = 3.0;
   /// No coarsening within this time (sim s) after a refinement: the hysteresis that stops
   /// refine / coarsen oscillation. Range >= 0.
   double refine_hold = 3.0;

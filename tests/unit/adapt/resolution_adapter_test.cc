@@ -104,6 +104,7 @@ TEST(ResolutionAdapterTest, HighEciRefinesAtMostOncePerInterval) {
 TEST(ResolutionAdapterTest, SustainedLowEciCoarsensOneStepPerPeriod) {
   ResolutionAdapterOptions o;  // low_eci 0.3, coarsen_after 3 s, refine_hold 3 s
   o.min_refine_interval = 0.0;
+  o.quiet_period = 100.0;  // the eci rule alone
   ResolutionAdapter ra(o);
   ra.Select(kStart, kFarGoal);
   ra.OnCollisionTrigger(0.0);
@@ -165,7 +166,7 @@ TEST(ResolutionAdapterTest, NoCoarseningWithinTheHoldAfterARefinement) {
 constexpr double kModerateEci = 0.4;
 
 TEST(ResolutionAdapterTest, CoarsensAfterTheQuietPeriodWhateverTheEci) {
-  ResolutionAdapter ra;  // quiet_period 5 s
+  ResolutionAdapter ra({.quiet_period = 5.0});
   ra.Select(kStart, kFarGoal);
   ra.OnCollisionTrigger(0.0);
   ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
@@ -178,7 +179,7 @@ TEST(ResolutionAdapterTest, CoarsensAfterTheQuietPeriodWhateverTheEci) {
 }
 
 TEST(ResolutionAdapterTest, ATriggerInsideTheQuietPeriodRestartsIt) {
-  ResolutionAdapter ra;  // quiet_period 5 s, min_refine_interval 2 s, threshold 0.9
+  ResolutionAdapter ra({.quiet_period = 5.0});  // min_refine_interval 2 s, threshold 0.9
   ra.Select(kStart, kFarGoal);
   ra.OnCollisionTrigger(0.0);
   ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
