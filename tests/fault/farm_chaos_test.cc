@@ -543,7 +543,10 @@ void ChaosFarm::Verify(const ChaosPlan& plan, const std::string& job) {
     }
     return n;
   };
-  EXPECT_TRUE(Eventually([&] { return spooled() == 0; }, 30s))
+  // A result whose ack was lost waits for its worker's next re-send: 10 s, then 20, 40, 60 s
+  // (enavi::worker::WorkerOptions::resend). 130 s covers three lost acks in a row; 30 s covered one,
+  // and at 10 % loss a second loss came often enough to fail 2 runs in 5.
+  EXPECT_TRUE(Eventually([&] { return spooled() == 0; }, 130s))
       << spooled() << " results still unacknowledged in the running workers' spools";
 
   // The plan was carried out.
