@@ -16,9 +16,7 @@ namespace enavi::api {
 
 using Vec3 = std::array<double, 3>;
 
-/// Clocks and cost modes the farm knows (docs/design.md, "Time: two clocks"). Methods come from the registry
-/// (navstack/methods), handed to job validation as a MethodCatalog.
-inline constexpr std::array<const char*, 2> kClocks = {"virtual", "emulated"};
+/// Cost modes of the virtual clock (docs/design.md, "Time: two clocks").
 inline constexpr std::array<const char*, 2> kCostModes = {"model", "measured"};
 
 /// A tunable as job validation sees it.
@@ -33,8 +31,14 @@ struct MethodEntry {
   std::string summary;
   std::vector<TunableRange> tunables;  ///< every override a spec for this method may set
 };
-struct MethodCatalog {
+/// What job validation knows, as data. api sits below the registries (methods: navstack/methods;
+/// boards: workers/board/profiles; scenarios: the worlds generators; clocks: workers/sim), so the
+/// composition root hands their contents in (sim::FarmCatalog()).
+struct Catalog {
   std::vector<MethodEntry> methods;
+  std::vector<std::string> boards;
+  std::vector<std::string> scenarios;
+  std::vector<std::string> clocks;
   /// Overrides with one of these prefixes pass unchecked (episode commands other than
   /// `enavi fly`, e.g. the farm tests' fake episode with its `fake.*` knobs).
   std::vector<std::string> unchecked_prefixes;
@@ -47,7 +51,7 @@ struct MethodCatalog {
 };
 
 struct EpisodeSpec {
-  std::string world = "s1";  ///< scenario id (s1..s5, canyon, forest, empty), a world file, a mesh or an SDF world
+  std::string world = "s1";  ///< scenario id (a worlds generator), a world file, a mesh or an SDF world
   std::uint64_t seed = 1;    ///< world generator seed and episode seed (sensor noise, planner)
   std::map<std::string, std::string> world_params;  ///< generator parameters
   std::optional<Vec3> start;  ///< required for mesh and SDF worlds

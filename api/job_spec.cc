@@ -32,11 +32,11 @@ class Context {
   }
 
   const std::vector<fs::path>& roots() const { return roots_; }
-  const MethodCatalog& catalog() const { return catalog_; }
+  const Catalog& catalog() const { return catalog_; }
 
  private:
   std::string file_;
-  const MethodCatalog& catalog_;
+  const Catalog& catalog_;
   std::vector<fs::path> roots_;
 };
 
@@ -305,7 +305,7 @@ ScenarioEntry Scenario(const Context& ctx, const YAML::Node& n) {
   // Never assign YAML::Node to an existing node: yaml-cpp would overwrite the node it refers to.
   const YAML::Node world_node = n.IsMap() ? n["world"] : n;
   const std::string world = Scalar(ctx, world_node, "scenarios");
-  if (Contains(kScenarios, world)) {
+  if (Contains(ctx.catalog().scenarios, world)) {
     entry.world = world;
   } else if (world.find('/') != std::string::npos || world.find('.') != std::string::npos) {
     entry.world = ResolveFile(ctx, world_node, "scenarios", world, kWorldFileExtensions);
@@ -319,7 +319,7 @@ ScenarioEntry Scenario(const Context& ctx, const YAML::Node& n) {
     }
   } else {
     ctx.Fail(world_node, "scenarios",
-             "unknown scenario '" + world + "' (known: " + Join(kScenarios) +
+             "unknown scenario '" + world + "' (known: " + Join(ctx.catalog().scenarios) +
                  ", or a world file: " + Join(kWorldFileExtensions) + ")");
   }
   return entry;
@@ -361,7 +361,7 @@ EpisodeOverride Override(const Context& ctx, const YAML::Node& n, const std::vec
   if (const YAML::Node m = n["match"]) {
     if (!m.IsMap()) ctx.Fail(m, f + ".match", "expected a map of board/scenario/method/seed");
     CheckKeys(ctx, m, f + ".match", {"board", "scenario", "method", "seed"});
-    if (m["board"]) o.boards = Choices(ctx, m["board"], f + ".match.board", kBoards, "board");
+    if (m["board"]) o.boards = Choices(ctx, m["board"], f + ".match.board", ctx.catalog().boards, "board");
     if (m["method"]) o.methods = Choices(ctx, m["method"], f + ".match.method", MethodNames(ctx), "method");
     if (m["scenario"]) {
       for (const auto& item : Items(ctx, m["scenario"], f + ".match.scenario")) {
@@ -394,7 +394,7 @@ EpisodePick Pick(const Context& ctx, const YAML::Node& n) {
     if (!n[required]) ctx.Fail(n, f + "." + required, "missing (required)");
   }
   EpisodePick p;
-  p.board = Choices(ctx, n["board"], f + ".board", kBoards, "board").front();
+  p.board = Choices(ctx, n["board"], f + ".board", ctx.catalog().boards, "board").front();
   p.scenario = Scenario(ctx, n["scenario"]);
   const std::int64_t seed = Integer(ctx, n["seed"], f + ".seed");
   if (seed < 0 || seed > (std::int64_t{1} << 53)) {
@@ -416,8 +416,9 @@ bool Matches(const EpisodeOverride& o, const EpisodeSpec& e) {
 
 JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
                      const JobSpecOptions& options) {
-  if (options.catalog.methods.empty())
-    throw std::logic_error("ParseJobSpec: no method catalog (the composition root passes the registry's)");
+  const Catalog& c = options.catalog;
+  if (c.methods.empty() || c.boards.empty() || c.scenarios.empty() || c.clocks.empty())
+    throw std::logic_error("ParseJobSpec: incomplete catalog (the composition root passes the registries')");
   const Context ctx(file_name, options);
   YAML::Node loaded;
   try {
@@ -461,7 +462,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
     }
     for (const auto& item : list) job.episodes.push_back(Pick(ctx, item));
   } else {
-    job.boards = Choices(ctx, root["boards"], "boards", kBoards, "board");
+    job.boards = Choices(ctx, root["boards"], "boards", ctx.catalog().boards, "board");
     for (const auto& item : Items(ctx, root["scenarios"], "scenarios")) {
       ScenarioEntry entry = Scenario(ctx, item);
       for (const auto& other : job.scenarios) {
@@ -472,7 +473,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
     if (job.scenarios.empty()) ctx.Fail(root["scenarios"], "scenarios", "empty list");
     job.seeds = Seeds(ctx, root["seeds"]);
   }
-  if (root["clock"]) job.clock = Choices(ctx, root["clock"], "clock", kClocks, "clock").front();
+  if (root["clock"]) job.clock = Choices(ctx, root["clock"], "clock", ctx.catalog().clocks, "clock").front();
   if (root["cost"]) job.cost = Choices(ctx, root["cost"], "cost", kCostModes, "cost mode").front();
   if (root["dilation"]) job.dilation = Number(ctx, root["dilation"], "dilation", 0.01, kMaxDilation);
   if (root["timeout_s"]) job.timeout_s = Number(ctx, root["timeout_s"], "timeout_s", 0, kMaxTimeoutS);
@@ -618,10 +619,6 @@ std::pair<std::string, std::string> ParseLabelFilter(const std::string& text,
     throw std::invalid_argument(field + ": '" + text + "': " + error);
   }
   return {std::move(key), std::move(value)};
-}
-
-std::string ScenarioOf(const std::string& world) {
-  return Contains(kScenarios, world) ? world : std::string("custom");
 }
 
 }  // namespace enavi::api

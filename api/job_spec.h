@@ -3,8 +3,8 @@
 // deterministically into EpisodeSpecs (docs/design.md, "One episode"; docs/farm.md).
 //
 //   name: tx2-city                # optional; default: the file's stem
-//   boards: [tx2, pi4b]           # pi4b tx2 nx opi5 x86 host
-//   scenarios:                    # s1..s5 canyon forest empty, or a world file under an allowed root
+//   boards: [tx2, pi4b]           # the registered boards (`enavi fly --help` lists them)
+//   scenarios:                    # registered scenario ids, or a world file under an allowed root
 //     - s1
 //     - worlds/hall.yaml
 //     - {world: meshes/yard.obj, start: [0, 0, 1], goal: [30, 0, 1], params: {k: v}}
@@ -12,7 +12,7 @@
 //     - {world: gazebo/yard.world, model_path: [gazebo/models], start: [0, 0, 2], goal: [20, 0, 2]}
 //   methods: [baseline, fixed, enavi]  # the registered methods
 //   seeds: 3                      # a count (1..N) or a list [1, 7, 9]
-//   clock: virtual                # virtual | emulated
+//   clock: virtual                # a registered clock: virtual | emulated
 //   cost: model                   # model | measured
 //   dilation: 1.0                 # emulated clock only: 1 sim s = dilation wall s
 //   timeout_s: 0                  # 0: derived from the start-goal distance
@@ -47,8 +47,6 @@
 
 namespace enavi::api {
 
-inline constexpr std::array<const char*, 6> kBoards = {"pi4b", "tx2", "nx", "opi5", "x86", "host"};
-inline constexpr std::array<const char*, 8> kScenarios = {"s1", "s2", "s3", "s4", "s5", "canyon", "forest", "empty"};
 /// A job expands to at most this many episodes.
 inline constexpr std::size_t kMaxJobEpisodes = 10000;
 /// `seeds: N` accepts 1..kMaxSeedCount; a seed list holds at most that many entries.
@@ -71,9 +69,9 @@ struct JobSpecOptions {
   /// taken relative to the first. Empty: the current directory.
   std::vector<std::filesystem::path> allowed_roots;
   std::size_t max_episodes = kMaxJobEpisodes;
-  /// The navigation methods and their tunables (the registry's, as data): `methods` and every
-  /// override are checked against it. Required.
-  MethodCatalog catalog;
+  /// The registries' contents: methods and their tunables, boards, scenarios and clocks. Every
+  /// name and override in a spec is checked against it. Required.
+  Catalog catalog;
 };
 
 struct ScenarioEntry {
@@ -158,8 +156,5 @@ std::string LabelError(const std::string& key, const std::string& value);
 /// @throws std::invalid_argument naming `field` and the reason.
 std::pair<std::string, std::string> ParseLabelFilter(const std::string& text,
                                                      const std::string& field);
-
-/// Scenario id of a world string as it appears in EpisodeSpec::world ("custom" for files).
-std::string ScenarioOf(const std::string& world);
 
 }  // namespace enavi::api

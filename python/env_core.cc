@@ -9,6 +9,7 @@
 #include "navstack/rl/decision_hook.h"
 #include "navstack/rl/rollout.h"
 #include "workers/sim/episode.h"
+#include "workers/sim/episode_config.h"
 #include "worlds/resolve.h"
 
 namespace enavi::python {
@@ -113,9 +114,10 @@ class EnvCore::Hook : public navstack::rl::DecisionHook {
 };
 
 EnvCore::EnvCore(EnvConfig config) : config_(std::move(config)) {
-  if (std::find(api::kBoards.begin(), api::kBoards.end(), config_.board) == api::kBoards.end()) {
+  const std::vector<std::string> boards = sim::FarmCatalog().boards;
+  if (std::find(boards.begin(), boards.end(), config_.board) == boards.end()) {
     std::string known;
-    for (const char* b : api::kBoards) known += (known.empty() ? "" : ", ") + std::string(b);
+    for (const std::string& b : boards) known += (known.empty() ? "" : ", ") + b;
     throw std::invalid_argument("board: unknown board '" + config_.board + "' (known: " + known + ")");
   }
   if (config_.overrides.count("strategy.explore")) {

@@ -21,7 +21,7 @@
 namespace enavi::python {
 
 struct EnvConfig {
-  std::string world = "empty";  ///< any world the CLI accepts (s1..s5, forest, empty, a file)
+  std::string world = "empty";  ///< any world the CLI accepts (a scenario id or a file)
   std::string board = "tx2";
   std::string policy;           ///< critic/actor file the stack loads; empty: the shipped one
   double timeout_s = 0;         ///< 0: derived from the start-goal distance

@@ -762,6 +762,8 @@ const GeneratorInfo* FindGenerator(std::string_view id) {
   return nullptr;
 }
 
+std::string ScenarioOf(const std::string& world) { return FindGenerator(world) ? world : std::string("custom"); }
+
 World Generate(const std::string& scenario, std::uint64_t seed, const std::map<std::string, std::string>& params) {
   const Entry* entry = nullptr;
   for (const auto& e : Entries()) {

@@ -28,18 +28,23 @@ struct GeneratorParam {
 };
 
 struct GeneratorInfo {
-  std::string id;               ///< s1..s5, canyon, forest, empty
+  std::string id;               ///< the scenario id job specs and `--world` name
   std::string description;
   double paper_path_length = 0;  ///< m, the paper's flight path (0 when not from the paper)
   std::vector<GeneratorParam> params;
   double flight_altitude = 1.5;  ///< m above the ground, of start and goal
 };
 
-/// All generators, in a fixed order.
+/// All generators, in a fixed order: the farm's one list of scenarios (job validation, the
+/// CLI's help, the paper's matrix of those with a paper path length read it).
 const std::vector<GeneratorInfo>& Generators();
 
 /// The generator with this id, or nullptr.
 const GeneratorInfo* FindGenerator(std::string_view id);
+
+/// The scenario of a world string as it appears in an episode spec: the generator id, or
+/// "custom" for a file.
+std::string ScenarioOf(const std::string& world);
 
 /// Generates and validates a world. Start and goal are at the generator's flight altitude (1.5 m
 /// above the ground, 5 m for `canyon`), in free space, joined by a route at least 1 m wide, and

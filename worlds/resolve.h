@@ -17,7 +17,7 @@
 namespace enavi::worlds {
 
 struct WorldRequest {
-  std::string world;                          ///< s1..s5, canyon, forest, empty, FILE.yaml, a mesh file or FILE.sdf/.world
+  std::string world;                          ///< a scenario id (Generators()), FILE.yaml, a mesh file or FILE.sdf/.world
   std::uint64_t seed = 1;                     ///< generator seed (ignored for files)
   std::map<std::string, std::string> params;  ///< generator parameters (--param k=v)
   std::optional<Eigen::Vector3d> start;       ///< required for mesh and SDF worlds, overrides otherwise

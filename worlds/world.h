@@ -98,7 +98,7 @@ struct Ground {
 
 struct WorldMetadata {
   std::string name;
-  std::string scenario;  ///< generator id (s1..s5, canyon, forest, empty) or "custom"
+  std::string scenario;  ///< generator id or "custom"
   std::uint64_t seed = 0;
   int generator_version = 0;
   std::map<std::string, std::string> params;  ///< generator parameters, sorted for stable output

@@ -72,6 +72,7 @@ ResolutionAdapter::ResolutionAdapter(const ResolutionAdapterOptions& options) : 
   RequireRange(options_.score_threshold, 0.0, 1.0, "score_threshold");
   RequireRange(options_.low_eci, 0.0, 1.0, "low_eci");
   RequireRange(options_.coarsen_after, 0.0, 1e6, "coarsen_after", /*lo_open=*/true);
+  RequireRange(options_.quiet_period, 0.0, 1e6, "quiet_period", /*lo_open=*/true);
   RequireRange(options_.refine_hold, 0.0, 1e6, "refine_hold");
   RequireRange(options_.min_refine_interval, 0.0, 1e6, "min_refine_interval");
   RequireRange(options_.high_eci, options_.low_eci, 1.0, "high_eci");
@@ -117,6 +118,8 @@ void ResolutionAdapter::ReportPlanningOutcome(int level, bool found_path) {
 }
 
 void ResolutionAdapter::Refine(double t) {
+  // Every trigger restarts the quiet period, also one held back below.
+  quiet_since_ = t;
   // Several triggers in a row usually report the same obstacle coming into view: one step each
   // min_refine_interval, so a burst does not jump straight to the finest (costliest) map.
   if (has_refined_ && t - last_refine_t_ + kTimeSlack < options_.min_refine_interval) return;
@@ -144,21 +147,21 @@ void ResolutionAdapter::ObserveEci(double t, double eci) {
     // Cluttered view ahead: plan on a finer map before the triggers ask for it (paper Sec. VI:
     // higher eci, finer resolution).
     if (eci >= options_.high_eci) Refine(t);
-    return;
-  }
-  if (!eci_low_) {
+  } else if (!eci_low_) {
     eci_low_ = true;
     eci_low_since_ = t;
   }
-  const bool sustained = t - eci_low_since_ + kTimeSlack >= options_.coarsen_after;
+  const bool low_sustained = eci_low_ && t - eci_low_since_ + kTimeSlack >= options_.coarsen_after;
+  const bool quiet = t - quiet_since_ + kTimeSlack >= options_.quiet_period;
   const bool held = !has_refined_ || t - last_refine_t_ + kTimeSlack >= options_.refine_hold;
-  if (!sustained || !held || level_ == 0) return;
+  if (!(low_sustained || quiet) || !held || level_ == 0) return;
   // One step coarser than where we plan now, and give that level another try.
   const int target = level_ - 1;
   floor_ = std::min(floor_, target);
   outcome_[static_cast<std::size_t>(target)] = Outcome::kUnknown;
-  // The next step needs another full low-eci period (and a Select() at the new level).
+  // The next step needs another full period of either kind (and a Select() at the new level).
   eci_low_since_ = t;
+  quiet_since_ = t;
 }
 
 }  // namespace enavi::navstack

@@ -46,6 +46,15 @@ struct ResolutionAdapterOptions {
   double high_eci = 0.5;
   /// eci must stay low this long (sim s) before going one step coarser. Range > 0.
   double coarsen_after = 3.0;
+  /// Also go one step coarser when no refinement trigger (collision-check trigger, path score
+  /// below the threshold, eci at or above high_eci) has come for this long (sim s), whatever
+  /// the eci: the paper (Sec. V.A) refines on those events and says nothing of coarsening, and
+  /// eci alone keeps a refinement for the rest of a flight wherever it hovers between low_eci
+  /// and high_eci. Default 3 s: the time to fly through the mapping range (5 m) at the planner's
+  /// top speed (2 m/s), 2.5 s, after which the obstacles that raised the last trigger are behind
+  /// the vehicle, rounded up to the adapter's other hysteresis periods (coarsen_after,
+  /// refine_hold). Range > 0.
+  double quiet_period = 3.0;
   /// No coarsening within this time (sim s) after a refinement: the hysteresis that stops
   /// refine / coarsen oscillation. Range >= 0.
   double refine_hold = 3.0;
@@ -70,15 +79,17 @@ struct ResolutionDecision {
   ResolutionReason reason = ResolutionReason::kGreedy;
 };
 
-/// Greedy coarsest-feasible resolution with event-driven refinement and eci-driven coarsening.
+/// Greedy coarsest-feasible resolution with event-driven refinement and two coarsening rules.
 ///
 /// State: a refinement floor (the coarsest level currently allowed) and, per level, the outcome of
 /// the last planning attempt there. Select() takes the coarsest level >= floor whose cells separate
 /// start and goal (Manhattan distance > 0) and whose last attempt did not fail (untried levels are
 /// tried optimistically). The floor moves one step finer after a collision-check trigger, a path
-/// scoring below the threshold or an eci at or above high_eci; it moves one step coarser (and that level gets another try) when
-/// eci has stayed low for `coarsen_after`, no sooner than `refine_hold` after a refinement, and
-/// again only after another full low-eci period.
+/// scoring below the threshold or an eci at or above high_eci (each is a trigger, even when
+/// min_refine_interval holds the refinement back); it moves one step coarser (and that level gets
+/// another try) when eci has stayed low for `coarsen_after` or no trigger has come for
+/// `quiet_period`, no sooner than `refine_hold` after a refinement, and again only after another
+/// full period of either kind. The coarsening rules are evaluated at each ObserveEci().
 class ResolutionAdapter {
  public:
   /// @throws std::invalid_argument for an option outside its range (message names the field).
@@ -121,6 +132,7 @@ class ResolutionAdapter {
   double last_refine_t_ = 0.0;
   bool eci_low_ = false;
   double eci_low_since_ = 0.0;
+  double quiet_since_ = 0.0;  ///< time of the last trigger or coarsening
 };
 
 }  // namespace enavi::navstack

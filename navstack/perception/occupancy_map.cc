@@ -7,7 +7,7 @@
 #include <string>
 #include <utility>
 
-#include <octomap/OcTree.h>
+#include "navstack/perception/cell_store.h"
 
 namespace enavi::navstack {
 namespace {
@@ -16,6 +16,13 @@ constexpr int kKeyOffset = 32768;  // OctoMap's tree_max_val for its 16-level tr
 constexpr double kMinResolution = 0.02;
 constexpr double kMaxResolution = 5.0;
 constexpr std::int64_t kMaxGridCells = std::int64_t{1} << 28;
+
+using detail::KeyBox;
+
+std::unique_ptr<detail::CellStore> MakeStore(const MapOptions& o) {
+  return o.storage == MapStorage::kBlocks ? detail::MakeBlockStore(o)
+                                          : detail::MakeOctreeStore(o, o.resolution);
+}
 
 void Require(bool ok, const char* field, double value, const char* range) {
   if (!ok) {
@@ -29,22 +36,6 @@ void RequireResolution(double res, const char* where) {
     throw std::invalid_argument(std::string(where) + ": " + std::to_string(res) +
                                 " is out of range [0.02, 5]");
   }
-}
-
-std::unique_ptr<octomap::OcTree> MakeTree(const MapOptions& o, double resolution) {
-  auto tree = std::make_unique<octomap::OcTree>(resolution);
-  tree->setProbHit(o.prob_hit);
-  tree->setProbMiss(o.prob_miss);
-  tree->setClampingThresMin(o.clamp_min);
-  tree->setClampingThresMax(o.clamp_max);
-  tree->setOccupancyThres(o.occupancy_threshold);
-  return tree;
-}
-
-octomap::OcTreeKey Unpack(std::uint64_t k) {
-  return octomap::OcTreeKey(static_cast<octomap::key_type>(k & 0xFFFF),
-                            static_cast<octomap::key_type>((k >> 16) & 0xFFFF),
-                            static_cast<octomap::key_type>((k >> 32) & 0xFFFF));
 }
 
 // Open-addressing set of packed keys that remembers insertion order, so the keys it hands out
@@ -98,6 +89,116 @@ class KeySet {
   std::vector<std::uint64_t> order_;
   std::size_t mask_ = 0;
   int shift_ = 0;
+};
+
+// Marks of the voxels around the sensor for one frame, in a dense array over the local update
+// box: deduplicating ray voxels by index instead of by hash, as Ego-Planner's raycast does with
+// its per-voxel flags (grid_map.cpp, raycastProcess). A generation stamp resets the marks between
+// frames without clearing the array; one array per thread, reused.
+class FrameMarks {
+ public:
+  static constexpr std::int64_t kMaxCells = std::int64_t{1} << 23;
+
+  // The box of keys within `half_cells` of `centre`; false (and unusable) if it has more than
+  // kMaxCells cells.
+  bool Reset(const Eigen::Vector3i& centre, const Eigen::Vector3i& half_cells) {
+    const Eigen::Vector3i dims = 2 * half_cells + Eigen::Vector3i::Ones();
+    if (std::int64_t{dims.x()} * dims.y() * dims.z() > kMaxCells) return false;
+    lo_ = centre - half_cells;
+    dims_ = dims;
+    Scratch& s = scratch();
+    const std::size_t cells = static_cast<std::size_t>(dims.prod());
+    if (s.stamps.size() < cells) s.stamps.assign(cells, 0);
+    if (++s.generation == (std::uint32_t{1} << 29)) {
+      std::fill(s.stamps.begin(), s.stamps.end(), 0);
+      s.generation = 1;
+    }
+    stamps_ = s.stamps.data();
+    tag_ = s.generation << 3;
+    return true;
+  }
+  // Sets `bit` on the key's voxel; true if it was not set yet this frame.
+  bool Mark(std::uint64_t key, std::uint32_t bit) {
+    std::uint32_t& v = stamps_[Index(key)];
+    if ((v & ~7u) != tag_) v = tag_;
+    if (v & bit) return false;
+    v |= bit;
+    return true;
+  }
+  bool Marked(std::uint64_t key, std::uint32_t bit) const {
+    const std::uint32_t v = stamps_[Index(key)];
+    return (v & ~7u) == tag_ && (v & bit) != 0;
+  }
+
+ private:
+  struct Scratch {
+    std::vector<std::uint32_t> stamps;
+    std::uint32_t generation = 0;
+  };
+  static Scratch& scratch() {
+    thread_local Scratch s;
+    return s;
+  }
+  std::size_t Index(std::uint64_t key) const {
+    const int x = static_cast<int>(key & 0xFFFF) - lo_.x();
+    const int y = static_cast<int>((key >> 16) & 0xFFFF) - lo_.y();
+    const int z = static_cast<int>((key >> 32) & 0xFFFF) - lo_.z();
+    if (static_cast<unsigned>(x) >= static_cast<unsigned>(dims_.x()) ||
+        static_cast<unsigned>(y) >= static_cast<unsigned>(dims_.y()) ||
+        static_cast<unsigned>(z) >= static_cast<unsigned>(dims_.z())) {
+      throw std::logic_error("OccupancyMap: a ray left the local update box");
+    }
+    return static_cast<std::size_t>(x) +
+           static_cast<std::size_t>(dims_.x()) * (y + static_cast<std::size_t>(dims_.y()) * z);
+  }
+  Eigen::Vector3i lo_ = Eigen::Vector3i::Zero();
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
+  std::uint32_t* stamps_ = nullptr;
+  std::uint32_t tag_ = 0;
+};
+
+// The frame's three key sets (cleared, hit, free ray ends), the first two remembering insertion
+// order so the keys come out in ray order. FrameMarks when the local box is small enough (every
+// method's default box), hash sets otherwise; both give the same keys in the same order.
+class FrameKeys {
+ public:
+  enum Set { kFree = 0, kOccupied = 1, kFreeEnd = 2 };
+
+  FrameKeys(const Eigen::Vector3i& centre, const Eigen::Vector3i& half_cells, std::size_t rays,
+            std::size_t hits)
+      : dense_(marks_.Reset(centre, half_cells)) {
+    if (dense_) {
+      order_[kFree].reserve(rays * 2);
+      order_[kOccupied].reserve(hits);
+    } else {
+      sets_.emplace_back(rays * 2);
+      sets_.emplace_back(hits);
+      sets_.emplace_back(rays);
+    }
+  }
+  // Adds `key` to `set`; true if it was not in it yet.
+  bool Add(Set set, std::uint64_t key) {
+    if (!dense_) return sets_[set].Insert(key);
+    if (!marks_.Mark(key, Bit(set))) return false;
+    if (set != kFreeEnd) order_[set].push_back(key);
+    return true;
+  }
+  bool Has(Set set, std::uint64_t key) const {
+    return dense_ ? marks_.Marked(key, Bit(set)) : sets_[set].Contains(key);
+  }
+  const std::vector<std::uint64_t>& Order(Set set) const {
+    return dense_ ? order_[set] : sets_[set].keys();
+  }
+  std::vector<std::uint64_t> Take(Set set) {
+    return dense_ ? std::move(order_[set]) : sets_[set].TakeKeys();
+  }
+
+ private:
+  static std::uint32_t Bit(Set set) { return std::uint32_t{1} << set; }
+  FrameMarks marks_;
+  bool dense_;
+  std::vector<std::uint64_t> order_[2];
+  std::vector<KeySet> sets_;
 };
 
 // Voxel traversal (Amanatides & Woo) in OctoMap's key space at one resolution.
@@ -199,7 +300,7 @@ void MapOptions::Validate() const {
 
 OccupancyMap::OccupancyMap(const MapOptions& options) : options_(options) {
   options_.Validate();
-  tree_ = MakeTree(options_, options_.resolution);
+  store_ = MakeStore(options_);
 }
 
 OccupancyMap::~OccupancyMap() = default;
@@ -228,20 +329,21 @@ MapUpdate OccupancyMap::ComputeUpdate(std::shared_ptr<const ScanPoints> scan,
 
   const std::size_t rays = scan->hits_W.size() + scan->far_W.size() +
                            (options_.clear_no_return ? scan->no_return_W.size() : 0);
-  KeySet occupied(scan->hits_W.size());
-  KeySet free(rays * 2);
+  const double inv = 1.0 / options_.resolution;
+  const Eigen::Vector3i half_cells =
+      (options_.local_half_extent * inv).array().ceil().cast<int>() + 2;
+  FrameKeys keys(o_key, half_cells, rays, scan->hits_W.size());
   const bool stop = options_.stop_at_traversed;
-  KeySet free_ends(options_.discretize_endpoints || stop ? rays : 0);
-  auto mark_free = [&free](std::uint64_t key) {
-    free.Insert(key);
+  auto mark_free = [&keys](std::uint64_t key) {
+    keys.Add(FrameKeys::kFree, key);
     return true;
   };
   // stop_at_traversed: from the end voxel back to the sensor, until a voxel already cleared.
-  if (stop) free.Insert(RayCaster::Pack(o_key));
+  if (stop) keys.Add(FrameKeys::kFree, RayCaster::Pack(o_key));
   auto cast_back = [&](const Eigen::Vector3d& end, const Eigen::Vector3i& end_key, bool end_is_free) {
     const std::uint64_t end_packed = RayCaster::Pack(end_key);
     update.ray_steps += caster.Cast(end, end_key, o, o_key, [&](std::uint64_t key) {
-      return key == end_packed && !end_is_free ? true : free.Insert(key);
+      return key == end_packed && !end_is_free ? true : keys.Add(FrameKeys::kFree, key);
     });
   };
 
@@ -260,12 +362,12 @@ MapUpdate OccupancyMap::ComputeUpdate(std::shared_ptr<const ScanPoints> scan,
     Eigen::Vector3i key;
     if (!caster.KeyOf(end, &key)) return;
     if (stop) {
-      if (free_ends.Insert(RayCaster::Pack(key))) cast_back(end, key, true);
+      if (keys.Add(FrameKeys::kFreeEnd, RayCaster::Pack(key))) cast_back(end, key, true);
       return;
     }
     Eigen::Vector3d target = end;
     if (options_.discretize_endpoints) {
-      if (!free_ends.Insert(RayCaster::Pack(key))) return;
+      if (!keys.Add(FrameKeys::kFreeEnd, RayCaster::Pack(key))) return;
       target = caster.CenterOf(key);
     }
     update.ray_steps += caster.Cast(o, o_key, target, key, mark_free);
@@ -281,7 +383,7 @@ MapUpdate OccupancyMap::ComputeUpdate(std::shared_ptr<const ScanPoints> scan,
     }
     Eigen::Vector3i key;
     if (!caster.KeyOf(p, &key)) continue;
-    const bool new_end = occupied.Insert(RayCaster::Pack(key));
+    const bool new_end = keys.Add(FrameKeys::kOccupied, RayCaster::Pack(key));
     if (stop) {
       if (new_end) cast_back(p, key, false);
     } else if (options_.discretize_endpoints) {
@@ -301,11 +403,11 @@ MapUpdate OccupancyMap::ComputeUpdate(std::shared_ptr<const ScanPoints> scan,
   if (options_.clear_no_return) cast_all_free(scan->no_return_W);
 
   // Occupied wins over free (OctoMap's computeUpdate rule).
-  update.free_keys.reserve(free.keys().size());
-  for (std::uint64_t key : free.keys()) {
-    if (!occupied.Contains(key)) update.free_keys.push_back(key);
+  update.free_keys.reserve(keys.Order(FrameKeys::kFree).size());
+  for (std::uint64_t key : keys.Order(FrameKeys::kFree)) {
+    if (!keys.Has(FrameKeys::kOccupied, key)) update.free_keys.push_back(key);
   }
-  update.occupied_keys = occupied.TakeKeys();
+  update.occupied_keys = keys.Take(FrameKeys::kOccupied);
   update.scan = std::move(scan);
   if (work != nullptr) work->Add(WorkUnit::kRayStep, update.ray_steps);
   return update;
@@ -324,8 +426,8 @@ ApplyResult OccupancyMap::Apply(const MapUpdate& update, WorkCounts* work) {
     use = &recomputed;
     result.recomputed = true;
   }
-  for (std::uint64_t key : use->free_keys) tree_->updateNode(Unpack(key), false);
-  for (std::uint64_t key : use->occupied_keys) tree_->updateNode(Unpack(key), true);
+  for (std::uint64_t key : use->free_keys) store_->Update(key, false);
+  for (std::uint64_t key : use->occupied_keys) store_->Update(key, true);
   result.voxel_updates =
       static_cast<std::int64_t>(use->free_keys.size() + use->occupied_keys.size());
   if (work != nullptr) work->Add(WorkUnit::kVoxelUpdate, result.voxel_updates);
@@ -360,28 +462,24 @@ std::shared_ptr<OccupancyMap> OccupancyMap::Rebuilt(double resolution, WorkCount
   if (!history_.empty()) {
     const Eigen::Vector3d centre = history_.back()->origin_W;
     const Eigen::Vector3d half = options_.local_half_extent;
-    const octomap::point3d lo(centre.x() - half.x(), centre.y() - half.y(), centre.z() - half.z());
-    const octomap::point3d hi(centre.x() + half.x(), centre.y() + half.y(), centre.z() + half.z());
-    const float hit_log_odds = map->tree_->getProbHitLog();
+    const double inv = 1.0 / resolution;
+    auto key = [inv](double x) { return static_cast<int>(std::floor(inv * x)) + kKeyOffset; };
+    const float hit_log_odds = map->store_->HitLogOdds();
     std::int64_t carried = 0;
-    for (auto it = tree_->begin_leafs_bbx(lo, hi), end = tree_->end_leafs_bbx(); it != end; ++it) {
-      if (!tree_->isNodeOccupied(*it)) continue;
-      const double h = 0.5 * it.getSize() - 1e-6;
-      const octomap::point3d c = it.getCoordinate();
-      const octomap::OcTreeKey kmin = map->tree_->coordToKey(c.x() - h, c.y() - h, c.z() - h);
-      const octomap::OcTreeKey kmax = map->tree_->coordToKey(c.x() + h, c.y() + h, c.z() + h);
+    store_->ForEachOccupiedLeaf(centre - half, centre + half, [&](const Eigen::Vector3d& c, double edge) {
+      const double h = 0.5 * edge - 1e-6;
       // int counters: a key of 65535 must not wrap the loop.
-      for (int x = kmin[0]; x <= kmax[0]; ++x) {
-        for (int y = kmin[1]; y <= kmax[1]; ++y) {
-          for (int z = kmin[2]; z <= kmax[2]; ++z) {
+      for (int x = key(c.x() - h); x <= key(c.x() + h); ++x) {
+        for (int y = key(c.y() - h); y <= key(c.y() + h); ++y) {
+          for (int z = key(c.z() - h); z <= key(c.z() + h); ++z) {
             // One hit's worth, however many old leaves share the cell, so frames clear it as fast
             // as a freshly seen one.
-            map->tree_->setNodeValue(octomap::OcTreeKey(x, y, z), hit_log_odds);
+            map->store_->Set(RayCaster::Pack({x, y, z}), hit_log_odds);
             ++carried;
           }
         }
       }
-    }
+    });
     if (work != nullptr) work->Add(WorkUnit::kVoxelUpdate, carried);
   }
   // Replay the kept frames, oldest first, exactly as they were inserted.
@@ -391,14 +489,7 @@ std::shared_ptr<OccupancyMap> OccupancyMap::Rebuilt(double resolution, WorkCount
 
 namespace {
 
-// Key range [lo, hi] of the cells overlapping `box`; false if it misses the key range.
-struct KeyBox {
-  Eigen::Vector3i lo, hi;
-  std::int64_t Cells() const {
-    return std::int64_t{hi.x() - lo.x() + 1} * (hi.y() - lo.y() + 1) * (hi.z() - lo.z() + 1);
-  }
-};
-
+// Key range [lo, hi] of the cells overlapping `box`.
 KeyBox KeyBoxOf(const Eigen::AlignedBox3d& box, double resolution, const char* where) {
   if (box.isEmpty() || !box.min().allFinite() || !box.max().allFinite()) {
     throw std::invalid_argument(std::string(where) + ": box is empty or not finite");
@@ -420,25 +511,6 @@ KeyBox KeyBoxOf(const Eigen::AlignedBox3d& box, double resolution, const char* w
   return kb;
 }
 
-// Calls fill(lo, hi, occupied) for each known octree leaf clipped to the key box.
-template <class Fill>
-void ForEachLeafBlock(const octomap::OcTree& tree, const KeyBox& kb, Fill&& fill) {
-  const octomap::OcTreeKey kmin(kb.lo.x(), kb.lo.y(), kb.lo.z());
-  const octomap::OcTreeKey kmax(kb.hi.x(), kb.hi.y(), kb.hi.z());
-  const int depth = static_cast<int>(tree.getTreeDepth());
-  for (auto it = tree.begin_leafs_bbx(kmin, kmax), end = tree.end_leafs_bbx(); it != end; ++it) {
-    const int size = 1 << (depth - static_cast<int>(it.getDepth()));
-    const octomap::OcTreeKey base = it.getIndexKey();
-    Eigen::Vector3i lo, hi;
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::max<int>(base[a], kb.lo[a]);
-      hi[a] = std::min<int>(base[a] + size - 1, kb.hi[a]);
-    }
-    if ((lo.array() > hi.array()).any()) continue;
-    fill(lo, hi, tree.isNodeOccupied(*it));
-  }
-}
-
 }  // namespace
 
 VoxelGrid OccupancyMap::ExtractGrid(const Eigen::AlignedBox3d& box, WorkCounts* work) const {
@@ -448,7 +520,7 @@ VoxelGrid OccupancyMap::ExtractGrid(const Eigen::AlignedBox3d& box, WorkCounts* 
   VoxelGrid grid(origin, res, kb.hi - kb.lo + Eigen::Vector3i::Ones(), CellState::kUnknown);
   const std::size_t nx = grid.dims.x();
   const std::size_t nxy = nx * grid.dims.y();
-  ForEachLeafBlock(*tree_, kb, [&](const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, bool occ) {
+  store_->ForEachKnownBlock(kb, [&](const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, bool occ) {
     const CellState state = occ ? CellState::kOccupied : CellState::kFree;
     const Eigen::Vector3i c0 = lo - kb.lo;
     const Eigen::Vector3i c1 = hi - kb.lo;
@@ -467,7 +539,7 @@ OccupancyStats OccupancyMap::Stats(const Eigen::AlignedBox3d& box, WorkCounts* w
   const KeyBox kb = KeyBoxOf(box, options_.resolution, "OccupancyMap::Stats");
   OccupancyStats stats;
   stats.total = kb.Cells();
-  ForEachLeafBlock(*tree_, kb, [&](const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, bool occ) {
+  store_->ForEachKnownBlock(kb, [&](const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, bool occ) {
     const std::int64_t n =
         std::int64_t{hi.x() - lo.x() + 1} * (hi.y() - lo.y() + 1) * (hi.z() - lo.z() + 1);
     (occ ? stats.occupied : stats.free) += n;
@@ -480,16 +552,14 @@ OccupancyStats OccupancyMap::Stats(const Eigen::AlignedBox3d& box, WorkCounts* w
 CellState OccupancyMap::Query(const Eigen::Vector3d& p_W) const {
   Eigen::Vector3i k;
   if (!RayCaster(options_.resolution).KeyOf(p_W, &k)) return CellState::kUnknown;
-  const octomap::OcTreeNode* node = tree_->search(octomap::OcTreeKey(k.x(), k.y(), k.z()));
-  if (node == nullptr) return CellState::kUnknown;
-  return tree_->isNodeOccupied(node) ? CellState::kOccupied : CellState::kFree;
+  return store_->State(RayCaster::Pack(k));
 }
 
 void OccupancyMap::Clear() {
-  tree_->clear();
+  store_->Clear();
   history_.clear();
 }
 
-std::size_t OccupancyMap::num_leaves() const { return tree_->getNumLeafNodes(); }
+std::size_t OccupancyMap::num_leaves() const { return store_->NumLeaves(); }
 
 }  // namespace enavi::navstack

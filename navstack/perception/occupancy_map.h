@@ -1,5 +1,6 @@
 #pragma once
-// Probabilistic occupancy map of the perception task: an OctoMap octree fed by depth frames,
+// Probabilistic occupancy map of the perception task: an OctoMap octree (or a dense block grid, as
+// Ego-Planner keeps) fed by depth frames,
 // updated in two phases so the simulated scheduler can apply a job's output at its finish time
 // (docs/design.md, "Time: two clocks"), and rebuilt when the resolution adapter changes `res` (paper Sec. V.A).
 
@@ -16,11 +17,22 @@
 #include "navstack/map/voxel_grid.h"
 #include "navstack/perception/points.h"
 
-namespace octomap {
-class OcTree;
+namespace enavi::navstack {
+
+namespace detail {
+class CellStore;
 }
 
-namespace enavi::navstack {
+/// Where the cells live. Both apply OctoMap's log-odds rule to the same floats, so the cell states
+/// and work counts are the same; they differ in speed, memory and rebuild granularity.
+enum class MapStorage {
+  /// OctoMap's pruned octree: compact for large uniform regions (E-Navi's multi-resolution map).
+  kOctree,
+  /// Dense blocks of 8^3 cells, allocated where rays reach: an update is an index, not an octree
+  /// descent (Ego-Planner's grid_map keeps dense arrays). A rebuild carries each occupied cell, not
+  /// each pruned leaf, so its work count can differ from the octree's.
+  kBlocks,
+};
 
 /// Map parameters. Probabilities follow OctoMap's defaults (one hit marks a cell occupied, one
 /// miss marks unknown space free, three misses clear a once-hit cell).
@@ -48,6 +60,7 @@ struct MapOptions {
   /// the same frame has already cleared. Rays converge at the sensor, so most stop a few voxels
   /// from their end; a voxel that only the skipped part of a ray crossed stays as it was.
   bool stop_at_traversed = false;
+  MapStorage storage = MapStorage::kOctree;
 
   /// Throws std::invalid_argument naming the field and its allowed range.
   void Validate() const;
@@ -79,7 +92,7 @@ struct OccupancyStats {
   std::int64_t total = 0;
 };
 
-/// OctoMap occupancy octree with two-phase updates, rebuild-on-resolution-change and dense
+/// Occupancy map (OctoMap's update rule) with two-phase updates, rebuild-on-resolution-change and dense
 /// extraction. Not thread-safe for writes; const members may run concurrently with each other.
 class OccupancyMap {
  public:
@@ -136,7 +149,7 @@ class OccupancyMap {
   const MapOptions& options() const { return options_; }
   /// Frames currently kept for a rebuild.
   int history_size() const { return static_cast<int>(history_.size()); }
-  /// Octree leaves (memory footprint).
+  /// Octree leaves, or known cells of the block grid (memory footprint).
   std::size_t num_leaves() const;
 
   /// Packs an octree key (16 bits per axis) into the integer stored in a MapUpdate.
@@ -146,7 +159,7 @@ class OccupancyMap {
 
  private:
   MapOptions options_;
-  std::unique_ptr<octomap::OcTree> tree_;
+  std::unique_ptr<detail::CellStore> store_;
   std::deque<std::shared_ptr<const ScanPoints>> history_;
 };
 

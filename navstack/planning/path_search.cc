@@ -15,7 +15,7 @@
 #include <ompl/base/StateSampler.h>
 #include <ompl/base/StateValidityChecker.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
-#include <ompl/datastructures/NearestNeighborsLinear.h>
+#include <ompl/datastructures/NearestNeighborsGNATNoThreadSafety.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/util/Console.h>
@@ -386,7 +386,9 @@ PathSearchResult SearchPath(const ClearanceMap& map, const Eigen::AlignedBox3d& 
   auto planner = std::make_shared<og::RRTConnect>(si);
   planner->setRange(options.search_range);
   planner->setProblemDefinition(pdef);
-  planner->setNearestNeighbors<ompl::NearestNeighborsLinear>();  // also runs setup()
+  // GNAT (OMPL's default for RRT-Connect) is an exact nearest-neighbour search, so the trees
+  // grow as with a linear scan; a linear scan made a failing 5000-sample search quadratic.
+  planner->setNearestNeighbors<ompl::NearestNeighborsGNATNoThreadSafety>();  // also runs setup()
 
   // Termination on the sample count or, if a budget hook is set, on the work done so far (the
   // counts this search has not yet added to *work included).

@@ -1,8 +1,13 @@
 #include "navstack/rl/policy_io.h"
 
+#include <bit>
+#include <cmath>
+#include <cstdint>
 #include <stdexcept>
 
 #include "api/atomic_file.h"
+#include "api/base64.h"
+#include "api/content_hash.h"
 #include "navstack/adapt/policy_state.h"
 #include "navstack/rl/json_read.h"
 
@@ -12,19 +17,107 @@ namespace {
 using detail::JsonReader;
 using nlohmann::json;
 
-json MlpToJson(const Mlp& mlp) {
-  json layers = json::array();
-  for (int l = 0; l < mlp.num_layers(); ++l) {
-    const auto W = mlp.W(l);
-    json rows = json::array();
-    for (Eigen::Index i = 0; i < W.rows(); ++i) rows.push_back(detail::ToJson(W.row(i).transpose()));
-    layers.push_back({{"in", W.cols()}, {"out", W.rows()}, {"weights", rows},
-                      {"bias", detail::ToJson(mlp.b(l))}});
-  }
-  return {{"layers", layers}};
+// Visits every weight of `net` in kPolicyParameterLayout order; `visit(value, name)` gets the
+// weight and a function that spells its field name (built only when an error needs it).
+template <typename Net, typename Visit>
+void ForEachParameter(Net& net, Visit&& visit) {
+  const auto each = [&](auto& mlp, const char* which) {
+    for (int l = 0; l < mlp.num_layers(); ++l) {
+      const std::string layer = std::string(which) + ".layers[" + std::to_string(l) + "]";
+      auto W = mlp.W(l);
+      for (Eigen::Index i = 0; i < W.rows(); ++i) {
+        for (Eigen::Index j = 0; j < W.cols(); ++j) {
+          visit(W(i, j), [&] { return layer + ".weights[" + std::to_string(i) + "][" + std::to_string(j) + "]"; });
+        }
+      }
+      auto b = mlp.b(l);
+      for (Eigen::Index i = 0; i < b.size(); ++i) {
+        visit(b[i], [&] { return layer + ".bias[" + std::to_string(i) + "]"; });
+      }
+    }
+  };
+  each(net.actor(), "actor");
+  each(net.critic(), "critic");
 }
 
-// Reads the layers of one network into `mlp`, whose sizes are already fixed by the architecture.
+Eigen::Index ParameterCount(const ActorCritic& net) { return net.actor().num_params() + net.critic().num_params(); }
+
+const char* DtypeName(WeightPrecision p) { return p == WeightPrecision::kFloat32 ? "float32" : "float64"; }
+std::size_t DtypeBytes(WeightPrecision p) { return p == WeightPrecision::kFloat32 ? 4 : 8; }
+
+// Little-endian bytes of each weight at `precision`, whatever the host's byte order.
+json ParametersToJson(const ActorCritic& net, WeightPrecision precision) {
+  std::string bytes;
+  bytes.reserve(static_cast<std::size_t>(ParameterCount(net)) * DtypeBytes(precision));
+  ForEachParameter(net, [&](double v, const auto& name) {
+    if (!std::isfinite(v)) throw std::domain_error("policy: " + name() + " is not finite");
+    std::uint64_t bits = 0;
+    if (precision == WeightPrecision::kFloat32) {
+      const float f = static_cast<float>(v);
+      if (!std::isfinite(f)) throw std::domain_error("policy: " + name() + " is beyond float32's range");
+      bits = std::bit_cast<std::uint32_t>(f);
+    } else {
+      bits = std::bit_cast<std::uint64_t>(v);
+    }
+    for (std::size_t k = 0; k < DtypeBytes(precision); ++k) bytes.push_back(static_cast<char>((bits >> (8 * k)) & 0xff));
+  });
+  return {{"dtype", DtypeName(precision)},      {"byte_order", "little"},
+          {"encoding", "base64"},               {"layout", kPolicyParameterLayout},
+          {"count", ParameterCount(net)},       {"sha256", api::Sha256Hex(bytes)},
+          {"data", api::Base64Encode(bytes)}};
+}
+
+// Version 2: the "parameters" block into `net`, whose shapes the architecture already fixed.
+void ParametersFromJson(const json& j, const JsonReader& r, ActorCritic* net) {
+  const std::string f = "parameters";
+  r.Object(j, f);
+  const std::string dtype = r.String(r.Field(j, f, "dtype"), f + ".dtype");
+  if (dtype != "float32" && dtype != "float64") {
+    r.Fail(f + ".dtype", "expected \"float32\" or \"float64\", got \"" + dtype + "\"");
+  }
+  const WeightPrecision precision = dtype == "float32" ? WeightPrecision::kFloat32 : WeightPrecision::kFloat64;
+  const auto expect = [&](const char* key, const std::string& value) {
+    const std::string got = r.String(r.Field(j, f, key), f + "." + key);
+    if (got != value) r.Fail(f + "." + key, "expected \"" + value + "\", got \"" + got + "\"");
+  };
+  expect("byte_order", "little");
+  expect("encoding", "base64");
+  expect("layout", kPolicyParameterLayout);
+  const Eigen::Index count = ParameterCount(*net);
+  if (r.Integer(r.Field(j, f, "count"), f + ".count") != count) {
+    r.Fail(f + ".count", "expected " + std::to_string(count) + " (the architecture's weights and biases)");
+  }
+  const std::string sha256 = r.String(r.Field(j, f, "sha256"), f + ".sha256");
+  std::string bytes;
+  try {
+    bytes = api::Base64Decode(r.String(r.Field(j, f, "data"), f + ".data"));
+  } catch (const std::invalid_argument& e) {
+    r.Fail(f + ".data", e.what());
+  }
+  const std::size_t width = DtypeBytes(precision);
+  const std::size_t expected = static_cast<std::size_t>(count) * width;
+  if (bytes.size() != expected) {
+    r.Fail(f + ".data", std::string(bytes.size() < expected ? "truncated: " : "too long: ") +
+                            std::to_string(bytes.size()) + " bytes, expected " + std::to_string(expected) + " (" +
+                            std::to_string(count) + " " + dtype + " values)");
+  }
+  const std::string digest = api::Sha256Hex(bytes);
+  if (digest != sha256) {
+    r.Fail(f + ".sha256", "does not match the weights (their sha256 is " + digest + "): the file is damaged or was edited");
+  }
+  std::size_t at = 0;
+  ForEachParameter(*net, [&](double& v, const auto& name) {
+    std::uint64_t bits = 0;
+    for (std::size_t k = 0; k < width; ++k) bits |= std::uint64_t{static_cast<unsigned char>(bytes[at + k])} << (8 * k);
+    at += width;
+    v = precision == WeightPrecision::kFloat32 ? static_cast<double>(std::bit_cast<float>(static_cast<std::uint32_t>(bits)))
+                                               : std::bit_cast<double>(bits);
+    if (!std::isfinite(v)) r.Fail(f + ".data", name() + " is not finite");
+  });
+}
+
+// Version 1: the layers of one network as nested arrays into `mlp`, whose sizes are already fixed
+// by the architecture.
 void MlpFromJson(const json& j, const std::string& field, const JsonReader& r, Mlp* mlp) {
   const json& layers = r.Array(r.Field(j, field, "layers"), field + ".layers");
   if (static_cast<int>(layers.size()) != mlp->num_layers()) {
@@ -79,7 +172,7 @@ PolicyFile MakeFrequencyPolicy(const ActionGrid& grid, std::uint64_t seed,
   return p;
 }
 
-json PolicyToJson(const PolicyFile& p) {
+json PolicyToJson(const PolicyFile& p, WeightPrecision precision) {
   CheckConsistent(p);
   const ActorCritic& net = p.net;
   json j;
@@ -108,8 +201,7 @@ json PolicyToJson(const PolicyFile& p) {
   } else {
     j["action_grid"] = nullptr;
   }
-  j["actor"] = MlpToJson(net.actor());
-  j["critic"] = MlpToJson(net.critic());
+  j["parameters"] = ParametersToJson(net, precision);
   j["metadata"] = p.metadata;
   return j;
 }
@@ -122,8 +214,8 @@ PolicyFile PolicyFromJson(const json& j, const std::string& source) {
     r.Fail("format", "expected \"" + std::string(kPolicyFormat) + "\", got \"" + format + "\"");
   }
   const std::int64_t version = r.Integer(r.Field(j, "", "version"), "version");
-  if (version != kPolicyVersion) {
-    r.Fail("version", "unsupported version " + std::to_string(version) + " (this build reads " +
+  if (version != 1 && version != kPolicyVersion) {
+    r.Fail("version", "unsupported version " + std::to_string(version) + " (this build reads 1 and " +
                           std::to_string(kPolicyVersion) + ")");
   }
 
@@ -212,14 +304,18 @@ PolicyFile PolicyFromJson(const json& j, const std::string& source) {
     p.action_grid = ActionGrid::FromTriples(std::move(triples), source + ": action_grid.actions");
   }
 
-  MlpFromJson(r.Field(j, "", "actor"), "actor", r, &p.net.actor());
-  MlpFromJson(r.Field(j, "", "critic"), "critic", r, &p.net.critic());
+  if (version == 1) {
+    MlpFromJson(r.Field(j, "", "actor"), "actor", r, &p.net.actor());
+    MlpFromJson(r.Field(j, "", "critic"), "critic", r, &p.net.critic());
+  } else {
+    ParametersFromJson(r.Field(j, "", "parameters"), r, &p.net);
+  }
   p.metadata = r.Object(r.Field(j, "", "metadata"), "metadata");
   return p;
 }
 
 void SavePolicyFile(const std::string& path, const PolicyFile& policy) {
-  api::WriteFileAtomic(path, PolicyToJson(policy).dump(1) + "\n");
+  api::WriteFileAtomic(path, PolicyToJson(policy, WeightPrecision::kFloat32).dump() + "\n");
 }
 
 PolicyFile LoadPolicyFile(const std::string& path) {
@@ -239,7 +335,9 @@ PolicyFile FrequencyPolicyFromText(const std::string& text, const std::string& s
   return p;
 }
 
-std::string CanonicalPolicyText(const PolicyFile& policy) { return PolicyToJson(policy).dump(); }
+std::string CanonicalPolicyText(const PolicyFile& policy) {
+  return PolicyToJson(policy, WeightPrecision::kFloat64).dump();
+}
 
 void CheckFrequencyPolicy(const PolicyFile& p, const std::string& source) {
   if (!p.action_grid) {

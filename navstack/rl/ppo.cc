@@ -404,7 +404,7 @@ json PpoTrainer::CheckpointToJson() const {
   j["iteration"] = iteration_;
   j["rng"] = rng_.SaveState();
   j["options"] = PpoOptionsToJson(options_);
-  j["policy"] = PolicyToJson(policy_);
+  j["policy"] = PolicyToJson(policy_, WeightPrecision::kFloat64);  // bit-exact resume
   j["adam"] = {{"actor", AdamToJson(adam_actor_)}, {"critic", AdamToJson(adam_critic_)}};
   return j;
 }

@@ -61,6 +61,8 @@ MethodInfo EnaviMethod() {
   m.tunables = {
       {"strategy.explore", 0, 1, 0, true, "1 samples the policy's actions (training), 0 greedy"},
       {"strategy.f_adapt", 1.0, 30.0, 5.0, false, "strategy controller decisions per second, Hz"},
+      {"resolution.quiet_period", 0.5, 60.0, ResolutionAdapterOptions{}.quiet_period, false,
+       "go one map step coarser after this long without a refinement trigger, sim s"},
   };
   m.configure = [](const MethodSetup& setup, NavStackOptions* o) {
     if (!setup.policy) throw std::invalid_argument("policy: method enavi needs a frequency-adapter policy");
@@ -74,6 +76,7 @@ MethodInfo EnaviMethod() {
     NavStackOptions o = options;
     o.strategy->mode = o.Param("strategy.explore") > 0 ? rl::ActMode::kSample : rl::ActMode::kGreedy;
     o.strategy->f_adapt = o.Param("strategy.f_adapt");
+    o.strategy->resolution.quiet_period = o.Param("resolution.quiet_period");
     return std::unique_ptr<Navigator>(std::make_unique<NavStack>(o, executor, initial));
   };
   return m;

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "server/cli/commands.h"
+#include "server/cli/registry_help.h"
 #include "workers/board/board_profile.h"
 #include "workers/board/host_calibration.h"
 #include "workers/board/throttle_bench.h"
@@ -120,7 +121,7 @@ void RegisterBenchCommands(CLI::App& app) {
   auto raycast = std::make_shared<RaycastArgs>();
   CLI::App* rc = bench->add_subcommand(
       "raycast", "Depth frames along the start-goal line rendered by Embree and by Bullet rayTest");
-  rc->add_option("--world", raycast->world, "world to render (s1..s5, canyon, forest, empty, FILE)")->capture_default_str();
+  rc->add_option("--world", raycast->world, "world to render: FILE or a scenario:" + ScenariosHelp())->capture_default_str();
   rc->add_option("--seed", raycast->seed, "world seed")->capture_default_str();
   rc->add_option("--frames", raycast->frames, "Embree frames")->capture_default_str()->check(CLI::Range(1, 10000));
   rc->add_option("--bullet-frames", raycast->bullet_frames, "of those, frames also rendered by Bullet")

@@ -48,7 +48,7 @@ void RunSubmit(const SubmitFlags& f) {
     // Local validation against local roots: the same parser the server runs.
     api::JobSpecOptions options;
     for (const auto& r : f.world_roots) options.allowed_roots.emplace_back(r);
-    options.catalog = sim::MethodCatalog();
+    options.catalog = sim::FarmCatalog();
     const api::JobSpec job = api::ParseJobSpec(ReadFile(f.file), f.file, options);
     std::cout << f.file << ": valid; " << job.MatrixSize() << " episodes (";
     if (job.episodes.empty()) {

@@ -48,5 +48,7 @@ void RegisterDatasetCommands(CLI::App& app);
 void RegisterCompareCommand(CLI::App& app);
 /// `enavi dashboard` (server/cli/dashboard_cmd.cc).
 void RegisterDashboardCommand(CLI::App& app);
+/// `enavi policy convert` (server/cli/policy_cmd.cc).
+void RegisterPolicyCommands(CLI::App& app);
 
 }  // namespace enavi::cli

@@ -13,6 +13,7 @@
 #include "navstack/methods/registry.h"
 #include "server/cli/commands.h"
 #include "server/cli/farm_flags.h"
+#include "server/cli/registry_help.h"
 #include "server/eval/eval.h"
 #include "server/eval/paper_reference.h"
 #include "server/eval/tables.h"
@@ -65,7 +66,7 @@ void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
   server::EvalOptions& o = f.options;
   o.db = f.db;
   for (const auto& r : f.world_roots) o.job_spec.allowed_roots.emplace_back(r);
-  o.job_spec.catalog = sim::MethodCatalog();
+  o.job_spec.catalog = sim::FarmCatalog();
   o.job_spec.catalog.unchecked_prefixes = f.unchecked_override_prefixes;
   if (f.domain >= 0) o.domain = static_cast<std::uint32_t>(f.domain);
   o.episode_timeout = std::chrono::seconds(static_cast<std::int64_t>(f.episode_timeout_s));
@@ -131,7 +132,9 @@ void RegisterEvalCommand(CLI::App& app) {
   for (const std::string& m : navstack::MethodNames()) method_names += (method_names.empty() ? "" : ", ") + m;
   sub->add_option("--methods", o.methods, "methods (comma-separated): " + method_names)->delimiter(',')->capture_default_str();
   sub->add_option("--seeds", o.seeds, "seeds 1..N per cell")->capture_default_str();
-  sub->add_option("--clock", o.clock, "virtual or emulated")->capture_default_str();
+  sub->add_option("--clock", o.clock, "clock:" + ClocksHelp())
+      ->capture_default_str()
+      ->check(CLI::IsMember(sim::FarmCatalog().clocks));
   sub->add_option("--cost", o.cost, "cost model: model or measured")->capture_default_str();
   sub->add_option("--db", f->db, "keep the results in this SQLite database (default: temporary)");
   sub->add_option("--workers", o.workers, "local worker processes")->capture_default_str();
@@ -155,8 +158,10 @@ void RegisterEvalCommand(CLI::App& app) {
   sub->add_flag("--json", f->json, "print the result objects as JSON instead of the table");
   sub->add_flag("-v,--verbose", f->verbose, "server log on stderr");
   sub->add_option("--preset", f->preset,
-                  "paper: the paper's HIL matrix (boards pi4b,tx2,nx,opi5,x86 x s1-s5 x baseline,enavi; "
-                  "--seeds default 3), our table beside the paper's with the difference of each cell")
+                  "paper: the paper's HIL matrix (boards " + JoinNames(server::PaperBoards(), ",") + " x " +
+                      JoinNames(server::PaperScenarios(), ",") +
+                      " x baseline,enavi; --seeds default 3), our table beside the paper's with the difference of "
+                      "each cell")
       ->check(CLI::IsMember({"paper"}));
   sub->callback([f, &app, sub] { RunEvalCommand(*f, app, *sub); });
 }

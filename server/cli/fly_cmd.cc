@@ -13,6 +13,7 @@
 #include "api/job_spec.h"
 #include "server/cli/cli_values.h"
 #include "server/cli/commands.h"
+#include "server/cli/registry_help.h"
 #include "server/report/flight_report.h"
 #include "workers/board/board_profile.h"
 #include "navstack/methods/registry.h"
@@ -139,7 +140,9 @@ void Run(FlyArgs args) {
 void RegisterFlyCommand(CLI::App& app) {
   auto args = std::make_shared<FlyArgs>();
   CLI::App* fly = app.add_subcommand("fly", "Fly one episode locally (no server) and print or write its results");
-  fly->add_option("--world", args->spec.world, "s1..s5, canyon, forest, empty, FILE.yaml, a mesh (.obj .gltf .glb .dae .stl .ply .fbx) or a Gazebo world (.sdf .world)")->capture_default_str();
+  fly->add_option("--world", args->spec.world,
+                  "a scenario, FILE.yaml, a mesh (.obj .gltf .glb .dae .stl .ply .fbx) or a Gazebo world (.sdf .world); "
+                  "scenarios:" + ScenariosHelp())->capture_default_str();
   fly->add_option("--seed", args->spec.seed, "world and episode seed")
       ->capture_default_str()
       ->check(CLI::Validator(
@@ -153,7 +156,7 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--param", args->params, "world generator parameter k=v (repeatable)");
   AddPlacementOptions(fly, &args->spec.units, &args->spec.scale, &args->spec.up, &args->spec.recenter,
                       &args->spec.model_path);
-  fly->add_option("--board", args->spec.board, "onboard computer to emulate")
+  fly->add_option("--board", args->spec.board, "onboard computer to emulate:" + BoardsHelp())
       ->capture_default_str()
       ->check(CLI::IsMember(board::KnownBoards()));
   std::string methods = "navigation method:";
@@ -161,9 +164,9 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--method", args->spec.method, methods)
       ->capture_default_str()
       ->check(CLI::IsMember(navstack::MethodNames()));
-  fly->add_option("--clock", args->spec.clock, "virtual (sim-time EDF) or emulated (throttled cgroup)")
+  fly->add_option("--clock", args->spec.clock, "clock:" + ClocksHelp())
       ->capture_default_str()
-      ->check(CLI::IsMember(std::vector<std::string>(api::kClocks.begin(), api::kClocks.end())));
+      ->check(CLI::IsMember(sim::FarmCatalog().clocks));
   fly->add_option("--dilation", args->dilation,
                   "emulated clock: 1 sim second = K wall seconds, quota divided by K (default: the smallest "
                   "multiple of 0.25 at which the board fits this host)")

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   RegisterDatasetCommands(app);
   RegisterCompareCommand(app);
   RegisterDashboardCommand(app);
+  RegisterPolicyCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const ExitStatus& e) {

@@ -55,7 +55,7 @@ void RunServe(const ServeFlags& f) {
   http.port = port;
   http.token = f.token;
   for (const auto& r : f.world_roots) http.job_spec.allowed_roots.emplace_back(r);
-  http.job_spec.catalog = sim::MethodCatalog();
+  http.job_spec.catalog = sim::FarmCatalog();
   http.job_spec.catalog.unchecked_prefixes = f.unchecked_override_prefixes;
   server::HttpApi api(&farm, http);
 

@@ -43,7 +43,7 @@ void RegisterTrainCommand(CLI::App& app) {
     o->out = *out;
     o->work_dir = *work;
     o->progress = true;
-    o->catalog = sim::MethodCatalog();
+    o->catalog = sim::FarmCatalog();
     const auto log = train::Train(*o);
     const auto& last = log.back();
     std::printf("trained %lld iterations: policy %s (mean return %.2f, success %.0f%%, nav cpu %.1f%%)\n",

@@ -1,4 +1,5 @@
 // enavi worker: the farm worker daemon.
+#include <algorithm>
 #include <cstdlib>
 #include <memory>
 
@@ -6,6 +7,8 @@
 
 #include "server/cli/commands.h"
 #include "server/cli/farm_flags.h"
+#include "server/cli/registry_help.h"
+#include "workers/sim/episode_config.h"
 #include "workers/worker/process.h"
 #include "workers/worker/worker.h"
 
@@ -29,6 +32,16 @@ struct WorkerFlags {
   BusFlags bus;
 };
 
+// The registered names a worker serves: all of them, or the listed ones, each checked.
+std::vector<std::string> Served(const std::string& flag, const std::string& what, const std::vector<std::string>& listed,
+                                const std::vector<std::string>& known) {
+  for (const std::string& name : listed) {
+    if (std::find(known.begin(), known.end(), name) == known.end())
+      throw std::invalid_argument(flag + ": unknown " + what + " '" + name + "' (known: " + JoinNames(known) + ")");
+  }
+  return listed.empty() ? known : listed;
+}
+
 void RunWorker(const WorkerFlags& f, const CLI::App& root) {
   RequireFlyUnlessEpisodeCmd(root, f.episode_cmd);
   StopSignals signals;
@@ -41,8 +54,9 @@ void RunWorker(const WorkerFlags& f, const CLI::App& root) {
   o.bus = ResolveBus(bus_flags);
   o.worker_id = f.id;
   o.slots = f.slots;
-  o.boards = f.boards;
-  o.clocks = f.clocks;
+  const api::Catalog catalog = sim::FarmCatalog();
+  o.boards = Served("--boards", "board", f.boards, catalog.boards);
+  o.clocks = Served("--clocks", "clock", f.clocks, catalog.clocks);
   o.calibration_id = f.calibration_id;
   if (!f.episode_cmd.empty()) o.episode_command = worker::SplitCommand(f.episode_cmd);
   o.limits.wall_timeout = std::chrono::seconds(static_cast<std::int64_t>(f.episode_timeout_s));

@@ -38,7 +38,7 @@ constexpr Column kColumns[] = {
     {"episode", "<i4", "[N]", "episode index within the job"},
     {"episode_id", "U", "[N]", "farm episode id"},
     {"board", "U", "[N]", "board profile the episode flew on"},
-    {"scenario", "U", "[N]", "scenario id (s1..s5, canyon, forest, empty, custom)"},
+    {"scenario", "U", "[N]", "scenario id (a registered generator, or custom for a world file)"},
     {"seed", "<u8", "[N]", "world and episode seed"},
     {"policy_hash", "U", "[N]", "SHA-256 of the policy that collected the step"},
 };

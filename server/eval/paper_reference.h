@@ -4,13 +4,14 @@
 // beside. Numbers as printed in the paper, per board, method and scenario S1-S5.
 
 #include <array>
+#include <cstddef>
 #include <string>
 #include <vector>
 
 namespace enavi::server {
 
 struct PaperRow {
-  std::string board;   ///< our board name (pi4b, tx2, nx, opi5, x86)
+  std::string board;   ///< our board id (a registered board profile)
   std::string method;  ///< "enavi" or "baseline"
   std::array<double, 5> cpu_pct;        ///< navigation task workload, % (S1-S5)
   std::array<double, 5> flight_time_s;  ///< S1-S5
@@ -22,14 +23,10 @@ const std::vector<PaperRow>& PaperHilTable();
 /// The row for (board, method), or nullptr.
 const PaperRow* FindPaperRow(const std::string& board, const std::string& method);
 
-/// The matrix of the paper's HIL experiment.
-inline const std::vector<std::string>& PaperBoards() {
-  static const std::vector<std::string> b = {"pi4b", "tx2", "nx", "opi5", "x86"};
-  return b;
-}
-inline const std::vector<std::string>& PaperScenarios() {
-  static const std::vector<std::string> s = {"s1", "s2", "s3", "s4", "s5"};
-  return s;
-}
+/// The boards of the paper's HIL experiment: those of PaperHilTable(), in its order.
+const std::vector<std::string>& PaperBoards();
+/// Its scenarios S1-S5: the registered generators after the paper's (those with a paper path
+/// length), in the registry's order, which PaperRow's arrays follow.
+const std::vector<std::string>& PaperScenarios();
 
 }  // namespace enavi::server

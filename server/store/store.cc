@@ -11,6 +11,7 @@
 #include "api/job_spec.h"
 #include "api/result_metrics.h"
 #include "server/store/sqlite.h"
+#include "worlds/generators.h"
 
 namespace enavi::server {
 namespace {
@@ -792,7 +793,7 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
         }();
         insert.Reset()
             .Bind(1, m.episode_id).Bind(2, out.job_id).Bind(3, m.worker_id).Bind(4, m.attempt)
-            .Bind(5, r.spec.board).Bind(6, r.scenario.empty() ? api::ScenarioOf(r.spec.world) : r.scenario)
+            .Bind(5, r.spec.board).Bind(6, r.scenario.empty() ? worlds::ScenarioOf(r.spec.world) : r.scenario)
             .Bind(7, r.spec.world).Bind(8, r.spec.method)
             .Bind(9, static_cast<std::int64_t>(r.spec.seed)).Bind(10, r.spec.clock)
             .Bind(11, r.success ? 1 : 0).Bind(12, r.collided ? 1 : 0).Bind(13, r.timed_out ? 1 : 0)
@@ -803,7 +804,7 @@ std::vector<IngestOutcome> Store::Ingest(const std::vector<api::ResultMessage>& 
             .BindBlob(25, PackSeries(r.series)).Bind(26, metrics).Run();
         add_cell.Reset()
             .Bind(1, out.job_id).Bind(2, r.spec.board)
-            .Bind(3, r.scenario.empty() ? api::ScenarioOf(r.spec.world) : r.scenario)
+            .Bind(3, r.scenario.empty() ? worlds::ScenarioOf(r.spec.world) : r.scenario)
             .Bind(4, r.spec.method).Bind(5, r.success ? 1 : 0).Bind(6, metrics).Run();
         if (!m.rollout.empty()) {
           insert_rollout.Reset().Bind(1, m.episode_id).Bind(2, out.job_id).Bind(3, m.attempt)
@@ -970,7 +971,7 @@ nlohmann::json Store::JobSummary(const std::string& job_id, const Page& page) {
   failed.Bind(1, job_id);
   std::map<std::tuple<std::string, std::string, std::string>, std::int64_t> failures;
   while (failed.Step()) {
-    failures[{failed.Text(0), api::ScenarioOf(failed.Text(1)), failed.Text(2)}] += failed.Int(3);
+    failures[{failed.Text(0), worlds::ScenarioOf(failed.Text(1)), failed.Text(2)}] += failed.Int(3);
   }
   for (auto& cell : cells) {
     const auto it = failures.find({cell["board"], cell["scenario"], cell["method"]});
@@ -1018,7 +1019,7 @@ nlohmann::json Store::JobFailures(const std::string& job_id, const Page& page) {
   nlohmann::json list = nlohmann::json::array();
   while (q.Step()) {
     list.push_back({{"episode_id", q.Text(0)}, {"board", q.Text(1)},
-                    {"scenario", api::ScenarioOf(q.Text(2))}, {"world", q.Text(2)},
+                    {"scenario", worlds::ScenarioOf(q.Text(2))}, {"world", q.Text(2)},
                     {"method", q.Text(3)}, {"seed", q.Int(4)}, {"state", q.Text(5)},
                     {"attempts", q.Int(6)}, {"reason", q.Text(7)}});
   }

@@ -19,7 +19,6 @@
 #include "navstack/rl/rollout.h"
 #include "server/eval/local_farm.h"
 #include "server/report/chart.h"
-#include "workers/board/board_profile.h"
 
 namespace enavi::train {
 namespace fs = std::filesystem;
@@ -32,15 +31,20 @@ void Check(bool ok, const std::string& what) {
 
 void Validate(const TrainOptions& o) {
   Check(!o.boards.empty(), "--boards: at least one board");
-  const auto known = board::KnownBoards();
+  const auto known = [](const std::vector<std::string>& names, const std::string& name) {
+    return std::find(names.begin(), names.end(), name) != names.end();
+  };
+  const auto join = [](const std::vector<std::string>& names) {
+    std::string out;
+    for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+    return out;
+  };
   for (const auto& b : o.boards)
-    Check(std::find(known.begin(), known.end(), b) != known.end(), "--boards: unknown board '" + b + "'");
+    Check(known(o.catalog.boards, b), "--boards: unknown board '" + b + "' (known: " + join(o.catalog.boards) + ")");
   Check(!o.scenarios.empty(), "--scenarios: at least one scenario");
-  std::string known_scenarios;
-  for (const char* k : api::kScenarios) known_scenarios += (known_scenarios.empty() ? "" : ", ") + std::string(k);
   for (const auto& s : o.scenarios)
-    Check(std::find(api::kScenarios.begin(), api::kScenarios.end(), s) != api::kScenarios.end(),
-          "--scenarios: unknown scenario '" + s + "' (known: " + known_scenarios + ")");
+    Check(known(o.catalog.scenarios, s),
+          "--scenarios: unknown scenario '" + s + "' (known: " + join(o.catalog.scenarios) + ")");
   Check(o.iterations >= 1 && o.iterations <= 100000, "--iterations: must be in [1, 100000]");
   Check(o.episodes_per_iteration >= 1 && o.episodes_per_iteration <= 10000,
         "--episodes-per-iter: must be in [1, 10000]");

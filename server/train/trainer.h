@@ -25,7 +25,7 @@ struct TrainOptions {
   std::string server;              ///< farm URL; empty: a private local farm
   std::string token;               ///< the farm's token (state-changing requests)
   int workers = 2;                 ///< private farm: local worker processes (one slot each)
-  api::MethodCatalog catalog;      ///< private farm: the methods its job validation knows
+  api::Catalog catalog;            ///< the registries: --boards, --scenarios and a private farm's jobs are checked against it
   std::uint64_t seed = 1;
   /// Training worlds use seeds from here on, so evaluation seeds (1, 2, 3 ...) stay unseen.
   std::uint64_t world_seed_base = 100;

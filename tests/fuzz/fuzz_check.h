@@ -13,13 +13,16 @@
 
 namespace enavi::fuzz {
 
-/// A method catalog shaped like the registry's (names, real and integer ranges); the registry
-/// itself lives in navstack's methods, which the harnesses need not link.
-inline api::MethodCatalog Catalog() {
-  api::MethodCatalog c;
+/// A catalog shaped like the registries' (method names, real and integer ranges, boards,
+/// scenarios, clocks); the registries live above api, which the harnesses need not link.
+inline api::Catalog Catalog() {
+  api::Catalog c;
   c.methods = {{"baseline", "", {{"planner.v_max", 0.1, 10.0, false}}},
                {"fixed", "", {{"planner.v_max", 0.1, 10.0, false}, {"map.resolution", 0.05, 0.5, false}}},
                {"enavi", "", {{"strategy.f_adapt", 1, 30, true}}}};
+  c.boards = {"pi4b", "tx2", "x86", "host"};
+  c.scenarios = {"s1", "s2", "canyon", "empty"};
+  c.clocks = {"virtual", "emulated"};
   return c;
 }
 

@@ -47,7 +47,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto episodes = api::ExpandJob(job);
   fuzz::Check(episodes.size() == job.MatrixSize(), "ExpandJob size differs from MatrixSize");
   for (const api::EpisodeSpec& e : episodes) {
-    fuzz::Check(std::find(api::kBoards.begin(), api::kBoards.end(), e.board) != api::kBoards.end(),
+    fuzz::Check(std::find(options.catalog.boards.begin(), options.catalog.boards.end(), e.board) !=
+                    options.catalog.boards.end(),
                 "episode on an unknown board");
     fuzz::Check(options.catalog.Find(e.method) != nullptr, "episode of an unknown method");
   }

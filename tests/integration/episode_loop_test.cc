@@ -62,6 +62,18 @@ TEST(EpisodeDeterminismTest, SameSpecTwiceGivesIdenticalJsonIncludingTimeSeries)
   EXPECT_EQ(b, c) << "two episodes in one prepared world flew differently";
 }
 
+TEST(EpisodeDeterminismTest, BaselineFliesTheSameFlightOnTheDenseMapAsOnTheOctree) {
+  // ego.dense_map only changes where the log-odds live (dense blocks vs OctoMap's octree): the
+  // same cells, so the same work counts, board times and flight, to the byte.
+  api::EpisodeSpec spec = Spec("forest", 2, {{"length", "12"}});
+  const api::EpisodeResult dense = sim::RunEpisode(spec);
+  spec.overrides = {{"ego.dense_map", 0}};
+  api::EpisodeResult octree = sim::RunEpisode(spec);
+  ExpectReachedGoal(dense);
+  octree.spec.overrides = dense.spec.overrides;  // the one field that must differ
+  EXPECT_EQ(nlohmann::json(dense).dump(), nlohmann::json(octree).dump());
+}
+
 TEST(BaselineOnHostTest, ReachesTheGoalOfTheIndoorHallWithoutCollision) {
   const api::EpisodeResult r = sim::RunEpisode(Spec("s3", 1));
   ExpectReachedGoal(r);

@@ -200,7 +200,7 @@ TEST(MethodRegistryTest, AMethodRegisteredAtRunTimeFliesThroughTheEpisodePath) {
   // Every list reads the registry: names, the CLI's tunables, the job validation catalog.
   const auto names = navstack::MethodNames();
   EXPECT_NE(std::find(names.begin(), names.end(), "straight_to_goal"), names.end());
-  const api::MethodCatalog catalog = sim::MethodCatalog();
+  const api::Catalog catalog = sim::FarmCatalog();
   const api::MethodEntry* entry = catalog.Find("straight_to_goal");
   ASSERT_NE(entry, nullptr);
   EXPECT_TRUE(std::any_of(entry->tunables.begin(), entry->tunables.end(),

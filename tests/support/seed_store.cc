@@ -11,7 +11,7 @@ std::string SeedJob(server::Store& store, const std::string& spec_yaml, std::int
                     const std::string& worker, int series_len) {
   // Validated against the registry's methods, as `enavi serve` does; fake.* knobs pass.
   api::JobSpecOptions options;
-  options.catalog = sim::MethodCatalog();
+  options.catalog = sim::FarmCatalog();
   options.catalog.unchecked_prefixes = {"fake."};
   const api::JobSpec job = api::ParseJobSpec(spec_yaml, "seed.yaml", options);
   server::JobMeta meta;

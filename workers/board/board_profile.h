@@ -33,7 +33,8 @@ struct ReferenceCosts {
   navstack::WorkCountCostModel::Coefficients ns;
 };
 
-/// Ids of all known boards, sorted.
+/// Ids of all known boards, sorted: one per embedded profile, the farm's one list of boards (the
+/// CLI's choices, job validation, a worker's capabilities read it).
 std::vector<std::string> KnownBoards();
 /// Loads an embedded profile. Throws std::invalid_argument naming the id and the known ones.
 BoardProfile LoadBoard(const std::string& id);

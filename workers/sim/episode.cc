@@ -74,20 +74,54 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const EpisodeOptions
 
 namespace {
 
+// The clock registry: each clock's name, help line and the link that runs the stack on it.
+struct ClockEntry {
+  ClockInfo info;
+  std::unique_ptr<NavLink> (*make)(const api::EpisodeSpec& spec, const EpisodeConfig& config,
+                                   const board::BoardProfile& board, int threads,
+                                   const navstack::VehicleState& initial, const EpisodeOptions& options);
+};
+
+const std::vector<ClockEntry>& ClockEntries() {
+  static const std::vector<ClockEntry> entries = {
+      {{"virtual", "sim-time EDF on the board's cores, job costs from the cost model (deterministic)"},
+       [](const api::EpisodeSpec& spec, const EpisodeConfig& config, const board::BoardProfile& board, int threads,
+          const navstack::VehicleState& initial, const EpisodeOptions& options) -> std::unique_ptr<NavLink> {
+         return std::make_unique<VirtualNavLink>(*config.method, config.nav, threads, config.scheduler.policy,
+                                                 MakeCostModel(spec, board), initial, options.job_observer);
+       }},
+      {{"emulated", "the stack in its own process, throttled by cgroups to the board's speed, in dilated wall time"},
+       [](const api::EpisodeSpec& spec, const EpisodeConfig& config, const board::BoardProfile& board, int threads,
+          const navstack::VehicleState& initial, const EpisodeOptions& options) -> std::unique_ptr<NavLink> {
+         return std::make_unique<EmulatedNavLink>(*config.method, config.nav, threads, config.scheduler.policy, board,
+                                                  spec.dilation, initial, options.emulation);
+       }},
+  };
+  return entries;
+}
+
 std::unique_ptr<NavLink> MakeNavLink(const api::EpisodeSpec& spec, const EpisodeConfig& config,
                                      const board::BoardProfile& board, const navstack::VehicleState& initial,
                                      const EpisodeOptions& options) {
   const int threads = config.scheduler.threads > 0 ? std::min(config.scheduler.threads, board.cores) : board.cores;
-  if (spec.clock == "virtual")
-    return std::make_unique<VirtualNavLink>(*config.method, config.nav, threads, config.scheduler.policy, MakeCostModel(spec, board),
-                                            initial, options.job_observer);
-  if (spec.clock == "emulated")
-    return std::make_unique<EmulatedNavLink>(*config.method, config.nav, threads, config.scheduler.policy, board, spec.dilation, initial,
-                                             options.emulation);
-  throw std::invalid_argument("clock: unknown clock '" + spec.clock + "' (known: virtual, emulated)");
+  std::string known;
+  for (const ClockEntry& c : ClockEntries()) {
+    if (c.info.name == spec.clock) return c.make(spec, config, board, threads, initial, options);
+    known += (known.empty() ? "" : ", ") + c.info.name;
+  }
+  throw std::invalid_argument("clock: unknown clock '" + spec.clock + "' (known: " + known + ")");
 }
 
 }  // namespace
+
+const std::vector<ClockInfo>& Clocks() {
+  static const std::vector<ClockInfo> infos = [] {
+    std::vector<ClockInfo> v;
+    for (const ClockEntry& c : ClockEntries()) v.push_back(c.info);
+    return v;
+  }();
+  return infos;
+}
 
 api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld& prepared,
                               const EpisodeOptions& options) {

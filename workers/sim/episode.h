@@ -4,6 +4,8 @@
 
 #include <functional>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "api/episode.h"
 #include "navstack/rl/rollout.h"
@@ -46,6 +48,15 @@ struct EpisodeOptions {
   /// The emulated clock (spec.clock == "emulated"): host calibration file and test knobs.
   EmulationOptions emulation;
 };
+
+/// A clock the navigation stack can run on (docs/design.md, "Time: two clocks").
+struct ClockInfo {
+  std::string name;     ///< what EpisodeSpec::clock, job specs and `--clock` say
+  std::string summary;  ///< one line for help texts
+};
+/// The registered clocks, in a fixed order: the farm's one list of clocks (the CLI's choices,
+/// job validation, a worker's capabilities read it).
+const std::vector<ClockInfo>& Clocks();
 
 /// Flies `spec` in `world`. Bad specs (unknown board/method, bad overrides) throw
 /// std::invalid_argument; a flight that fails (collision, timeout) is a result, not an error.

@@ -10,6 +10,9 @@
 #include <nlohmann/json.hpp>
 
 #include "navstack/methods/registry.h"
+#include "workers/board/board_profile.h"
+#include "workers/sim/episode.h"
+#include "worlds/generators.h"
 #include "navstack/rl/policy_io.h"
 
 namespace enavi::sim {
@@ -91,8 +94,8 @@ std::vector<Tunable> TunablesFor(const navstack::MethodInfo& method) {
   return out;
 }
 
-api::MethodCatalog MethodCatalog() {
-  api::MethodCatalog catalog;
+api::Catalog FarmCatalog() {
+  api::Catalog catalog;
   for (const navstack::MethodInfo& m : navstack::Methods()) {
     api::MethodEntry entry;
     entry.name = m.name;
@@ -100,6 +103,9 @@ api::MethodCatalog MethodCatalog() {
     for (const Tunable& t : TunablesFor(m)) entry.tunables.push_back({t.name, t.min, t.max, t.integer});
     catalog.methods.push_back(std::move(entry));
   }
+  catalog.boards = board::KnownBoards();
+  for (const worlds::GeneratorInfo& g : worlds::Generators()) catalog.scenarios.push_back(g.id);
+  for (const ClockInfo& c : Clocks()) catalog.clocks.push_back(c.name);
   return catalog;
 }
 

@@ -35,8 +35,9 @@ const std::vector<Tunable>& CommonTunables();
 /// Every tunable a spec for `method` may override: the common ones, then the method's own.
 std::vector<Tunable> TunablesFor(const navstack::MethodInfo& method);
 
-/// The registry as plain data for job-spec validation at submit (api cannot see navstack).
-api::MethodCatalog MethodCatalog();
+/// The registries as plain data for job-spec validation at submit (api cannot see them):
+/// navstack's methods with their tunables, the board profiles, the scenario generators, the clocks.
+api::Catalog FarmCatalog();
 
 /// The E-Navi frequency-adapter policy at `path`, or the shipped default when empty. Throws
 /// std::invalid_argument naming the file and field for a missing or corrupt file.

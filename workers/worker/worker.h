@@ -24,8 +24,8 @@ struct WorkerOptions {
   api::BusOptions bus;
   std::string worker_id;                ///< empty: <hostname>-<pid>
   int slots = 1;                        ///< episodes run at once
-  std::vector<std::string> boards;      ///< empty: every known board
-  std::vector<std::string> clocks;      ///< empty: every known clock
+  std::vector<std::string> boards;      ///< boards served (required; registered names)
+  std::vector<std::string> clocks;      ///< clocks served (required; registered names)
   std::string calibration_id;
   /// Episode command without its --spec-file/--result-file arguments; empty: this executable's
   /// `fly` (`/proc/self/exe fly`).

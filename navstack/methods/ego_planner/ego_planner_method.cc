@@ -30,6 +30,7 @@ MethodInfo EgoPlannerMethod() {
       {"ego.check_two_thirds", 0, 1, 1, true, "1: the safety check samples only the first 2/3 of a trajectory"},
       {"ego.newest_frame_only", 0, 1, 1, true, "1: the occupancy update raycasts only the newest frame"},
       {"ego.ray_break", 0, 1, 1, true, "1: a ray stops at the first voxel this frame already cleared (grid_map raycast)"},
+      {"ego.dense_map", 0, 1, 1, true, "1: log-odds in dense blocks as grid_map's arrays, 0: OctoMap's octree (same cells, slower)"},
   };
   m.configure = [](const MethodSetup&, NavStackOptions* o) {
     // Ego-Planner's ESDF-free rebound optimisation (navstack/planning/README.md).
@@ -48,6 +49,9 @@ MethodInfo EgoPlannerMethod() {
     NavStackOptions o = options;
     o.map.resolution = o.Param("map.resolution");
     o.map.stop_at_traversed = o.Param("ego.ray_break") > 0;
+    // plan_env/src/grid_map.cpp keeps the log-odds in dense arrays (occupancy_buffer_). The
+    // baseline never changes resolution, so the octree's cheap rebuilds buy it nothing.
+    o.map.storage = o.Param("ego.dense_map") > 0 ? MapStorage::kBlocks : MapStorage::kOctree;
     EgoPlannerOptions e;
     e.occupancy_hz = o.Param("ego.occupancy_hz");
     e.safety_hz = o.Param("ego.safety_hz");

@@ -1,5 +1,6 @@
 // Resolution Adapter (paper Sec. V.A): greedy coarsest feasible resolution, refinement on collision
-// triggers and low path scores, coarsening after sustained low eci, the Manhattan rule.
+// triggers and low path scores, coarsening after sustained low eci or a quiet period without
+// triggers, the Manhattan rule.
 
 #include "navstack/adapt/resolution_adapter.h"
 
@@ -103,6 +104,7 @@ TEST(ResolutionAdapterTest, HighEciRefinesAtMostOncePerInterval) {
 TEST(ResolutionAdapterTest, SustainedLowEciCoarsensOneStepPerPeriod) {
   ResolutionAdapterOptions o;  // low_eci 0.3, coarsen_after 3 s, refine_hold 3 s
   o.min_refine_interval = 0.0;
+  o.quiet_period = 100.0;  // the eci rule alone
   ResolutionAdapter ra(o);
   ra.Select(kStart, kFarGoal);
   ra.OnCollisionTrigger(0.0);
@@ -126,7 +128,7 @@ TEST(ResolutionAdapterTest, SustainedLowEciCoarsensOneStepPerPeriod) {
 }
 
 TEST(ResolutionAdapterTest, HighEciRestartsTheLowEciPeriod) {
-  ResolutionAdapter ra;
+  ResolutionAdapter ra({.quiet_period = 100.0});  // the eci rule alone
   ra.Select(kStart, kFarGoal);
   ra.OnCollisionTrigger(0.0);
   ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
@@ -158,6 +160,45 @@ TEST(ResolutionAdapterTest, NoCoarseningWithinTheHoldAfterARefinement) {
   }
   ra.ObserveEci(6.0, 0.05);
   EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 0);
+}
+
+// The quiet rule: eci 0.4 is neither low (<= 0.3) nor high (>= 0.5), so only it can coarsen.
+constexpr double kModerateEci = 0.4;
+
+TEST(ResolutionAdapterTest, CoarsensAfterTheQuietPeriodWhateverTheEci) {
+  ResolutionAdapter ra({.quiet_period = 5.0});
+  ra.Select(kStart, kFarGoal);
+  ra.OnCollisionTrigger(0.0);
+  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
+  for (int k = 1; k < 50; ++k) {
+    ra.ObserveEci(0.1 * k, kModerateEci);
+    ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1) << "t = " << 0.1 * k << " < 5 s since the trigger";
+  }
+  ra.ObserveEci(5.0, kModerateEci);
+  EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 0) << "5 s without a trigger: one step coarser";
+}
+
+TEST(ResolutionAdapterTest, ATriggerInsideTheQuietPeriodRestartsIt) {
+  ResolutionAdapter ra({.quiet_period = 5.0});  // min_refine_interval 2 s, threshold 0.9
+  ra.Select(kStart, kFarGoal);
+  ra.OnCollisionTrigger(0.0);
+  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
+  // A collision trigger at 1 s is held back by min_refine_interval, but still restarts the period.
+  ra.OnCollisionTrigger(1.0);
+  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
+  const auto level_at = [&ra](double t) {
+    ra.ObserveEci(t, kModerateEci);
+    return ra.Select(kStart, kFarGoal).level;
+  };
+  EXPECT_EQ(level_at(5.9), 1) << "4.9 s since the held-back trigger";
+  // A poor path (score e^-1) at 5.95 s, just before the period ends: one step finer, and the
+  // period starts again from there.
+  ra.OnPathPlanned(5.95, {.path_length = 20.0, .straight_length = 10.0});
+  EXPECT_EQ(level_at(6.0), 2);
+  EXPECT_EQ(level_at(10.9), 2) << "4.95 s since the poor path";
+  EXPECT_EQ(level_at(10.95), 1) << "5 s since it";
+  EXPECT_EQ(level_at(15.9), 1) << "the next step needs another full period";
+  EXPECT_EQ(level_at(15.95), 0);
 }
 
 TEST(ResolutionAdapterTest, CoarseningGivesAFailedLevelAnotherTry) {
@@ -206,6 +247,7 @@ TEST(ResolutionAdapterTest, RefusesBadOptions) {
   EXPECT_THROW(ResolutionAdapter({.ladder = {}}), std::invalid_argument);
   EXPECT_THROW(ResolutionAdapter({.score_threshold = 1.5}), std::invalid_argument);
   EXPECT_THROW(ResolutionAdapter({.coarsen_after = 0.0}), std::invalid_argument);
+  EXPECT_THROW(ResolutionAdapter({.quiet_period = 0.0}), std::invalid_argument);
   ResolutionAdapter ra;
   EXPECT_THROW(ra.ReportPlanningOutcome(6, true), std::out_of_range);
 }

@@ -12,6 +12,9 @@ const std::string kHashRef = "sha256:" + std::string(64, 'c');
 JobSpecOptions Options() {
   JobSpecOptions o;
   o.catalog.methods = {{"baseline", "", {}}, {"enavi", "", {{"strategy.explore", 0, 1, true}}}};
+  o.catalog.boards = {"pi4b", "tx2"};
+  o.catalog.scenarios = {"s1", "s2", "empty"};
+  o.catalog.clocks = {"virtual", "emulated"};
   return o;
 }
 

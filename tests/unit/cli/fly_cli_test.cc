@@ -8,7 +8,9 @@
 
 #include <gtest/gtest.h>
 
+#include "api/episode.h"
 #include "tests/unit/worlds/test_util.h"
+#include "workers/sim/episode_config.h"
 
 namespace enavi::cli {
 namespace {
@@ -21,10 +23,10 @@ struct CliRun {
   std::string out, err;
 };
 
-CliRun Fly(const TempDir& dir, const std::string& args) {
+CliRun Enavi(const TempDir& dir, const std::string& args) {
   const auto out = dir.path() / "stdout.txt", err = dir.path() / "stderr.txt";
   const std::string cmd =
-      std::string(ENAVI_BINARY_DIR) + "/bin/enavi fly " + args + " >" + out.string() + " 2>" + err.string();
+      std::string(ENAVI_BINARY_DIR) + "/bin/enavi " + args + " >" + out.string() + " 2>" + err.string();
   const int status = std::system(cmd.c_str());
   CliRun r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -32,6 +34,8 @@ CliRun Fly(const TempDir& dir, const std::string& args) {
   r.err = ReadFile(err);
   return r;
 }
+
+CliRun Fly(const TempDir& dir, const std::string& args) { return Enavi(dir, "fly " + args); }
 
 bool Has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
@@ -143,6 +147,26 @@ TEST(FlyCliInputTest, HelpExitsZeroAndListsTheFlags) {
   for (const char* flag : {"--world", "--seed", "--start", "--goal", "--param", "--board", "--method", "--clock",
                            "--cost", "--timeout", "--set", "--out", "--json"})
     EXPECT_TRUE(Has(r.out, flag)) << flag << " missing from --help:\n" << r.out;
+}
+
+// The help texts read the registries: every board, scenario and clock has its line.
+TEST(FlyCliInputTest, HelpListsEveryRegisteredBoardScenarioAndClock) {
+  TempDir dir;
+  const CliRun r = Fly(dir, "--help");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const api::Catalog catalog = sim::FarmCatalog();
+  for (const auto* names : {&catalog.boards, &catalog.scenarios, &catalog.clocks})
+    for (const std::string& name : *names) EXPECT_TRUE(Has(r.out, "    " + name + ": ")) << name << " missing from:\n" << r.out;
+}
+
+// `enavi bench raycast` (its core is the enavi::raycast_bench library, outside the simulator's).
+TEST(BenchCliTest, RaycastRendersWithBothRenderersAndPrintsJson) {
+  TempDir dir;
+  const CliRun r = Enavi(dir, "bench raycast --world empty --frames 2 --bullet-frames 1 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(Has(r.out, "\"embree_mrays_per_s_per_core\"")) << r.out;
+  EXPECT_TRUE(Has(r.out, "\"bullet_frames\": 1,")) << r.out;
+  ExpectRefused(Enavi(dir, "bench raycast --world empty --frames 0"), {"--frames"}, "zero frames");
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 // The corpus check: every malformed world, mesh, SDF and job file of tests/corpus/malformed/ is
 // refused by each command that reads a user's file (`enavi world check`, `enavi fly --world`,
-// `enavi submit --dry-run`) with exit code 2 and a message naming the file: never a crash (a
-// signal, a sanitizer report: exit 1), never a hang (killed after kTimeoutS).
+// `enavi submit --dry-run`), and every malformed policy file of tests/corpus/policy/ by
+// `enavi fly --policy` and `enavi policy convert`, with exit code 2 and a message naming the
+// file: never a crash (a signal, a sanitizer report: exit 1), never a hang (killed after
+// kTimeoutS).
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -24,10 +26,11 @@ using worlds::testing::TempDir;
 constexpr int kTimeoutS = 60;
 
 fs::path CorpusDir() { return fs::path(ENAVI_SOURCE_DIR) / "tests/corpus/malformed"; }
+fs::path PolicyCorpusDir() { return fs::path(ENAVI_SOURCE_DIR) / "tests/corpus/policy"; }
 
-std::vector<std::string> CorpusFiles() {
+std::vector<std::string> CorpusFiles(const fs::path& dir = CorpusDir()) {
   std::vector<std::string> names;
-  for (const auto& e : fs::directory_iterator(CorpusDir())) names.push_back(e.path().filename().string());
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
   return names;
 }
@@ -80,12 +83,28 @@ TEST_P(MalformedInputTest, FlyRefusesIt) {
 
 TEST_P(MalformedInputTest, SubmitDryRunRefusesIt) { ExpectRefused("submit --dry-run --world-root . " + GetParam()); }
 
-INSTANTIATE_TEST_SUITE_P(Corpus, MalformedInputTest, ::testing::ValuesIn(CorpusFiles()),
-                         [](const ::testing::TestParamInfo<std::string>& info) {
-                           std::string name;
-                           for (char c : info.param) name += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-                           return name;
-                         });
+std::string TestName(const ::testing::TestParamInfo<std::string>& info) {
+  std::string name;
+  for (char c : info.param) name += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Corpus, MalformedInputTest, ::testing::ValuesIn(CorpusFiles()), TestName);
+
+using MalformedPolicyTest = MalformedInputTest;
+
+TEST_P(MalformedPolicyTest, FlyRefusesIt) {
+  ExpectRefused("fly --world s3 --board tx2 --method enavi --policy " + (PolicyCorpusDir() / GetParam()).string());
+}
+
+TEST_P(MalformedPolicyTest, ConvertRefusesItAndWritesNothing) {
+  TempDir dir;
+  const fs::path out = dir.path() / "converted.json";
+  ExpectRefused("policy convert " + (PolicyCorpusDir() / GetParam()).string() + " --out " + out.string());
+  EXPECT_FALSE(fs::exists(out));
+}
+
+INSTANTIATE_TEST_SUITE_P(Corpus, MalformedPolicyTest, ::testing::ValuesIn(CorpusFiles(PolicyCorpusDir())), TestName);
 
 }  // namespace
 }  // namespace enavi

@@ -1,5 +1,6 @@
 #include "navstack/perception/occupancy_map.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -323,6 +324,76 @@ TEST(OccupancyMapTest, EgoPlannersRayBreakCutsRayStepsAndKeepsTheMap) {
   EXPECT_EQ(Name(cut.Query({1.5, 0.0, 0.0})), "free");
   EXPECT_EQ(Name(cut.Query({2.9, -1.0, 0.5})), "free");
   EXPECT_EQ(Name(cut.Query({3.9, 0.0, 0.0})), "unknown") << "hidden behind the wall";
+}
+
+TEST(OccupancyMapTest, DenseMarksAndHashSetsGiveTheSameUpdate) {
+  // A frame's keys are deduplicated in a dense array over the local box when it is small enough
+  // (6 m: 123^3 cells) and in hash sets otherwise (50 m); every ray here stays within 5 m, so
+  // both must give the same keys in the same order.
+  PerceptionOptions every;
+  every.stride = 1;
+  for (const bool stop : {false, true}) {
+    MapOptions small, large;
+    small.local_half_extent = {6, 6, 6};
+    large.local_half_extent = {50, 50, 50};
+    small.stop_at_traversed = large.stop_at_traversed = stop;
+    const OccupancyMap dense_marks(small), hash_sets(large);
+    for (const DepthFrame& f : {WallFrame(), WallFrame({0.4, -0.2, 0.1}, -0.15)}) {
+      const MapUpdate a = dense_marks.ComputeUpdate(f, kCam, every);
+      const MapUpdate b = hash_sets.ComputeUpdate(f, kCam, every);
+      ASSERT_GT(a.free_keys.size(), 1000u);
+      EXPECT_EQ(a.free_keys, b.free_keys) << "stop_at_traversed " << stop;
+      EXPECT_EQ(a.occupied_keys, b.occupied_keys) << "stop_at_traversed " << stop;
+      EXPECT_EQ(a.ray_steps, b.ray_steps) << "stop_at_traversed " << stop;
+    }
+  }
+}
+
+TEST(OccupancyMapTest, BlockStoreHoldsTheSameCellsAsTheOctree) {
+  // The same frames into OctoMap's octree and into dense blocks: OctoMap's log-odds rule on the
+  // same floats, so every cell state agrees, also after a rebuild at another resolution. Narrow
+  // clamping bounds make the clamp decide cells: after three misses one hit marks a cell occupied
+  // only if the misses were clamped, and after hits one miss frees it only if the hits were.
+  MapOptions o;
+  o.clamp_min = 0.45;
+  o.clamp_max = 0.55;
+  MapOptions b = o;
+  b.storage = MapStorage::kBlocks;
+  OccupancyMap octree(o), blocks(b);
+  const DepthFrame nothing = RenderFrame(Scene{}, kCam, CameraPose({0, 0, 0}));
+  for (const DepthFrame& f : {nothing, nothing, nothing, WallFrame(), WallFrame({0.4, -0.2, 0.1}, -0.15),
+                              WallFrame(), WallFrame(), RenderFrame(Scene{}, kCam, CameraPose({0.2, 0.1, 0}, 0.1)),
+                              WallFrame({1.0, 0.6, -0.3}, 0.3)}) {
+    WorkCounts wo, wb;
+    octree.Insert(f, kCam, {}, &wo);
+    blocks.Insert(f, kCam, {}, &wb);
+    EXPECT_EQ(wo.n, wb.n) << "the same work";
+  }
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-1, -4, -3), Eigen::Vector3d(6, 4, 3));
+  const VoxelGrid g = octree.ExtractGrid(box);
+  ASSERT_EQ(g.cells, blocks.ExtractGrid(box).cells);
+  const OccupancyStats so = octree.Stats(box), sb = blocks.Stats(box);
+  EXPECT_GT(so.occupied, 200);
+  EXPECT_GT(so.free, 5000);
+  EXPECT_EQ(so.occupied, sb.occupied);
+  EXPECT_EQ(so.free, sb.free);
+  EXPECT_EQ(so.unknown, sb.unknown);
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(3.05, 0, 0), Eigen::Vector3d(1.5, 0, 0),
+                                  Eigen::Vector3d(3.9, 0, 0), Eigen::Vector3d(-200, 0, 0)}) {
+    EXPECT_EQ(Name(octree.Query(p)), Name(blocks.Query(p))) << p.transpose();
+  }
+  // A sub-box whose faces cut through blocks.
+  const Eigen::AlignedBox3d part(Eigen::Vector3d(2.33, -0.77, -0.41), Eigen::Vector3d(3.51, 1.29, 0.66));
+  EXPECT_EQ(octree.ExtractGrid(part).cells, blocks.ExtractGrid(part).cells);
+
+  octree.SetResolution(0.2);
+  blocks.SetResolution(0.2);
+  EXPECT_EQ(octree.ExtractGrid(box).cells, blocks.ExtractGrid(box).cells) << "after a rebuild";
+  blocks.Clear();
+  const VoxelGrid cleared = blocks.ExtractGrid(box);
+  EXPECT_TRUE(std::all_of(cleared.cells.begin(), cleared.cells.end(),
+                          [](CellState c) { return c == CellState::kUnknown; }));
+  EXPECT_EQ(blocks.num_leaves(), 0u);
 }
 
 TEST(OccupancyMapTest, LocalBoxLimitsTheUpdate) {

@@ -48,7 +48,7 @@ class HttpApiTest : public ::testing::Test {
   std::string Serve(const std::string& token = "", HttpOptions http = {}) {
     http.token = token;
     http.job_spec.allowed_roots = {dir_};
-    http.job_spec.catalog = sim::MethodCatalog();
+    http.job_spec.catalog = sim::FarmCatalog();
     api_ = std::make_unique<HttpApi>(farm_.get(), http);
     api_->Start();
     return api_->url();
@@ -62,7 +62,7 @@ class HttpApiTest : public ::testing::Test {
 
 TEST_F(HttpApiTest, HandleRawServesOneRequestWithoutASocket) {
   HttpOptions http;
-  http.job_spec.catalog = sim::MethodCatalog();
+  http.job_spec.catalog = sim::FarmCatalog();
   HttpApi api(farm_.get(), http);  // never started: no port, no thread
   const std::string ok = api.HandleRaw("GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
   EXPECT_EQ(ok.rfind("HTTP/1.1 200", 0), 0u) << ok;

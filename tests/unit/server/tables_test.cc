@@ -1,9 +1,37 @@
 #include "server/eval/tables.h"
 
+#include <algorithm>
+
 #include <gtest/gtest.h>
+
+#include "server/eval/paper_reference.h"
+#include "workers/board/board_profile.h"
+#include "worlds/generators.h"
 
 namespace enavi::server {
 namespace {
+
+// The paper's matrix is read from its table and the registries, so it names registered boards
+// and generators, and every board has both of the paper's rows.
+TEST(PaperReferenceTest, TheMatrixIsRegisteredBoardsAndTheGeneratorsAfterThePapersScenarios) {
+  const std::vector<std::string> known = board::KnownBoards();
+  ASSERT_EQ(PaperBoards().size(), 5u) << "the paper flew five boards";
+  for (const std::string& b : PaperBoards()) {
+    EXPECT_NE(std::find(known.begin(), known.end(), b), known.end()) << b << " is not a registered board";
+    EXPECT_NE(FindPaperRow(b, "enavi"), nullptr) << b;
+    EXPECT_NE(FindPaperRow(b, "baseline"), nullptr) << b;
+    EXPECT_GT(board::LoadBoard(b).paper_gflops, 0) << b << ": a board of the paper has its GFLOPS figure";
+  }
+  EXPECT_EQ(PaperHilTable().size(), 2 * PaperBoards().size());
+  ASSERT_EQ(PaperScenarios().size(), 5u);
+  for (const std::string& s : PaperScenarios()) {
+    const worlds::GeneratorInfo* g = worlds::FindGenerator(s);
+    ASSERT_NE(g, nullptr) << s;
+    EXPECT_GT(g->paper_path_length, 0) << s;
+  }
+  EXPECT_EQ(PaperScenarios().front(), "s1") << "PaperRow's arrays run S1-S5";
+  EXPECT_EQ(PaperScenarios().back(), "s5");
+}
 
 nlohmann::json Result(const std::string& board, const std::string& method, const std::string& s,
                       int seed, double cpu, double time, double path, bool ok) {

@@ -133,8 +133,11 @@ TEST(NavStackTest, AMapUpdateChecksTheTrajectoryAgainstTheNewMap) {
   stack.OnFrame(frame);
   ex.Run(TaskId::kPerception);
   ASSERT_EQ(ex.Triggered(TaskId::kCollision), 1) << "collision check after every map update";
-  for (const auto& [task, deadline] : ex.triggers)
-    if (task == TaskId::kCollision) EXPECT_DOUBLE_EQ(deadline, 1.0 / o.rates.f_per) << "before the next update";
+  for (const auto& [task, deadline] : ex.triggers) {
+    if (task == TaskId::kCollision) {
+      EXPECT_DOUBLE_EQ(deadline, 1.0 / o.rates.f_per) << "before the next update";
+    }
+  }
   ex.Run(TaskId::kPerception);
   EXPECT_EQ(ex.Triggered(TaskId::kCollision), 1) << "the same frame is mapped once";
 }

@@ -28,6 +28,8 @@ class WorkerTest : public ::testing::Test {
     options_.bus = bus_;
     options_.worker_id = "w1";
     options_.slots = 1;
+    options_.boards = {"tx2"};
+    options_.clocks = {"virtual", "emulated"};
     options_.episode_command = {std::string(ENAVI_BINARY_DIR) + "/tests/fake_episode"};
     options_.spool_dir = dir_ / "spool";
     options_.work_dir = dir_ / "work";
@@ -212,7 +214,10 @@ TEST_F(WorkerTest, BadOptionsAreRejected) {
   options_.slots = 0;
   EXPECT_THROW(Worker w(options_), std::invalid_argument);
   options_.slots = 1;
-  options_.boards = {"c64"};
+  options_.boards = {};
+  EXPECT_THROW(Worker w(options_), std::invalid_argument);
+  options_.boards = {"tx2"};
+  options_.clocks = {};
   EXPECT_THROW(Worker w(options_), std::invalid_argument);
 }
 

@@ -315,7 +315,11 @@ TEST(JobSpecWorldsTest, ScenarioEntriesCarryPlacementAndEveryMeshFormatIsAccepte
   dir.Write("models/pillar/model.config", "x");
   api::JobSpecOptions options;
   options.allowed_roots = {dir.path()};
-  options.catalog.methods = {{"baseline", "", {}}};  // placement is independent of the methods
+  // Placement is independent of the methods, boards and clocks.
+  options.catalog.methods = {{"baseline", "", {}}};
+  options.catalog.boards = {"host"};
+  options.catalog.scenarios = {"s1"};
+  options.catalog.clocks = {"virtual"};
   std::string scenarios;
   for (const auto& f : kMeshFormats) {
     scenarios += std::string("  - {world: m") + f.extension + ", start: [0, 0, 1], goal: [4, 0, 1]}\n";

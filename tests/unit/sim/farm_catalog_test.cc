@@ -1,0 +1,79 @@
+// The farm's catalog is the registries' contents (boards: the embedded profiles; scenarios: the
+// generators; clocks: sim::Clocks(); methods: navstack's), and job validation and the episode
+// runner read the same lists: every registered name is accepted, every other name is refused
+// with the registered ones in the message.
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "api/job_spec.h"
+#include "workers/sim/episode.h"
+#include "workers/sim/episode_config.h"
+
+namespace enavi::sim {
+namespace {
+
+std::string YamlList(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "[" : ", ") + n;
+  return out + "]";
+}
+
+api::JobSpecOptions Options() {
+  api::JobSpecOptions o;
+  o.catalog = FarmCatalog();
+  return o;
+}
+
+TEST(FarmCatalogTest, AJobOfEveryRegisteredBoardScenarioAndMethodIsAcceptedOnEveryClock) {
+  const api::Catalog c = FarmCatalog();
+  ASSERT_FALSE(c.boards.empty());
+  ASSERT_FALSE(c.scenarios.empty());
+  ASSERT_FALSE(c.clocks.empty());
+  std::vector<std::string> methods;
+  for (const api::MethodEntry& m : c.methods) methods.push_back(m.name);
+  for (const std::string& clock : c.clocks) {
+    const api::JobSpec job = api::ParseJobSpec("boards: " + YamlList(c.boards) + "\nscenarios: " + YamlList(c.scenarios) +
+                                                   "\nmethods: " + YamlList(methods) + "\nseeds: 1\nclock: " + clock + "\n",
+                                               "job.yaml", Options());
+    EXPECT_EQ(job.clock, clock);
+    EXPECT_EQ(api::ExpandJob(job).size(), c.boards.size() * c.scenarios.size() * methods.size());
+  }
+}
+
+TEST(FarmCatalogTest, UnknownNamesAreRefusedWithTheRegisteredOnes) {
+  const api::Catalog c = FarmCatalog();
+  auto error = [](const std::string& yaml) {
+    try {
+      api::ParseJobSpec(yaml, "job.yaml", Options());
+    } catch (const api::JobSpecError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string board = error("boards: [c64]\nscenarios: [s1]\nmethods: [baseline]\nseeds: 1\n");
+  for (const std::string& b : c.boards) EXPECT_NE(board.find(b), std::string::npos) << board;
+  const std::string scenario = error("boards: [host]\nscenarios: [moon]\nmethods: [baseline]\nseeds: 1\n");
+  for (const std::string& s : c.scenarios) EXPECT_NE(scenario.find(s), std::string::npos) << scenario;
+  const std::string clock = error("boards: [host]\nscenarios: [s1]\nmethods: [baseline]\nseeds: 1\nclock: wall\n");
+  for (const std::string& k : c.clocks) EXPECT_NE(clock.find(k), std::string::npos) << clock;
+}
+
+TEST(FarmCatalogTest, TheEpisodeRunnerRefusesAnUnregisteredClockNamingTheRegisteredOnes) {
+  api::EpisodeSpec spec;
+  spec.world = "empty";
+  spec.world_params["length"] = "5";
+  spec.clock = "wall";
+  try {
+    RunEpisode(spec);
+    FAIL() << "an unknown clock flew";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("unknown clock 'wall'"), std::string::npos) << what;
+    for (const ClockInfo& c : Clocks()) EXPECT_NE(what.find(c.name), std::string::npos) << what;
+  }
+}
+
+}  // namespace
+}  // namespace enavi::sim
