@@ -12,6 +12,7 @@
 #include <variant>
 #include <vector>
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include "worlds/detmath.h"
@@ -40,6 +41,41 @@ struct ParseContext {
   std::size_t triangles = 0;
   std::size_t max_objects = kMaxObjects;
   std::size_t max_triangles = kMaxTriangles;
+};
+
+// Counts the documents of a YAML text up to two, and where the second starts. Not
+// YAML::LoadAll: yaml-cpp 0.7's parser never gets past a stray ',' where a document starts and
+// LoadAll collects empty documents until memory runs out (found by world_yaml_fuzz).
+class DocumentCounter : public YAML::EventHandler {
+ public:
+  static DocumentCounter Count(const std::string& yaml) {
+    std::istringstream in(yaml);
+    YAML::Parser parser(in);
+    DocumentCounter counter;
+    while (counter.documents_ < 2 && parser.HandleNextDocument(counter)) {
+    }
+    return counter;
+  }
+  int documents() const { return documents_; }
+  int second_line() const { return second_line_; }
+
+  void OnDocumentStart(const YAML::Mark& mark) override {
+    if (++documents_ == 2) second_line_ = mark.line + 1;
+  }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+
+ private:
+  int documents_ = 0;
+  int second_line_ = 0;
 };
 
 int LineOf(const YAML::Node& node) {
@@ -425,10 +461,11 @@ World ParseWorld(std::string_view yaml, const std::string& file_name, const std:
   };
   World world;
   try {
-    std::vector<YAML::Node> docs = YAML::LoadAll(std::string(yaml));
-    if (docs.empty()) throw WorldError(file_name, 0, "document", "empty file (expected a world mapping)");
-    if (docs.size() > 1) throw WorldError(file_name, LineOf(docs[1]), "document", "more than one YAML document");
-    world = ParseDocument(&ctx, docs[0], options);
+    const std::string text(yaml);
+    const DocumentCounter docs = DocumentCounter::Count(text);
+    if (docs.documents() == 0) throw WorldError(file_name, 0, "document", "empty file (expected a world mapping)");
+    if (docs.documents() > 1) throw WorldError(file_name, docs.second_line(), "document", "more than one YAML document");
+    world = ParseDocument(&ctx, YAML::Load(text), options);
   } catch (const YAML::Exception& e) {
     throw WorldError(file_name, e.mark.line >= 0 ? e.mark.line + 1 : 0, "yaml", e.msg);
   }
