@@ -23,17 +23,11 @@ constexpr int kBlockBits = 3;
 constexpr int kBlockEdge = 1 << kBlockBits;
 constexpr int kBlockMask = kBlockEdge - 1;
 constexpr int kBlockCells = kBlockEdge * kBlockEdge * kBlockEdge;
-constexpr int kKeyOffset = 32768;  // OctoMap's tree_max_val
 
 struct Block {
   Block() { log_odds.fill(std::numeric_limits<float>::quiet_NaN()); }  // NaN: unknown
   std::array<float, kBlockCells> log_odds;
 };
-
-Eigen::Vector3i Unpack(std::uint64_t k) {
-  return {static_cast<int>(k & 0xFFFF), static_cast<int>((k >> 16) & 0xFFFF),
-          static_cast<int>((k >> 32) & 0xFFFF)};
-}
 
 std::uint64_t BlockId(int bx, int by, int bz) {
   return std::uint64_t(bx) | (std::uint64_t(by) << 16) | (std::uint64_t(bz) << 32);
@@ -74,7 +68,7 @@ class BlockStore final : public CellStore {
   }
 
   CellState State(std::uint64_t packed_key) const override {
-    const Eigen::Vector3i k = Unpack(packed_key);
+    const Eigen::Vector3i k = UnpackKey(packed_key);
     const Block* b = Find(k.x() >> kBlockBits, k.y() >> kBlockBits, k.z() >> kBlockBits);
     if (b == nullptr) return CellState::kUnknown;
     return StateOf(b->log_odds[CellIndex(k.x(), k.y(), k.z())]);
@@ -117,8 +111,8 @@ class BlockStore final : public CellStore {
     const double inv = 1.0 / resolution_;
     KeyBox box;
     for (int a = 0; a < 3; ++a) {
-      box.lo[a] = static_cast<int>(std::floor(inv * lo[a])) + kKeyOffset;
-      box.hi[a] = static_cast<int>(std::floor(inv * hi[a])) + kKeyOffset;
+      box.lo[a] = KeyOf(inv, lo[a]);
+      box.hi[a] = KeyOf(inv, hi[a]);
     }
     ForEachKnownBlock(box, [&](const Eigen::Vector3i& l, const Eigen::Vector3i& h, bool occupied) {
       if (!occupied) return;
@@ -152,7 +146,7 @@ class BlockStore final : public CellStore {
   }
 
   float& Cell(std::uint64_t packed_key) {
-    const Eigen::Vector3i k = Unpack(packed_key);
+    const Eigen::Vector3i k = UnpackKey(packed_key);
     const std::uint64_t id = BlockId(k.x() >> kBlockBits, k.y() >> kBlockBits, k.z() >> kBlockBits);
     // Updates come in ray order, so most hit the block of the one before.
     if (id != last_id_) {

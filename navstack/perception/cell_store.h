@@ -4,6 +4,7 @@
 // update rule to the same float values, so a map's cell states do not depend on the store.
 // Internal to enavi::perception.
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -13,6 +14,18 @@
 #include "navstack/perception/occupancy_map.h"
 
 namespace enavi::navstack::detail {
+
+/// OctoMap's tree_max_val for its 16-level trees: key = floor(x / resolution) + kKeyOffset.
+inline constexpr int kKeyOffset = 32768;
+
+/// Key of coordinate `x` on one axis, as OcTree::coordToKey (`inv` = 1 / resolution).
+inline int KeyOf(double inv, double x) { return static_cast<int>(std::floor(inv * x)) + kKeyOffset; }
+
+/// The three 16-bit keys packed by OccupancyMap::PackKey.
+inline Eigen::Vector3i UnpackKey(std::uint64_t k) {
+  return {static_cast<int>(k & 0xFFFF), static_cast<int>((k >> 16) & 0xFFFF),
+          static_cast<int>((k >> 32) & 0xFFFF)};
+}
 
 /// Inclusive range of keys (OctoMap's 16-bit key space) on each axis.
 struct KeyBox {

@@ -12,12 +12,12 @@
 namespace enavi::navstack {
 namespace {
 
-constexpr int kKeyOffset = 32768;  // OctoMap's tree_max_val for its 16-level trees
 constexpr double kMinResolution = 0.02;
 constexpr double kMaxResolution = 5.0;
 constexpr std::int64_t kMaxGridCells = std::int64_t{1} << 28;
 
 using detail::KeyBox;
+using detail::kKeyOffset;
 
 std::unique_ptr<detail::CellStore> MakeStore(const MapOptions& o) {
   return o.storage == MapStorage::kBlocks ? detail::MakeBlockStore(o)
@@ -140,9 +140,8 @@ class FrameMarks {
     return s;
   }
   std::size_t Index(std::uint64_t key) const {
-    const int x = static_cast<int>(key & 0xFFFF) - lo_.x();
-    const int y = static_cast<int>((key >> 16) & 0xFFFF) - lo_.y();
-    const int z = static_cast<int>((key >> 32) & 0xFFFF) - lo_.z();
+    const Eigen::Vector3i d = detail::UnpackKey(key) - lo_;
+    const int x = d.x(), y = d.y(), z = d.z();
     if (static_cast<unsigned>(x) >= static_cast<unsigned>(dims_.x()) ||
         static_cast<unsigned>(y) >= static_cast<unsigned>(dims_.y()) ||
         static_cast<unsigned>(z) >= static_cast<unsigned>(dims_.z())) {
@@ -463,7 +462,7 @@ std::shared_ptr<OccupancyMap> OccupancyMap::Rebuilt(double resolution, WorkCount
     const Eigen::Vector3d centre = history_.back()->origin_W;
     const Eigen::Vector3d half = options_.local_half_extent;
     const double inv = 1.0 / resolution;
-    auto key = [inv](double x) { return static_cast<int>(std::floor(inv * x)) + kKeyOffset; };
+    auto key = [inv](double x) { return detail::KeyOf(inv, x); };
     const float hit_log_odds = map->store_->HitLogOdds();
     std::int64_t carried = 0;
     store_->ForEachOccupiedLeaf(centre - half, centre + half, [&](const Eigen::Vector3d& c, double edge) {

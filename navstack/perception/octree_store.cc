@@ -11,10 +11,10 @@
 namespace enavi::navstack::detail {
 namespace {
 
-octomap::OcTreeKey Unpack(std::uint64_t k) {
-  return octomap::OcTreeKey(static_cast<octomap::key_type>(k & 0xFFFF),
-                            static_cast<octomap::key_type>((k >> 16) & 0xFFFF),
-                            static_cast<octomap::key_type>((k >> 32) & 0xFFFF));
+octomap::OcTreeKey Unpack(std::uint64_t packed_key) {
+  const Eigen::Vector3i k = UnpackKey(packed_key);
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(k.x()), static_cast<octomap::key_type>(k.y()),
+                            static_cast<octomap::key_type>(k.z()));
 }
 
 class OctreeStore final : public CellStore {
