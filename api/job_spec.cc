@@ -5,37 +5,42 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <set>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
+
+#include "api/yaml_read.h"
 
 namespace enavi::api {
 namespace {
 
 namespace fs = std::filesystem;
 
-// Error reporting: every message reads FILE:LINE: field: reason.
+// Error reporting: every message reads FILE:LINE: field: reason (the shared YAML reader's, as
+// JobSpecError; a node without a position is blamed on line 1).
 class Context {
  public:
-  Context(std::string file, const JobSpecOptions& options) : file_(std::move(file)), catalog_(options.catalog) {
+  Context(std::string file, const JobSpecOptions& options)
+      : reader_(std::move(file),
+                [](const std::string& source, int line, const std::string& field, const std::string& reason) {
+                  throw JobSpecError(source + ":" + std::to_string(line > 0 ? line : 1) + ": " + field + ": " + reason);
+                }),
+        catalog_(options.catalog) {
     std::vector<fs::path> roots = options.allowed_roots;
     if (roots.empty()) roots.push_back(fs::current_path());
     for (const auto& r : roots) roots_.push_back(fs::weakly_canonical(fs::absolute(r)));
   }
 
-  [[noreturn]] void Fail(const YAML::Node& at, const std::string& field,
-                         const std::string& reason) const {
-    const YAML::Mark mark = at.Mark();
-    const int line = mark.is_null() ? 1 : mark.line + 1;
-    throw JobSpecError(file_ + ":" + std::to_string(line) + ": " + field + ": " + reason);
+  [[noreturn]] void Fail(const YAML::Node& at, const std::string& field, const std::string& reason) const {
+    reader_.Fail(at, field, reason);
   }
 
+  const YamlReader& reader() const { return reader_; }
   const std::vector<fs::path>& roots() const { return roots_; }
   const Catalog& catalog() const { return catalog_; }
 
  private:
-  std::string file_;
+  YamlReader reader_;
   const Catalog& catalog_;
   std::vector<fs::path> roots_;
 };
@@ -68,65 +73,27 @@ bool Contains(const List& list, const std::string& value) {
 }
 
 std::string Scalar(const Context& ctx, const YAML::Node& n, const std::string& field) {
-  if (!n.IsScalar()) ctx.Fail(n, field, "expected a single value");
-  return n.Scalar();
+  return ctx.reader().Scalar(n, field);
 }
 
 std::int64_t Integer(const Context& ctx, const YAML::Node& n, const std::string& field) {
-  const std::string text = Scalar(ctx, n, field);
-  try {
-    std::size_t used = 0;
-    const long long v = std::stoll(text, &used, 10);
-    if (used == text.size()) return v;
-  } catch (const std::exception&) {
-  }
-  ctx.Fail(n, field, "expected an integer, got '" + text + "'");
+  return ctx.reader().Integer(n, field);
 }
 
-double Number(const Context& ctx, const YAML::Node& n, const std::string& field, double lo,
-              double hi) {
-  const std::string text = Scalar(ctx, n, field);
-  double v = 0;
-  try {
-    v = n.as<double>();
-  } catch (const YAML::Exception&) {
-    ctx.Fail(n, field, "expected a number, got '" + text + "'");
-  }
-  if (!std::isfinite(v) || v < lo || v > hi) {
-    std::ostringstream os;
-    os << text << " outside [" << lo << ", " << hi << "]";
-    ctx.Fail(n, field, os.str());
-  }
-  return v;
+double Number(const Context& ctx, const YAML::Node& n, const std::string& field, double lo, double hi) {
+  return ctx.reader().Range(n, field, lo, hi);
 }
 
-// A scalar or a list of scalars, as strings.
 std::vector<YAML::Node> Items(const Context& ctx, const YAML::Node& n, const std::string& field) {
-  std::vector<YAML::Node> out;
-  if (n.IsScalar()) {
-    out.push_back(n);
-  } else if (n.IsSequence()) {
-    for (const auto& item : n) out.push_back(item);
-  } else {
-    ctx.Fail(n, field, "expected a value or a list");
-  }
-  return out;
+  return ctx.reader().Items(n, field);
 }
 
-// Rejects keys that are not in `allowed` and duplicated keys.
 void CheckKeys(const Context& ctx, const YAML::Node& map, const std::string& where,
                std::initializer_list<const char*> allowed) {
-  std::set<std::string> seen;
-  for (const auto& kv : map) {
-    const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "?";
-    const std::string field = where.empty() ? key : where + "." + key;
-    if (!Contains(allowed, key)) {
-      ctx.Fail(kv.first, field,
-               "unknown key (allowed: " + Join(allowed) + ")");
-    }
-    if (!seen.insert(key).second) ctx.Fail(kv.first, field, "duplicate key");
-  }
+  ctx.reader().CheckKeys(map, where, allowed);
 }
+
+bool Bool(const Context& ctx, const YAML::Node& n, const std::string& field) { return ctx.reader().Bool(n, field); }
 
 std::vector<std::string> Choices(const Context& ctx, const YAML::Node& n, const std::string& field,
                                  const auto& known, const char* what) {
@@ -288,11 +255,7 @@ ScenarioEntry Scenario(const Context& ctx, const YAML::Node& n) {
       entry.up = Scalar(ctx, n["up"], "scenarios.up");
       if (!Contains(kUpAxes, entry.up)) ctx.Fail(n["up"], "scenarios.up", "expected y or z (got '" + entry.up + "')");
     }
-    if (n["recenter"]) {
-      const std::string v = Scalar(ctx, n["recenter"], "scenarios.recenter");
-      if (v != "true" && v != "false") ctx.Fail(n["recenter"], "scenarios.recenter", "expected true or false");
-      entry.recenter = v == "true";
-    }
+    if (n["recenter"]) entry.recenter = Bool(ctx, n["recenter"], "scenarios.recenter");
     if (n["model_path"]) {
       for (const auto& item : Items(ctx, n["model_path"], "scenarios.model_path")) {
         entry.model_path.push_back(
@@ -420,12 +383,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   if (c.methods.empty() || c.boards.empty() || c.scenarios.empty() || c.clocks.empty())
     throw std::logic_error("ParseJobSpec: incomplete catalog (the composition root passes the registries')");
   const Context ctx(file_name, options);
-  YAML::Node loaded;
-  try {
-    loaded = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw JobSpecError(file_name + ":" + std::to_string(e.mark.line + 1) + ": yaml: " + e.msg);
-  }
+  const YAML::Node loaded = ctx.reader().Load(yaml_text);
   // const: operator[] on a mutable node would insert the keys it looks up.
   const YAML::Node root = loaded;
   if (!root.IsMap()) ctx.Fail(root, "job", "expected a YAML map of name, boards, scenarios, ...");
@@ -492,11 +450,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
       ctx.Fail(root["clock"], "clock", "rollouts are recorded on the virtual clock only");
     }
     if (job.policy.empty()) ctx.Fail(root, "policy", "a collection job names its policy");
-    if (root["sample"]) {
-      const std::string v = Scalar(ctx, root["sample"], "sample");
-      if (v != "true" && v != "false") ctx.Fail(root["sample"], "sample", "expected true or false");
-      job.collect->sample = v == "true";
-    }
+    if (root["sample"]) job.collect->sample = Bool(ctx, root["sample"], "sample");
   } else if (root["sample"]) {
     ctx.Fail(root["sample"], "sample", "only with collect: rollouts");
   }

@@ -1,20 +1,19 @@
 #pragma once
-// Locale-free number text for world files and OBJ: std::from_chars / std::to_chars only, so a
-// file reads and writes the same on every machine whatever its locale.
+// Locale-free number text for world files and OBJ: std::to_chars for writing (the parsers are
+// api/number_parse.h), so a file reads and writes the same on every machine whatever its locale.
 
 #include <cstdint>
 #include <string>
 #include <string_view>
 
+#include "api/number_parse.h"
+
 namespace enavi::worlds {
 
-/// Parses a whole token as a finite double ("1.5", "-2e3", "+0.25"). False on anything else
-/// (empty, trailing characters, inf, nan, out of range).
-bool ParseFiniteDouble(std::string_view text, double* out);
-
-/// Parses a whole token as a decimal integer (optional sign). False on anything else.
-bool ParseInt64(std::string_view text, std::int64_t* out);
-bool ParseUint64(std::string_view text, std::uint64_t* out);
+// The parsers are api's (one home for number text to value); the worlds readers name them here.
+using api::ParseFiniteDouble;
+using api::ParseInt64;
+using api::ParseUint64;
 
 /// `x` in fixed notation rounded to `decimals` digits; with `trim`, trailing zeros are cut to
 /// one decimal ("1.5", "2.0", "-0.0001"), without it all digits stay ("0.30"). A zero never

@@ -15,6 +15,7 @@
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
+#include "api/yaml_read.h"
 #include "worlds/detmath.h"
 #include "worlds/number_text.h"
 #include "worlds/obj_import.h"
@@ -32,8 +33,17 @@ constexpr std::size_t kMaxStringLength = 256;
 // ---------------------------------------------------------------------------------------------
 // Reading
 
+// World errors are WorldError (file, line, field, reason), raised through the shared reader.
+api::YamlReader WorldReader(const std::string& file) {
+  return api::YamlReader(file, [](const std::string& source, int line, const std::string& field, const std::string& reason) {
+    throw WorldError(source, line, field, reason);
+  });
+}
+
 struct ParseContext {
+  explicit ParseContext(const std::string& file_name) : file(file_name), reader(WorldReader(file_name)) {}
   std::string file;
+  api::YamlReader reader;
   std::filesystem::path base_dir;
   std::map<std::string, int> lines;  // field -> line, for errors found after parsing
   std::map<std::string, ImportedMesh> meshes;  // mesh files loaded so far, by relative path
@@ -78,109 +88,25 @@ class DocumentCounter : public YAML::EventHandler {
   int second_line_ = 0;
 };
 
-int LineOf(const YAML::Node& node) {
-  const YAML::Mark mark = node.Mark();
-  return mark.line >= 0 ? mark.line + 1 : 0;
-}
+int LineOf(const YAML::Node& node) { return api::YamlReader::Line(node); }
 
 [[noreturn]] void Fail(const ParseContext& ctx, const YAML::Node& at, const std::string& field,
                        const std::string& reason) {
-  throw WorldError(ctx.file, LineOf(at), field, reason);
+  ctx.reader.Fail(at, field, reason);
 }
 
-const char* Describe(const YAML::Node& node) {
-  switch (node.Type()) {
-    case YAML::NodeType::Map: return "a mapping";
-    case YAML::NodeType::Sequence: return "a sequence";
-    case YAML::NodeType::Scalar: return "a scalar";
-    case YAML::NodeType::Null: return "null";
-    default: return "nothing";
-  }
-}
+using api::YamlReader;
+using MapView = api::YamlReader::Map;
 
-// Value text for "(got ...)", cut short so a hostile file cannot flood the message.
-std::string Shown(const std::string& text) {
-  constexpr std::size_t kMax = 40;
-  std::string out;
-  for (char ch : text.substr(0, kMax)) out += (ch >= 32 && ch < 127) ? ch : '?';
-  if (text.size() > kMax) out += "...";
-  return out;
-}
-
-std::string Join(std::initializer_list<const char*> items) {
-  std::string out;
-  for (const char* s : items) out += (out.empty() ? "" : ", ") + std::string(s);
-  return out;
-}
-
-std::string Child(const std::string& parent, const std::string& key) {
-  return parent.empty() ? key : parent + "." + key;
-}
-
-// A mapping's entries by key; unknown, duplicate and non-scalar keys are refused.
-class MapView {
- public:
-  MapView(const ParseContext& ctx, const YAML::Node& node, std::string field,
-          std::initializer_list<const char*> allowed)
-      : ctx_(ctx), node_(node), field_(std::move(field)) {
-    if (!node.IsMap()) {
-      Fail(ctx, node, field_.empty() ? "document" : field_, std::string("expected a mapping (got ") + Describe(node) + ")");
-    }
-    for (auto it = node.begin(); it != node.end(); ++it) {
-      const YAML::Node key = it->first;
-      if (!key.IsScalar()) Fail(ctx, key, field_.empty() ? "document" : field_, "keys must be plain names");
-      const std::string name = key.Scalar();
-      if (std::find_if(allowed.begin(), allowed.end(), [&](const char* a) { return name == a; }) == allowed.end()) {
-        Fail(ctx, key, Child(field_, Shown(name)), "unknown key (allowed: " + Join(allowed) + ")");
-      }
-      if (!entries_.emplace(name, std::make_pair(key, it->second)).second) {
-        Fail(ctx, key, Child(field_, name), "duplicate key");
-      }
-    }
-  }
-
-  bool Has(const std::string& key) const { return entries_.count(key) != 0; }
-  const YAML::Node& Get(const std::string& key) const {
-    const auto it = entries_.find(key);
-    if (it == entries_.end()) Fail(ctx_, node_, Child(field_, key), "missing (required)");
-    return it->second.second;
-  }
-  int KeyLine(const std::string& key) const { return LineOf(entries_.at(key).first); }
-  std::string Field(const std::string& key) const { return Child(field_, key); }
-  const YAML::Node& node() const { return node_; }
-
- private:
-  const ParseContext& ctx_;
-  YAML::Node node_;
-  std::string field_;
-  std::map<std::string, std::pair<YAML::Node, YAML::Node>> entries_;
-};
+std::string Shown(const std::string& text) { return YamlReader::Shown(text); }
 
 std::string ReadString(const ParseContext& ctx, const YAML::Node& node, const std::string& field) {
-  if (!node.IsScalar()) Fail(ctx, node, field, std::string("expected a string (got ") + Describe(node) + ")");
-  if (node.Scalar().size() > kMaxStringLength) Fail(ctx, node, field, "longer than 256 characters");
-  return node.Scalar();
+  return ctx.reader.String(node, field, kMaxStringLength);
 }
 
-double ReadNumber(const ParseContext& ctx, const YAML::Node& node, const std::string& field) {
-  if (!node.IsScalar()) Fail(ctx, node, field, std::string("expected a number (got ") + Describe(node) + ")");
-  double v = 0.0;
-  if (!ParseFiniteDouble(node.Scalar(), &v)) {
-    Fail(ctx, node, field, "expected a finite number (got " + Shown(node.Scalar()) + ")");
-  }
-  return v;
-}
-
-// A number in [lo, hi] (lo excluded when `lo_open`), with the allowed range in the message.
 double ReadRange(const ParseContext& ctx, const YAML::Node& node, const std::string& field, double lo, double hi,
                  bool lo_open) {
-  const double v = ReadNumber(ctx, node, field);
-  if (lo_open ? !(v > lo) : !(v >= lo)) {
-    Fail(ctx, node, field, std::string("must be ") + (lo_open ? "> " : ">= ") + FormatFixed(lo) + " (got " +
-                               Shown(node.Scalar()) + ")");
-  }
-  if (!(v <= hi)) Fail(ctx, node, field, "must be <= " + FormatFixed(hi) + " (got " + Shown(node.Scalar()) + ")");
-  return v;
+  return ctx.reader.Range(node, field, lo, hi, lo_open);
 }
 
 // [x, y, z], each component checked like ReadRange; errors name the vector field.
@@ -188,7 +114,7 @@ Eigen::Vector3d ReadVec3(const ParseContext& ctx, const YAML::Node& node, const 
                          double hi, bool lo_open) {
   if (!node.IsSequence() || node.size() != 3) {
     Fail(ctx, node, field, std::string("expected [x, y, z] (got ") +
-                               (node.IsSequence() ? std::to_string(node.size()) + " values" : Describe(node)) + ")");
+                               (node.IsSequence() ? std::to_string(node.size()) + " values" : YamlReader::Describe(node)) + ")");
   }
   Eigen::Vector3d v;
   for (std::size_t i = 0; i < 3; ++i) v[static_cast<int>(i)] = ReadRange(ctx, node[i], field, lo, hi, lo_open);
@@ -232,9 +158,9 @@ Object ReadObject(ParseContext* ctx, const YAML::Node& node, const std::string& 
   if (!node.IsMap() || node.size() != 1) {
     Fail(*ctx, node, field, "expected one of {box: ...}, {cylinder: ...}, {ellipsoid: ...}, {mesh: ...}");
   }
-  const MapView kind(*ctx, node, field, {"box", "cylinder", "ellipsoid", "mesh"});
+  const MapView kind(ctx->reader, node, field, {"box", "cylinder", "ellipsoid", "mesh"});
   if (kind.Has("box")) {
-    const MapView m(*ctx, kind.Get("box"), kind.Field("box"), {"center", "size", "yaw"});
+    const MapView m(ctx->reader, kind.Get("box"), kind.Field("box"), {"center", "size", "yaw"});
     Box b;
     b.center = ReadPoint(*ctx, m.Get("center"), m.Field("center"));
     b.size = ReadVec3(*ctx, m.Get("size"), m.Field("size"), 0.0, kMaxExtent, true);
@@ -243,7 +169,7 @@ Object ReadObject(ParseContext* ctx, const YAML::Node& node, const std::string& 
     return b;
   }
   if (kind.Has("cylinder")) {
-    const MapView m(*ctx, kind.Get("cylinder"), kind.Field("cylinder"), {"base", "radius", "height"});
+    const MapView m(ctx->reader, kind.Get("cylinder"), kind.Field("cylinder"), {"base", "radius", "height"});
     Cylinder c;
     c.base = ReadPoint(*ctx, m.Get("base"), m.Field("base"));
     c.radius = ReadRange(*ctx, m.Get("radius"), m.Field("radius"), 0.0, kMaxRadius, true);
@@ -252,14 +178,14 @@ Object ReadObject(ParseContext* ctx, const YAML::Node& node, const std::string& 
     return c;
   }
   if (kind.Has("ellipsoid")) {
-    const MapView m(*ctx, kind.Get("ellipsoid"), kind.Field("ellipsoid"), {"center", "radii"});
+    const MapView m(ctx->reader, kind.Get("ellipsoid"), kind.Field("ellipsoid"), {"center", "radii"});
     Ellipsoid e;
     e.center = ReadPoint(*ctx, m.Get("center"), m.Field("center"));
     e.radii = ReadVec3(*ctx, m.Get("radii"), m.Field("radii"), 0.0, kMaxRadius, true);
     CountTriangles(ctx, node, field, TriangleCount(e));
     return e;
   }
-  const MapView m(*ctx, kind.Get("mesh"), kind.Field("mesh"),
+  const MapView m(ctx->reader, kind.Get("mesh"), kind.Field("mesh"),
                   {"file", "position", "yaw", "scale", "units", "up", "recenter"});
   const std::string path = ReadString(*ctx, m.Get("file"), m.Field("file"));
   const std::filesystem::path full = ResolveMeshPath(*ctx, m.Get("file"), m.Field("file"));
@@ -275,11 +201,7 @@ Object ReadObject(ParseContext* ctx, const YAML::Node& node, const std::string& 
     if (!placement.up) Fail(*ctx, m.Get("up"), m.Field("up"), "expected y or z");
   }
   if (m.Has("recenter")) {
-    const YAML::Node& n = m.Get("recenter");
-    if (!n.IsScalar() || (n.Scalar() != "true" && n.Scalar() != "false")) {
-      Fail(*ctx, n, m.Field("recenter"), "expected true or false");
-    }
-    placement.recenter = n.Scalar() == "true";
+    placement.recenter = ctx->reader.Bool(m.Get("recenter"), m.Field("recenter"));
   }
   if (m.Has("scale")) placement.scale = ReadRange(*ctx, m.Get("scale"), m.Field("scale"), 0.0, kMaxScale, true);
   auto cached = ctx->meshes.find(path);
@@ -305,7 +227,7 @@ Object ReadObject(ParseContext* ctx, const YAML::Node& node, const std::string& 
 
 World ParseDocument(ParseContext* ctx, const YAML::Node& root, const WorldFileOptions& options) {
   World world;
-  const MapView top(*ctx, root, "", {"format", "name", "metadata", "bounds", "ground", "start", "goal", "objects"});
+  const MapView top(ctx->reader, root, "", {"format", "name", "metadata", "bounds", "ground", "start", "goal", "objects"});
 
   const std::string format = ReadString(*ctx, top.Get("format"), "format");
   if (format != kWorldFormat) {
@@ -316,7 +238,7 @@ World ParseDocument(ParseContext* ctx, const YAML::Node& root, const WorldFileOp
                                         : std::filesystem::path(ctx->file).stem().string();
   world.metadata.scenario = "custom";
   if (top.Has("metadata")) {
-    const MapView meta(*ctx, top.Get("metadata"), "metadata", {"scenario", "seed", "generator_version", "params"});
+    const MapView meta(ctx->reader, top.Get("metadata"), "metadata", {"scenario", "seed", "generator_version", "params"});
     if (meta.Has("scenario")) world.metadata.scenario = ReadString(*ctx, meta.Get("scenario"), meta.Field("scenario"));
     if (meta.Has("seed")) {
       const YAML::Node& n = meta.Get("seed");
@@ -347,7 +269,7 @@ World ParseDocument(ParseContext* ctx, const YAML::Node& root, const WorldFileOp
 
   // Bounds: min < max per axis, at most kMaxExtent.
   {
-    const MapView b(*ctx, top.Get("bounds"), "bounds", {"min", "max"});
+    const MapView b(ctx->reader, top.Get("bounds"), "bounds", {"min", "max"});
     const Eigen::Vector3d lo = ReadPoint(*ctx, b.Get("min"), "bounds.min");
     const Eigen::Vector3d hi = ReadPoint(*ctx, b.Get("max"), "bounds.max");
     for (int a = 0; a < 3; ++a) {
@@ -369,7 +291,7 @@ World ParseDocument(ParseContext* ctx, const YAML::Node& root, const WorldFileOp
     if (g.IsScalar() && g.Scalar() == "none") {
       world.ground.enabled = false;
     } else if (g.IsMap()) {
-      const MapView gm(*ctx, g, "ground", {"z"});
+      const MapView gm(ctx->reader, g, "ground", {"z"});
       world.ground.enabled = true;
       world.ground.z = ReadRange(*ctx, gm.Get("z"), "ground.z", -kMaxCoordinate, kMaxCoordinate, false);
     } else {
@@ -396,7 +318,7 @@ World ParseDocument(ParseContext* ctx, const YAML::Node& root, const WorldFileOp
   if (top.Has("objects")) {
     const YAML::Node& objects = top.Get("objects");
     if (!objects.IsSequence()) {
-      Fail(*ctx, objects, "objects", std::string("expected a sequence (got ") + Describe(objects) + ")");
+      Fail(*ctx, objects, "objects", std::string("expected a sequence (got ") + YamlReader::Describe(objects) + ")");
     }
     if (objects.size() > ctx->max_objects) {
       Fail(*ctx, objects, "objects", "more than " + std::to_string(ctx->max_objects) + " objects (" +
@@ -448,8 +370,7 @@ std::string Key(const std::string& s) {
 
 World ParseWorld(std::string_view yaml, const std::string& file_name, const std::filesystem::path& base_dir,
                  const WorldFileOptions& options) {
-  ParseContext ctx;
-  ctx.file = file_name;
+  ParseContext ctx(file_name);
   ctx.base_dir = base_dir.empty() ? std::filesystem::path(".") : base_dir;
   ctx.max_objects = options.max_objects;
   ctx.max_triangles = options.max_triangles;
@@ -465,8 +386,9 @@ World ParseWorld(std::string_view yaml, const std::string& file_name, const std:
     const DocumentCounter docs = DocumentCounter::Count(text);
     if (docs.documents() == 0) throw WorldError(file_name, 0, "document", "empty file (expected a world mapping)");
     if (docs.documents() > 1) throw WorldError(file_name, docs.second_line(), "document", "more than one YAML document");
-    world = ParseDocument(&ctx, YAML::Load(text), options);
+    world = ParseDocument(&ctx, ctx.reader.Load(text), options);
   } catch (const YAML::Exception& e) {
+    // yaml-cpp may still throw while a document is walked (a bad node deep in it).
     throw WorldError(file_name, e.mark.line >= 0 ? e.mark.line + 1 : 0, "yaml", e.msg);
   }
   if (options.validate) {

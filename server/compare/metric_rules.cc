@@ -2,11 +2,13 @@
 
 #include <cmath>
 #include <fstream>
-#include <set>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
 #include <yaml-cpp/yaml.h>
+
+#include "api/yaml_read.h"
 
 namespace enavi::server {
 
@@ -43,71 +45,31 @@ const char* DirectionName(Direction d) {
   return "none";
 }
 
-namespace {
-
-[[noreturn]] void Fail(const std::string& file, const YAML::Node& at, const std::string& field,
-                       const std::string& reason) {
-  throw std::invalid_argument(file + ":" + std::to_string(at.Mark().line + 1) + ": " + field +
-                              ": " + reason);
-}
-
-double NonNegative(const std::string& file, const YAML::Node& n, const std::string& field) {
-  double v = 0;
-  try {
-    v = n.as<double>();
-  } catch (const YAML::Exception&) {
-    Fail(file, n, field, "expected a number, got '" + n.Scalar() + "'");
-  }
-  if (!std::isfinite(v) || v < 0) Fail(file, n, field, "expected a finite number >= 0");
-  return v;
-}
-
-}  // namespace
-
 MetricRules ParseMetricRules(const std::string& yaml_text, const std::string& file) {
-  YAML::Node loaded;
-  try {
-    loaded = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw std::invalid_argument(file + ":" + std::to_string(e.mark.line + 1) + ": yaml: " + e.msg);
-  }
-  const YAML::Node root = loaded;
+  const api::YamlReader reader(file);
+  const YAML::Node root = reader.Load(yaml_text);  // const: operator[] would insert what it looks up
   MetricRules rules = DefaultMetricRules();
   if (root.IsNull()) return rules;
-  if (!root.IsMap()) Fail(file, root, "thresholds", "expected a map with metrics:");
-  for (const auto& kv : root) {
-    if (kv.first.Scalar() != "metrics") Fail(file, kv.first, kv.first.Scalar(), "unknown key (allowed: metrics)");
-  }
+  if (!root.IsMap()) reader.Fail(root, "thresholds", "expected a map with metrics:");
+  reader.CheckKeys(root, "", {"metrics"});
   const YAML::Node metrics = root["metrics"];
   if (!metrics) return rules;
-  if (!metrics.IsMap()) Fail(file, metrics, "metrics", "expected a map of metric: {direction, abs, rel}");
-  std::set<std::string> seen;
+  const api::YamlReader::Map by_name(reader, metrics, "metrics", {});
   for (const auto& kv : metrics) {
     const std::string name = kv.first.Scalar();
-    const std::string field = "metrics." + name;
-    if (!seen.insert(name).second) Fail(file, kv.first, field, "duplicate metric");
-    if (!kv.second.IsMap()) Fail(file, kv.second, field, "expected a map of direction, abs, rel, success_only");
+    const api::YamlReader::Map m(reader, kv.second, by_name.Field(name), {"direction", "abs", "rel", "success_only"});
     MetricRule rule = rules.count(name) ? rules.at(name) : MetricRule{};
-    for (const auto& setting : kv.second) {
-      const std::string key = setting.first.Scalar();
-      if (key == "direction") {
-        const std::string d = setting.second.Scalar();
-        if (d == "lower") rule.direction = Direction::kLower;
-        else if (d == "higher") rule.direction = Direction::kHigher;
-        else if (d == "none") rule.direction = Direction::kNone;
-        else Fail(file, setting.second, field + ".direction", "'" + d + "': expected lower, higher or none");
-      } else if (key == "abs") {
-        rule.abs = NonNegative(file, setting.second, field + ".abs");
-      } else if (key == "rel") {
-        rule.rel = NonNegative(file, setting.second, field + ".rel");
-      } else if (key == "success_only") {
-        const std::string b = setting.second.Scalar();
-        if (b != "true" && b != "false") Fail(file, setting.second, field + ".success_only", "expected true or false");
-        rule.success_only = b == "true";
-      } else {
-        Fail(file, setting.first, field + "." + key, "unknown key (allowed: direction, abs, rel, success_only)");
-      }
+    if (m.Has("direction")) {
+      const std::string d = reader.Scalar(m.Get("direction"), m.Field("direction"));
+      if (d == "lower") rule.direction = Direction::kLower;
+      else if (d == "higher") rule.direction = Direction::kHigher;
+      else if (d == "none") rule.direction = Direction::kNone;
+      else reader.Fail(m.Get("direction"), m.Field("direction"), "'" + api::YamlReader::Shown(d) + "': expected lower, higher or none");
     }
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    if (m.Has("abs")) rule.abs = reader.Range(m.Get("abs"), m.Field("abs"), 0.0, kInf);
+    if (m.Has("rel")) rule.rel = reader.Range(m.Get("rel"), m.Field("rel"), 0.0, kInf);
+    if (m.Has("success_only")) rule.success_only = reader.Bool(m.Get("success_only"), m.Field("success_only"));
     rules[name] = rule;
   }
   return rules;

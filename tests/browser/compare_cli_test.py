@@ -101,7 +101,7 @@ class CompareCliTest(unittest.TestCase):
             f.write("metrics:\n  flight_time_s:\n    rel: -1\n")
         r = self.compare(self.base, self.candidate, "--thresholds", bad)
         self.assertEqual(r.returncode, 2)
-        self.assertIn(bad + ":3: metrics.flight_time_s.rel: expected a finite number >= 0", r.stderr)
+        self.assertIn(bad + ":3: metrics.flight_time_s.rel: must be >= 0.0 (got -1)", r.stderr)
         r = self.compare(self.db, self.base)
         self.assertEqual(r.returncode, 2)
         self.assertIn("holds 3 jobs; name one as", r.stderr)

@@ -196,7 +196,7 @@ TEST_F(JobSpecTest, NegativeAndAbsurdSeedCountsAreRejected) {
   EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 50000\n"),
             "job.yaml:4: seeds: count 50000 outside [1, 1000]");
   EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 2.5\n"),
-            "job.yaml:4: seeds: expected an integer, got '2.5'");
+            "job.yaml:4: seeds: expected an integer (got 2.5)");
   EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: [1, 1]\n"),
             "job.yaml:4: seeds: seed 1 listed twice");
 }
@@ -253,9 +253,11 @@ TEST_F(JobSpecTest, MissingRequiredFieldAndMalformedYamlAreRejected) {
 
 TEST_F(JobSpecTest, OutOfRangeNumbersNameTheRange) {
   EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\ntimeout_s: -5\n"),
-            "job.yaml:5: timeout_s: -5 outside [0, 3600]");
+            "job.yaml:5: timeout_s: must be >= 0.0 (got -5)");
   EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\ndilation: .inf\n"),
-            "job.yaml:5: dilation: .inf outside [0.01, 100]");
+            "job.yaml:5: dilation: expected a finite number (got .inf)");
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\ndilation: 500\n"),
+            "job.yaml:5: dilation: must be <= 100.0 (got 500)");
   EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\noverrides: {F_PER: 2}\n"),
             "job.yaml:5: overrides.F_PER: tunable names are lower_case identifiers");
 }
