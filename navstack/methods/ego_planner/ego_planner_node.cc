@@ -21,7 +21,11 @@ struct EgoPlannerNode::Attempt {
 
 EgoPlannerNode::EgoPlannerNode(const NavStackOptions& options, const EgoPlannerOptions& ego, TaskExecutor* executor,
                                const VehicleState& initial)
-    : options_(options), ego_(ego), executor_(executor), state_(initial) {
+    : options_(options),
+      ego_(ego),
+      executor_(executor),
+      state_(initial),
+      local_target_(initial.p_WB, options.goal, ego.planning_horizon) {
   options_.planner.Validate();
   options_.flight_bounds.max().z() = std::min(options_.flight_bounds.max().z(), initial.p_WB.z() + options_.max_climb);
   map_ = std::make_shared<OccupancyMap>(options_.map);
@@ -29,7 +33,6 @@ EgoPlannerNode::EgoPlannerNode(const NavStackOptions& options, const EgoPlannerO
   perception_ = options_.perception;
   const int decimation = std::max(1, CameraIntrinsics::Default().width / std::max(1, options_.camera.width));
   perception_.stride = std::max(1, ego_.skip_pixel / decimation);
-  global_start_ = initial.p_WB;
   const Eigen::Vector3d to_goal = options_.goal - initial.p_WB;
   hold_ = HoldAt(initial.p_WB, std::atan2(to_goal.y(), to_goal.x()));
   holding_ = true;
@@ -92,28 +95,32 @@ JobOutput EgoPlannerNode::OccupancyJob() {
   return out;
 }
 
-Eigen::Vector3d EgoPlannerNode::LocalTarget(const Eigen::Vector3d& from) {
-  // getLocalTarget on a one-segment global path: walk it from the last progress point in steps
-  // of planning_horizon / 20 to the first point planning_horizon away; the goal when none is.
-  const Eigen::Vector3d line = options_.goal - global_start_;
+GlobalPathTarget::GlobalPathTarget(const Eigen::Vector3d& start, const Eigen::Vector3d& goal, double horizon)
+    : start_(start), goal_(goal), horizon_(horizon), target_(goal) {}
+
+Eigen::Vector3d GlobalPathTarget::Next(const Eigen::Vector3d& from) {
+  const Eigen::Vector3d line = goal_ - start_;
   const double length = line.norm();
-  if (length < 1e-9) return options_.goal;
+  if (length < 1e-9) return target_ = goal_;
   const Eigen::Vector3d dir = line / length;
-  const double step = ego_.planning_horizon / 20.0;
-  double nearest = 1e300, nearest_s = last_progress_;
-  for (double s = last_progress_; s < length; s += step) {
-    const Eigen::Vector3d p = global_start_ + s * dir;
+  const double step = horizon_ / 20.0;
+  double nearest = 1e300, nearest_s = progress_;
+  for (double s = progress_; s < length; s += step) {
+    const Eigen::Vector3d p = start_ + s * dir;
     const double d = (p - from).norm();
+    // ego_replan_fsm.cpp getLocalTarget: already the progress point too far: return, the old
+    // target stands (not the progress point itself, which lies behind it).
+    if (s == progress_ && d > horizon_) return target_;
     if (d < nearest) {
       nearest = d;
       nearest_s = s;
     }
-    if (d >= ego_.planning_horizon) {
-      last_progress_ = nearest_s;
-      return p;
+    if (d >= horizon_) {
+      progress_ = nearest_s;
+      return target_ = p;
     }
   }
-  return options_.goal;
+  return target_ = goal_;
 }
 
 std::shared_ptr<const EgoPlannerNode::Attempt> EgoPlannerNode::PlanOnce(TaskId task, const TrajectorySample& start,
@@ -121,7 +128,7 @@ std::shared_ptr<const EgoPlannerNode::Attempt> EgoPlannerNode::PlanOnce(TaskId t
   auto attempt = std::make_shared<Attempt>();
   attempt->t_begin = t_begin;
   attempt->start_p = start.p;
-  const Eigen::Vector3d target = LocalTarget(start.p);
+  const Eigen::Vector3d target = local_target_.Next(start.p);
   PlanRequest request;
   request.t_start = t_begin;
   request.start = start;

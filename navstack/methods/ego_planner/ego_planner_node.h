@@ -16,7 +16,8 @@
 // - ego_replan_fsm.cpp (execFSMCallback): GEN_NEW_TRAJ plans from odometry with zero
 //   acceleration; in EXEC_TRAJ it replans (REPLAN_TRAJ) once the reference is thresh_replan
 //   1.5 m past the local trajectory's start, never within thresh_no_replan 2.0 m of the goal;
-//   the local target lies planning_horizon 7.5 m ahead on the global path (getLocalTarget);
+//   the local target lies planning_horizon 7.5 m ahead on the global path (getLocalTarget; a
+//   start farther than that from the last progress point keeps the previous target);
 //   failed plans are retried every FSM tick without limit. planFromCurrentTraj starts from the
 //   current trajectory evaluated when planning begins and tries three initialisations.
 // - planner_manager.cpp (reboundReplan -> updateTrajInfo(pos, ros::Time::now())): the new
@@ -66,6 +67,26 @@ struct EgoPlannerOptions {
   bool newest_frame_only = true;   ///< 0: the occupancy update inserts every frame since the last
 };
 
+/// getLocalTarget (ego_replan_fsm.cpp) on a one-segment global path, the straight line from the
+/// start to the goal (planGlobalTraj without waypoints): walks the path from the last progress
+/// point in steps of horizon / 20 to the first point `horizon` away from `from`, and moves the
+/// progress point to the path point nearest to `from` on the way; the goal when none is that far.
+class GlobalPathTarget {
+ public:
+  GlobalPathTarget(const Eigen::Vector3d& start, const Eigen::Vector3d& goal, double horizon);
+
+  /// The local target for a plan from `from`. If even the progress point is more than `horizon`
+  /// from `from` (the vehicle was driven off the path), getLocalTarget returns at once
+  /// ("last_progress_time_ ERROR") and the previous target stands.
+  Eigen::Vector3d Next(const Eigen::Vector3d& from);
+
+ private:
+  Eigen::Vector3d start_, goal_;
+  double horizon_;
+  double progress_ = 0;  ///< arc length of the last progress point
+  Eigen::Vector3d target_;  ///< the last target given
+};
+
 class EgoPlannerNode final : public Navigator {
  public:
   enum class State { kGenNewTraj, kReplanTraj, kExecTraj, kWaitTarget, kEmergencyStop };
@@ -92,8 +113,6 @@ class EgoPlannerNode final : public Navigator {
   JobOutput FsmJob();
   JobOutput SafetyJob();
 
-  /// getLocalTarget: the point planning_horizon ahead of `from` on the global path.
-  Eigen::Vector3d LocalTarget(const Eigen::Vector3d& from);
   /// One planning call from `start` (planning began at `t_begin`), its work added to `work`.
   std::shared_ptr<const Attempt> PlanOnce(TaskId task, const TrajectorySample& start, double t_begin,
                                           WorkCounts* work);
@@ -121,9 +140,7 @@ class EgoPlannerNode final : public Navigator {
   bool holding_ = false;
   TrajectorySample hold_;
 
-  // Global path: the straight line from the start to the goal (planGlobalTraj of one segment).
-  Eigen::Vector3d global_start_ = Eigen::Vector3d::Zero();
-  double last_progress_ = 0;  ///< arc length of the last local target's nearest point
+  GlobalPathTarget local_target_;
 
   std::int64_t plan_calls_ = 0;
   std::int64_t plan_failures_ = 0;

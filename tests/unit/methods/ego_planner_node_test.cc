@@ -169,5 +169,29 @@ TEST(EgoPlannerNodeTest, AWallItCannotReplanAroundStopsTheVehicleBeforeIt) {
   EXPECT_LT(no_stop.hold_x, 0.0);
 }
 
+TEST(GlobalPathTargetTest, LiesThePlanningHorizonAheadOnTheStartGoalLine) {
+  GlobalPathTarget target(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(30, 0, 1), 7.5);
+  // Walked in steps of horizon / 20 = 0.375 m from the progress point.
+  EXPECT_NEAR(target.Next(Eigen::Vector3d(0, 0, 1)).x(), 7.5, 1e-9);
+  EXPECT_NEAR(target.Next(Eigen::Vector3d(3, 1, 1)).x(), 3.0 + std::sqrt(7.5 * 7.5 - 1.0), 0.375);
+  EXPECT_NEAR(target.Next(Eigen::Vector3d(9, 0, 1)).x(), 16.5, 0.375);
+  EXPECT_NEAR(target.Next(Eigen::Vector3d(16, 0, 1)).x(), 23.5, 0.375);
+  // Less than the horizon from the goal: the goal.
+  EXPECT_EQ(target.Next(Eigen::Vector3d(23, 0, 1)), Eigen::Vector3d(30, 0, 1));
+}
+
+TEST(GlobalPathTargetTest, AVehicleDrivenOffThePathKeepsItsPreviousTarget) {
+  // ego_replan_fsm.cpp getLocalTarget: when even the last progress point is more than
+  // planning_horizon away, it returns before choosing ("last_progress_time_ ERROR"), so the
+  // previous target stands; it is not replaced by the progress point behind it.
+  GlobalPathTarget target(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(30, 0, 1), 7.5);
+  const Eigen::Vector3d before = target.Next(Eigen::Vector3d(2, 0, 1));
+  EXPECT_NEAR(before.x(), 9.5, 0.375);
+  // 8 m to the side of the progress point (x = 2): the target stays where it was.
+  EXPECT_EQ(target.Next(Eigen::Vector3d(2, 8, 1)), before);
+  // Back within the horizon, it moves on from the progress point as before.
+  EXPECT_NEAR(target.Next(Eigen::Vector3d(4, 2, 1)).x(), 4.0 + std::sqrt(7.5 * 7.5 - 4.0), 0.375);
+}
+
 }  // namespace
 }  // namespace enavi::navstack
