@@ -16,7 +16,7 @@
 namespace enavi::worlds {
 
 /// Bumped whenever a generator's output for a given seed changes.
-inline constexpr int kGeneratorVersion = 1;
+inline constexpr int kGeneratorVersion = 2;
 
 /// A tunable generator parameter with its allowed range (inclusive).
 struct GeneratorParam {
