@@ -149,7 +149,13 @@ nlohmann::json ResultSummaryJson(const EpisodeResult& r) {
       {"emergency_stops", r.emergency_stops},
       {"time_stopped_s", r.time_stopped_s},
       {"setpoint_lag_p95_m", r.setpoint_lag_p95_m},
-      {"eci", {{"min", r.eci.min}, {"mean", r.eci.mean}, {"max", r.eci.max}}},
+      {"eci",
+       {{"min", r.eci.min},
+        {"mean", r.eci.mean},
+        {"max", r.eci.max},
+        {"flight_min", r.eci.flight_min},
+        {"flight_max", r.eci.flight_max},
+        {"flight_frames", r.eci.flight_frames}}},
       {"eci_time_ms_mean", r.eci_time_ms_mean},
       {"adapter_time_ms_mean", r.adapter_time_ms_mean},
       {"sim_time_s", r.sim_time_s},
@@ -209,6 +215,9 @@ void from_json(const nlohmann::json& j, EpisodeResult& r) {
     e->Optional("min", r.eci.min);
     e->Optional("mean", r.eci.mean);
     e->Optional("max", r.eci.max);
+    e->Optional("flight_min", r.eci.flight_min);
+    e->Optional("flight_max", r.eci.flight_max);
+    e->Optional("flight_frames", r.eci.flight_frames);
   }
   f.Optional("eci_time_ms_mean", r.eci_time_ms_mean);
   f.Optional("adapter_time_ms_mean", r.adapter_time_ms_mean);

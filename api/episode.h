@@ -78,8 +78,14 @@ struct TaskUtilisation {
   double Sum() const { return perception + planning + collision + difference; }
 };
 
+/// eci of the frames of an episode (docs/results.md, "eci range along a flight").
 struct EciSummary {
-  double min = 0, mean = 0, max = 0;
+  double min = 0, mean = 0, max = 0;  ///< over every frame, the hover before take-off included
+  /// Over the frames in flight: from the first frame at which the vehicle moves faster than
+  /// 0.5 m/s (the flight recorder's take-off speed) to the end. flight_frames = 0 when it never
+  /// took off (then flight_min = flight_max = 0).
+  double flight_min = 0, flight_max = 0;
+  std::int64_t flight_frames = 0;
 };
 
 struct EpisodeEvent {

@@ -218,8 +218,8 @@ void BuildS1(Rng& rng, const Params& p, World* w) {
     b.AddBox(x, y, 0.0, sx, sy, h, yaw);
     return true;
   };
-  // Buildings on the straight line, so the flight has to steer.
-  const int blockers = std::max(2, static_cast<int>(std::round(L / 11.0)));
+  // Buildings on and beside the straight line, so the flight has to steer between them.
+  const int blockers = std::max(2, static_cast<int>(std::round(L / 7.0)));
   for (int i = 1; i <= blockers; ++i) {
     for (int attempt = 0; attempt < 20; ++attempt) {
       const double x = -half + L * i / (blockers + 1) + rng.Uniform(-2.0, 2.0);
@@ -231,7 +231,7 @@ void BuildS1(Rng& rng, const Params& p, World* w) {
     placed += try_building(rng.Uniform(area.x0, area.x1), rng.Uniform(area.y0, area.y1)) ? 1 : 0;
   }
   // Street lamps: thin poles at flight altitude.
-  for (int attempt = 0, placed = 0; attempt < 200 && placed < 8; ++attempt) {
+  for (int attempt = 0, placed = 0; attempt < 300 && placed < 16; ++attempt) {
     const Footprint f = Circle(rng.Uniform(area.x0, area.x1), rng.Uniform(area.y0, area.y1), 0.12);
     if (!area.Contains(f, 0.5) || !layout.Fits(f, 2.0)) continue;
     layout.Add(f);
@@ -271,21 +271,21 @@ void BuildS2(Rng& rng, const Params& p, World* w) {
     layout.Add(RotatedRect(px, py, roof, roof, yaw));
   }
 
-  // Trees until the park is saturated, at least 1.5 m between crown footprints.
+  // Trees until the park is saturated, at least 1.2 m between crown footprints.
   const TreeStyle style{0.12, 0.3, 0.5, 2.8, 1.0, 2.4, 1.0, 2.0, 0.4};
   for (int attempt = 0, placed = 0; attempt < 3000 && placed < 200; ++attempt) {
     const Tree t = DrawTree(rng, rng.Uniform(area.x0, area.x1), rng.Uniform(area.y0, area.y1), style);
     const Footprint f = t.footprint();
-    if (!area.Contains(Circle(t.x, t.y, t.trunk_r)) || !layout.Fits(f, 1.5)) continue;
+    if (!area.Contains(Circle(t.x, t.y, t.trunk_r)) || !layout.Fits(f, 1.2)) continue;
     layout.Add(f);
     t.Commit(b, 0.0);
     ++placed;
   }
   // Young trees with low crowns in the gaps: the park's irregular undergrowth.
   const TreeStyle young{0.06, 0.12, 0.4, 1.2, 0.5, 1.0, 0.6, 1.0, 0.2};
-  for (int attempt = 0, placed = 0; attempt < 1500 && placed < 40; ++attempt) {
+  for (int attempt = 0, placed = 0; attempt < 2000 && placed < 60; ++attempt) {
     const Tree t = DrawTree(rng, rng.Uniform(area.x0, area.x1), rng.Uniform(area.y0, area.y1), young);
-    if (!area.Contains(t.footprint()) || !layout.Fits(t.footprint(), 1.3)) continue;
+    if (!area.Contains(t.footprint()) || !layout.Fits(t.footprint(), 1.1)) continue;
     layout.Add(t.footprint());
     t.Commit(b, 0.0);
     ++placed;
@@ -328,7 +328,7 @@ void BuildS3(Rng& rng, const Params& p, World* w) {
   const bool first_full = rng.Chance(0.5);
   for (int k = 0; k < 2; ++k) {
     const double x = (k == 0 ? -L / 6.0 : L / 6.0) + rng.Uniform(-0.5, 0.5);
-    const double door = rng.Uniform(2.2, 3.0), door_y = rng.Uniform(-hy + 1.8, hy - 1.8);
+    const double door = rng.Uniform(1.6, 2.2), door_y = rng.Uniform(-hy + 1.8, hy - 1.8);
     const double height = (k == 0) == first_full ? H : rng.Uniform(2.2, 2.5);
     const double y_lo = door_y - 0.5 * door, y_hi = door_y + 0.5 * door;
     b.AddBox(x, 0.5 * (-hy + y_lo), 0.0, 0.15, y_lo + hy, height);
@@ -339,7 +339,7 @@ void BuildS3(Rng& rng, const Params& p, World* w) {
 
   // Furniture, at least 1 m apart (shelves may stand against the walls).
   const Area inside{-hx, hx, -hy, hy};
-  const int target = static_cast<int>(std::round(4 * hx * hy * 0.16));
+  const int target = static_cast<int>(std::round(4 * hx * hy * 0.2));
   for (int attempt = 0, placed = 0; attempt < 1500 && placed < target; ++attempt) {
     double x = rng.Uniform(-hx, hx), y = rng.Uniform(-hy, hy);
     const double kind = rng.Uniform();
@@ -439,7 +439,7 @@ void BuildS4(Rng& rng, const Params& p, World* w) {
   Layout layout;
   layout.Add(Circle(w->start.x(), w->start.y(), 5.0));
   layout.Add(Circle(w->goal.x(), w->goal.y(), 5.0));
-  for (int attempt = 0, placed = 0; attempt < 300 && placed < 8; ++attempt) {
+  for (int attempt = 0, placed = 0; attempt < 400 && placed < 14; ++attempt) {
     const bool along_x = rng.Chance(0.5);
     const int street = rng.Int(-1, 1);
     const double along = rng.Uniform(-2.0 * P, 2.0 * P);
@@ -455,6 +455,27 @@ void BuildS4(Rng& rng, const Params& p, World* w) {
     b.AddBox(x, y, 0.0, 2.0 * f.hx, 2.0 * f.hy, h);
     ++placed;
   }
+  // Street lamps on both kerbs, 9-13 m apart, and one at every corner of every intersection.
+  auto lamp = [&](double x, double y) {
+    const Footprint f = Circle(x, y, 0.1);
+    if (!layout.Fits(f, 1.0)) return;
+    layout.Add(f);
+    b.AddCylinder(x, y, 0.0, 0.1, 5.0);
+  };
+  const double kerb = 0.5 * kStreet - 0.4;
+  for (int street = -1; street <= 1; ++street) {
+    for (const double side : {-kerb, kerb}) {
+      for (double along = -2.0 * P + rng.Uniform(0.0, 4.0); along < 2.0 * P; along += rng.Uniform(9.0, 13.0)) {
+        lamp(along, street * P + side);
+        lamp(street * P + side, along);
+      }
+    }
+    for (int cross = -1; cross <= 1; ++cross) {
+      for (const double sx : {-kerb, kerb}) {
+        for (const double sy : {-kerb, kerb}) lamp(street * P + sx, cross * P + sy);
+      }
+    }
+  }
 }
 
 // s5: village: houses, trees and fences on terrain slabs, a river channel below the ground and
@@ -463,7 +484,7 @@ void BuildS5(Rng& rng, const Params& p, World* w) {
   const double L = p.at("length"), half = 0.5 * L;
   const Area area{-half - 8.0, half + 8.0, -18.0, 18.0};
   const double river_x = rng.Uniform(-3.0, 3.0), river_w = rng.Uniform(5.0, 7.0);
-  constexpr double kDepth = 1.5, kSlab = 1.0;
+  constexpr double kDepth = 1.5, kSlab = 1.0, kFreeboard = 0.6;  // m: bed and water below the banks
   SetBounds(w, area.x0, area.y0, -kDepth - kSlab, area.x1, area.y1, 7.0);
   w->ground.enabled = false;  // terrain slabs instead, so the river can be lower
   const Route route{-half, rng.Uniform(-1.5, 1.5), half, rng.Uniform(-1.5, 1.5)};
@@ -475,6 +496,7 @@ void BuildS5(Rng& rng, const Params& p, World* w) {
   b.AddBox(0.5 * (area.x0 + bank_l), 0.0, -kSlab, bank_l - area.x0, ylen, kSlab);
   b.AddBox(0.5 * (bank_r + area.x1), 0.0, -kSlab, area.x1 - bank_r, ylen, kSlab);
   b.AddBox(river_x, 0.0, -kDepth - kSlab, river_w, ylen, kSlab);  // river bed
+  b.AddBox(river_x, 0.0, -kDepth, river_w, ylen, kDepth - kFreeboard);  // the water, below the banks
 
   Layout layout;
   layout.Add(Circle(route.sx, route.sy, 2.5));
@@ -510,14 +532,31 @@ void BuildS5(Rng& rng, const Params& p, World* w) {
     const double x = rng.Uniform(route.sx + 6.0, bank_l - 3.0);
     if (try_house(x, route.YAt(x) + rng.Uniform(-2.0, 2.0), 0.5)) break;
   }
+  // The village street: houses along both sides of the way to the bridge and beyond it, their
+  // walls 4-7 m from the straight line, with gardens between them.
+  for (double x = area.x0 + 4.0; x < area.x1 - 4.0; x += rng.Uniform(7.0, 10.0)) {
+    for (const double side : {-1.0, 1.0}) {
+      const double y = route.YAt(x) + side * rng.Uniform(7.0, 9.5);
+      try_house(x + rng.Uniform(-1.5, 1.5), y, 2.0);
+    }
+  }
   for (int attempt = 0, placed = 0; attempt < 600 && placed < 10; ++attempt) {
     placed += try_house(rng.Uniform(area.x0, bank_l), rng.Uniform(area.y0, area.y1), 2.8) ? 1 : 0;
   }
   for (int attempt = 0, placed = 0; attempt < 400 && placed < 3; ++attempt) {
     placed += try_house(rng.Uniform(bank_r, area.x1), rng.Uniform(area.y0, area.y1), 3.0) ? 1 : 0;
   }
-  // Round village trees and garden fences, mostly on the open goal side.
+  // Round village trees and garden fences, mostly on the open goal side; first a row of trees on
+  // each bank, either side of the bridge, as rivers are lined.
   const TreeStyle style{0.15, 0.3, 1.2, 2.5, 1.2, 2.0, 1.2, 1.8, 0.2};
+  for (const double bank : {bank_l - 3.5, bank_r + 3.5}) {
+    for (double y = area.y0 + 2.5; y < area.y1 - 2.5; y += rng.Uniform(4.5, 6.5)) {
+      const Tree t = DrawTree(rng, bank + rng.Uniform(-0.4, 0.4), y, style);
+      if (!area.Contains(t.footprint()) || !layout.Fits(t.footprint(), 0.8)) continue;
+      layout.Add(t.footprint());
+      t.Commit(b, 0.0);
+    }
+  }
   for (int attempt = 0, placed = 0; attempt < 600 && placed < 14; ++attempt) {
     const double x = rng.Chance(0.7) ? rng.Uniform(bank_r, area.x1) : rng.Uniform(area.x0, bank_l);
     const Tree t = DrawTree(rng, x, rng.Uniform(area.y0, area.y1), style);

@@ -76,7 +76,7 @@ void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
     if (f.json) {
       std::cout << report.results.dump(2) << "\n";
     } else {
-      std::cout << server::PaperTable(report.results);
+      std::cout << server::PaperTable(report.results) << "\n" << server::EciRangeTable(report.results);
       if (f.preset == "paper") std::cout << server::PaperComparison(report.results);
     }
     std::cout.flush();

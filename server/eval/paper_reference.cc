@@ -32,6 +32,20 @@ const PaperRow* FindPaperRow(const std::string& board, const std::string& method
   return nullptr;
 }
 
+const std::array<PaperEciRange, 5>& PaperEciRanges() {
+  // S1 city with varying-height buildings, S2 park with trees and a pavilion, S3 indoor hall with
+  // varying furniture, S4 city with similar-height buildings, S5 village with house, bridge, river.
+  static const std::array<PaperEciRange, 5> ranges = {
+      {{0.06, 0.87}, {0.08, 0.97}, {0.19, 0.83}, {0.26, 0.86}, {0.25, 0.79}}};
+  return ranges;
+}
+
+const PaperEciRange* FindPaperEciRange(const std::string& scenario) {
+  const std::vector<std::string>& ids = PaperScenarios();
+  const auto it = std::find(ids.begin(), ids.end(), scenario);
+  return it == ids.end() ? nullptr : &PaperEciRanges()[static_cast<std::size_t>(it - ids.begin())];
+}
+
 const std::vector<std::string>& PaperBoards() {
   static const std::vector<std::string> boards = [] {
     std::vector<std::string> b;

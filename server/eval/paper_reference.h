@@ -23,6 +23,16 @@ const std::vector<PaperRow>& PaperHilTable();
 /// The row for (board, method), or nullptr.
 const PaperRow* FindPaperRow(const std::string& board, const std::string& method);
 
+/// The eci range the paper gives for one of its scenarios (its Tab. "Descriptions of the five
+/// experimental scenarios").
+struct PaperEciRange {
+  double min = 0, max = 0;
+};
+/// The paper's eci ranges of S1-S5, in PaperScenarios()'s order.
+const std::array<PaperEciRange, 5>& PaperEciRanges();
+/// The paper's eci range of `scenario` (one of PaperScenarios()), or nullptr.
+const PaperEciRange* FindPaperEciRange(const std::string& scenario);
+
 /// The boards of the paper's HIL experiment: those of PaperHilTable(), in its order.
 const std::vector<std::string>& PaperBoards();
 /// Its scenarios S1-S5: the registered generators after the paper's (those with a paper path

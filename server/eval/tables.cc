@@ -330,6 +330,59 @@ std::string PaperComparison(const nlohmann::json& results) {
   return out.empty() ? "no results on the paper's boards and scenarios\n" : out;
 }
 
+std::string EciRangeTable(const nlohmann::json& results) {
+  struct Cell {
+    Mean lo, hi;
+    double lowest = 1.0, highest = 0.0;
+    int without = 0;  // flights with no range: never took off, or stored before the field existed
+  };
+  std::vector<std::pair<std::string, std::string>> order;  // (scenario, method), first seen
+  std::map<std::pair<std::string, std::string>, Cell> cells;
+  for (const auto& r : results) {
+    const std::string scenario =
+        r.value("scenario", "") == "custom" ? r.value("world", "") : r.value("scenario", "");
+    const std::pair<std::string, std::string> key{scenario, r.value("method", "")};
+    if (cells.find(key) == cells.end()) order.push_back(key);
+    Cell& c = cells[key];
+    const nlohmann::json eci = r.value("eci", nlohmann::json::object());
+    if (eci.value("flight_frames", 0) <= 0) {
+      ++c.without;
+      continue;
+    }
+    const double lo = eci.value("flight_min", 0.0), hi = eci.value("flight_max", 0.0);
+    c.lo.Add(lo);
+    c.hi.Add(hi);
+    c.lowest = std::min(c.lowest, lo);
+    c.highest = std::max(c.highest, hi);
+  }
+  if (cells.empty()) return "no results\n";
+  const bool paper = std::any_of(order.begin(), order.end(),
+                                 [](const auto& k) { return FindPaperEciRange(k.first) != nullptr; });
+  std::vector<std::string> head = {"scenario", "method", "flights", "no range", "min", "max", "lowest min",
+                                   "highest max"};
+  if (paper) head.insert(head.end(), {"paper min", "paper max", "diff min", "diff max"});
+  std::vector<std::vector<std::string>> rows = {head};
+  for (const auto& key : order) {
+    const Cell& c = cells.at(key);
+    const bool any = c.lo.n > 0;
+    std::vector<std::string> line = {key.first, key.second, std::to_string(c.lo.n), std::to_string(c.without),
+                                     c.lo.Text(2), c.hi.Text(2), any ? Fixed(c.lowest, 2) : "-",
+                                     any ? Fixed(c.highest, 2) : "-"};
+    if (paper) {
+      if (const PaperEciRange* p = FindPaperEciRange(key.first)) {
+        line.insert(line.end(), {Fixed(p->min, 2), Fixed(p->max, 2), any ? Fixed(c.lo.value() - p->min, 2) : "-",
+                                 any ? Fixed(c.hi.value() - p->max, 2) : "-"});
+      } else {
+        line.insert(line.end(), {"-", "-", "-", "-"});
+      }
+    }
+    rows.push_back(line);
+  }
+  return "eci range per scenario (per flight: least and greatest eci of the frames in flight; min, max: their means "
+         "over the flights)\n" +
+         Render(rows, 2);
+}
+
 std::string ProgressLine(const api::JobProgress& p, bool bar) {
   std::ostringstream os;
   if (bar) {

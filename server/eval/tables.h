@@ -30,6 +30,13 @@ std::string PaperTable(const nlohmann::json& results);
 /// result (or, for flight and path, no success) print "-".
 std::string PaperComparison(const nlohmann::json& results);
 
+/// `enavi eval`'s "eci range per scenario" (docs/results.md, "eci range along a flight"): per
+/// scenario and method, over the flights that took off (result eci.flight_frames > 0), the mean
+/// of each flight's least and greatest eci in flight (eci.flight_min, eci.flight_max), the
+/// lowest and highest of them, and for the paper's scenarios its range and ours minus it.
+/// Results without the flight fields (stored before they existed) are counted as "no range".
+std::string EciRangeTable(const nlohmann::json& results);
+
 /// "[########------] 12/40 done  1 failed  3.2 ep/s  ETA 9s" (bar when `bar`, else plain).
 std::string ProgressLine(const api::JobProgress& p, bool bar);
 

@@ -83,6 +83,13 @@ TEST(BaselineOnHostTest, ReachesTheGoalThroughAShortForestWithoutCollision) {
   const api::EpisodeResult r = sim::RunEpisode(Spec("forest", 2, {{"length", "12"}}));
   ExpectReachedGoal(r);
   EXPECT_GT(r.eci.max, 0.0) << "trees in view must raise eci: " << Describe(r);
+  // The range in flight leaves out the hover before take-off and lies inside the all-frames one.
+  const std::int64_t frames = std::llround(30.0 * r.sim_time_s);
+  EXPECT_GT(r.eci.flight_frames, frames / 2) << Describe(r);
+  EXPECT_LT(r.eci.flight_frames, frames) << "the frames before take-off were counted: " << Describe(r);
+  EXPECT_GE(r.eci.flight_min, r.eci.min);
+  EXPECT_LE(r.eci.flight_max, r.eci.max);
+  EXPECT_LE(r.eci.flight_min, r.eci.flight_max);
 }
 
 TEST(BaselineOnHostTest, FliesOnTheFullFrameToo) {

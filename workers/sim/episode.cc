@@ -173,6 +173,10 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   double next_frame_t = 0.0;
   std::int64_t frame_index = 0;
   double eci_latest = 0, eci_sum = 0, eci_min = std::numeric_limits<double>::infinity(), eci_max = 0;
+  // eci along the flight itself: from the first frame at take-off speed on (api::EciSummary).
+  bool took_off = false;
+  double flight_eci_min = std::numeric_limits<double>::infinity(), flight_eci_max = 0;
+  std::int64_t flight_frames = 0;
   double eci_cost_sum = 0;
   double last_busy = 0;
   std::string interval_events;
@@ -205,6 +209,12 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
       eci_sum += eci_latest;
       eci_min = std::min(eci_min, eci_latest);
       eci_max = std::max(eci_max, eci_latest);
+      took_off = took_off || state.v_WB.norm() > FlightRecorder::kMovingSpeed;
+      if (took_off) {
+        ++flight_frames;
+        flight_eci_min = std::min(flight_eci_min, eci_latest);
+        flight_eci_max = std::max(flight_eci_max, eci_latest);
+      }
       nav->OnFrame(std::move(frame));
     }
 
@@ -303,7 +313,8 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   }
   result.deadline_miss_ratio =
       result.jobs_released > 0 ? static_cast<double>(result.deadline_misses) / result.jobs_released : 0.0;
-  result.eci = {frame_index > 0 ? eci_min : 0.0, frame_index > 0 ? eci_sum / frame_index : 0.0, eci_max};
+  result.eci = {frame_index > 0 ? eci_min : 0.0, frame_index > 0 ? eci_sum / frame_index : 0.0, eci_max,
+                flight_frames > 0 ? flight_eci_min : 0.0, flight_eci_max, flight_frames};
   // E-Navi runs the eci on the board (a task); for the baseline it is what it would cost there.
   result.eci_time_ms_mean = acc[TaskId::kEci].started > 0 ? 1e3 * acc[TaskId::kEci].MeanCost()
                             : frame_index > 0             ? 1e3 * eci_cost_sum / frame_index

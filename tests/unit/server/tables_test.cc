@@ -90,6 +90,55 @@ TEST(PaperComparisonTest, AReductionNeedsEveryScenario) {
   EXPECT_EQ(PaperComparison(nlohmann::json::array()), "no results on the paper's boards and scenarios\n");
 }
 
+nlohmann::json WithEci(nlohmann::json r, double lo, double hi, int frames) {
+  r["eci"] = {{"min", 0.0}, {"mean", 0.5}, {"max", 1.0}, {"flight_min", lo}, {"flight_max", hi},
+              {"flight_frames", frames}};
+  return r;
+}
+
+TEST(EciRangeTableTest, AveragesEachFlightsRangeAndPrintsThePapersBesideIt) {
+  nlohmann::json results = nlohmann::json::array();
+  results.push_back(WithEci(Result("x86", "baseline", "s1", 1, 50, 40, 45, true), 0.10, 0.80, 900));
+  results.push_back(WithEci(Result("tx2", "baseline", "s1", 2, 50, 40, 45, true), 0.20, 0.90, 800));
+  // Never took off: no range; the all-frames min of 0 must not reach the table.
+  results.push_back(WithEci(Result("x86", "baseline", "s1", 3, 50, 40, 45, false), 0.0, 0.0, 0));
+  // Stored before the flight fields existed.
+  nlohmann::json old = Result("x86", "baseline", "s4", 1, 50, 40, 45, true);
+  old["eci"] = {{"min", 0.0}, {"mean", 0.5}, {"max", 1.0}};
+  results.push_back(old);
+  results.push_back(WithEci(Result("x86", "enavi", "forest", 1, 50, 40, 45, true), 0.30, 0.40, 700));
+  const std::string out = EciRangeTable(results);
+  // s1: min (0.10 + 0.20) / 2 = 0.15, max (0.80 + 0.90) / 2 = 0.85; paper 0.06-0.87.
+  EXPECT_NE(out.find("s1        baseline        2         1  0.15  0.85        0.10         0.90       0.06       0.87"
+                     "      0.09     -0.02"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("s4        baseline        0         1     -     -           -            -       0.26       0.86"
+                     "         -         -"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("forest    enavi           1         0  0.30  0.40        0.30         0.40          -          -"
+                     "         -         -"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(EciRangeTable(nlohmann::json::array()), "no results\n");
+}
+
+TEST(EciRangeTableTest, LeavesThePaperColumnsOutWithoutAPaperScenario) {
+  nlohmann::json results = nlohmann::json::array();
+  results.push_back(WithEci(Result("x86", "baseline", "canyon", 1, 50, 40, 45, true), 0.25, 0.75, 900));
+  const std::string out = EciRangeTable(results);
+  EXPECT_EQ(out.find("paper"), std::string::npos) << out;
+  EXPECT_NE(out.find("canyon    baseline        1         0  0.25  0.75        0.25         0.75"), std::string::npos) << out;
+}
+
+TEST(PaperReferenceTest, EciRangesFollowTheScenarioOrder) {
+  ASSERT_NE(FindPaperEciRange("s3"), nullptr);
+  EXPECT_DOUBLE_EQ(FindPaperEciRange("s3")->min, 0.19);
+  EXPECT_DOUBLE_EQ(FindPaperEciRange("s5")->max, 0.79);
+  EXPECT_EQ(FindPaperEciRange("canyon"), nullptr);
+}
+
 TEST(ResultsCsvTest, FlattensNestedFieldsAndQuotes) {
   nlohmann::json results = nlohmann::json::array();
   results.push_back(Result("tx2", "enavi", "s1", 1, 60, 30, 45, true));
