@@ -1,26 +1,17 @@
 // `enavi calibrate`: fits the board cost model to this host (docs/design.md, "Time: two clocks").
-#include <sys/utsname.h>
-
-#include <unistd.h>
+#include <sched.h>
 
 #include <cstdio>
-#include <filesystem>
-#include <ctime>
-#include <fstream>
 #include <memory>
-#include <sched.h>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
-#include "navstack/adapt/action_grid.h"
-#include "navstack/rl/policy_io.h"
 #include "server/cli/commands.h"
 #include "workers/board/board_profile.h"
-#include "workers/board/calibration.h"
+#include "workers/board/calibration_flights.h"
 #include "workers/board/cgroup.h"
 #include "workers/board/host_calibration.h"
-#include "workers/sim/episode.h"
 
 namespace enavi::cli {
 namespace {
@@ -35,15 +26,6 @@ struct CalibrateArgs {
   bool status = false;
 };
 
-std::string CpuModel() {
-  std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  return "unknown";
-}
-
-
 // --- Host calibration file and board emulation table (emulated clock, docs/design.md, "Time: two clocks") ---
 
 // Host CPUs an emulation may use: this process's CPUs minus what the simulator keeps.
@@ -52,33 +34,6 @@ double EmulationCpusFree() {
   CPU_ZERO(&set);
   const double cpus = sched_getaffinity(0, sizeof(set), &set) == 0 ? CPU_COUNT(&set) : 1.0;
   return cpus - board::CgroupOptions{}.host_reserve_cpus;
-}
-
-std::string UtcNow() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
-// The host calibration from this run's fit and job samples.
-board::HostCalibration MakeHostCalibration(const board::CostFit& fit, double speed, const board::ReferenceCosts& reference,
-                                           const std::vector<board::JobSample>& samples) {
-  board::HostCalibration cal;
-  cal.relative_speed = speed;
-  cal.fitted = fit.costs.ns;
-  cal.samples = fit.samples;
-  cal.r2 = fit.r2;
-  cal.cpu_model = board::HostCpuModel();
-  cal.kernel = board::HostKernel();
-  cal.date = UtcNow();
-  cal.reference_calibration_id = reference.calibration_id;
-  std::map<std::string, std::vector<double>> times;
-  for (const board::JobSample& s : samples) times[std::string(navstack::TaskName(s.task))].push_back(s.host_cpu_s);
-  for (auto& [task, t] : times) cal.tasks[task] = board::SummariseTimes(std::move(t));
-  return cal;
 }
 
 nlohmann::json BoardTableJson(const board::HostCalibration& cal) {
@@ -167,63 +122,19 @@ void RunStatus(const CalibrateArgs& args) {
 
 void Run(const CalibrateArgs& args) {
   if (args.status) return RunStatus(args);
-  // A mix of scenes and resolutions so every unit of work varies independently enough to fit.
-  std::vector<board::JobSample> samples;
-  sim::EpisodeOptions options;
-  options.job_observer = [&](navstack::TaskId task, const navstack::WorkCounts& work, double cpu) {
-    samples.push_back({task, work, cpu});
-  };
-  struct Run {
-    std::string world;
-    double res;
-    double f_dif;  // difference detection is off in the baseline; two runs turn it on
-    bool enavi;    // E-Navi prices the eci and the adapter's network on the board
-  };
-  const std::vector<Run> runs = {{"s1", 0.1, 0, false},  {"s2", 0.1, 15, false}, {"s3", 0.1, 0, false},
-                                 {"s4", 0.1, 0, false},  {"s5", 0.1, 30, false}, {"s2", 0.2, 0, false},
-                                 {"s3", 0.3, 0, false},  {"s2", 0.0, 0, true}};
-  // Calibration prices work, not decisions: a freshly initialised network costs what a trained one does.
-  const std::string policy = (std::filesystem::temp_directory_path() / ("enavi-calibrate-policy-" + std::to_string(getpid()) + ".json")).string();
-  navstack::rl::SavePolicyFile(policy, navstack::rl::MakeFrequencyPolicy(navstack::ActionGrid(), 1));
-  for (const auto& [world, res, f_dif, enavi] : runs) {
-    api::EpisodeSpec spec;
-    spec.world = world;
-    spec.seed = 1;
-    spec.board = "host";
-    spec.cost = "measured";
-    spec.timeout_s = args.episode_seconds;
-    if (enavi) {
-      spec.method = "enavi";
-      spec.policy = policy;
-    } else {
-      spec.method = "fixed";  // our stack at fixed rates: the loads the reference was fitted on
-      spec.overrides["map.resolution"] = res;
-      spec.overrides["rates.f_dif"] = f_dif;
-    }
-    if (!args.json)
-      std::fprintf(stderr, "calibrate: flying %s %s for %.0f s\n", world.c_str(),
-                   enavi ? "with E-Navi" : ("at " + std::to_string(res).substr(0, 4) + " m").c_str(), args.episode_seconds);
-    sim::RunEpisode(spec, options);
-  }
-  std::filesystem::remove(policy);
-  board::CostFit fit = board::FitCosts(samples);
-  const board::ReferenceCosts reference = board::LoadReferenceCosts();
-  const double speed = board::RelativeSpeed(samples, reference);
-
-  utsname uts{};
-  uname(&uts);
-  fit.costs.reference_cpu = CpuModel();
-  char id[64];
-  std::snprintf(id, sizeof id, "%ld-%d", static_cast<long>(std::time(nullptr)), fit.samples);
-  fit.costs.calibration_id = id;
-
-  if (!args.write_reference.empty()) {
-    std::ofstream out(args.write_reference);
-    out << board::ReferenceCostsYaml(fit.costs, "Nanoseconds per work unit on the reference core, fitted by `enavi calibrate --write-reference` on " +
-                                                    fit.costs.reference_cpu + " (" + uts.release + "), R^2 " +
-                                                    std::to_string(fit.r2) + " over " + std::to_string(fit.samples) + " jobs.");
-    if (!out) throw std::runtime_error("cannot write " + args.write_reference);
-  }
+  board::CalibrationOptions options;
+  options.episode_seconds = args.episode_seconds;
+  if (!args.json)
+    options.on_flight = [&](const board::CalibrationFlight& f) {
+      std::fprintf(stderr, "calibrate: flying %s on %s%s for %.0f s\n", f.method.c_str(), f.world.c_str(),
+                   f.resolution > 0 ? (" at " + std::to_string(f.resolution).substr(0, 4) + " m").c_str() : "",
+                   args.episode_seconds);
+    };
+  const board::CalibrationRun run = board::RunCalibration(options);
+  const board::CostFit& fit = run.fit;
+  const double speed = run.relative_speed;
+  const board::ReferenceCosts& reference = run.reference;
+  if (!args.write_reference.empty()) board::WriteReferenceCosts(args.write_reference, fit, "");
   nlohmann::json j;
   j["cpu"] = fit.costs.reference_cpu;
   j["samples"] = fit.samples;
@@ -236,7 +147,7 @@ void Run(const CalibrateArgs& args) {
   for (const auto& [task, q] : fit.per_task)
     j["tasks"][task] = {{"jobs", q.jobs}, {"measured_s", q.measured_s}, {"predicted_s", q.predicted_s}};
   j["unobserved_units"] = fit.unobserved_units;
-  const board::HostCalibration host = MakeHostCalibration(fit, speed, reference, samples);
+  const board::HostCalibration& host = run.host;
   const std::string stored = StoreHostCalibration(args, host);
   j["host_calibration_file"] = stored;
   j["boards"] = BoardTableJson(host);
