@@ -132,21 +132,33 @@ void Run(const CalibrateArgs& args) {
     };
   const board::CalibrationRun run = board::RunCalibration(options);
   const board::CostFit& fit = run.fit;
-  const double speed = run.relative_speed;
-  const board::ReferenceCosts& reference = run.reference;
-  if (!args.write_reference.empty()) board::WriteReferenceCosts(args.write_reference, fit, "");
+  if (!args.write_reference.empty()) board::WriteReferenceCosts(args.write_reference, run);
+  auto coefficient_json = [](const board::CoefficientFit& c) {
+    nlohmann::json j = {{"ns", c.ns}, {"jobs", c.jobs}, {"share", c.share}};
+    if (!c.zero_reason.empty()) j["zero_reason"] = c.zero_reason;
+    return j;
+  };
   nlohmann::json j;
   j["cpu"] = fit.costs.reference_cpu;
   j["samples"] = fit.samples;
   j["r2"] = fit.r2;
-  j["relative_speed_vs_reference"] = speed;
-  j["reference_calibration_id"] = reference.calibration_id;
-  j["ns_per_job"] = fit.costs.ns.ns_per_job;
-  for (std::size_t u = 0; u < navstack::kWorkUnitNames.size(); ++u)
-    j["ns_per_unit"][std::string(navstack::kWorkUnitNames[u])] = fit.costs.ns.ns_per_unit[u];
-  for (const auto& [task, q] : fit.per_task)
-    j["tasks"][task] = {{"jobs", q.jobs}, {"measured_s", q.measured_s}, {"predicted_s", q.predicted_s}};
-  j["unobserved_units"] = fit.unobserved_units;
+  j["load_average"] = {{"before", run.load_before}, {"after", run.load_after}};
+  j["relative_speed_vs_reference"] = run.relative_speed;
+  j["reference_calibration_id"] = run.reference.calibration_id;
+  for (const board::CoefficientFit& c : fit.overheads) {
+    j["ns_per_job"][c.name] = c.ns;
+    j["overheads"][c.name] = coefficient_json(c);
+  }
+  for (const board::CoefficientFit& c : fit.units) {
+    j["ns_per_unit"][c.name] = c.ns;
+    j["units"][c.name] = coefficient_json(c);
+  }
+  for (const board::TaskFitQuality& q : fit.per_task)
+    j["tasks"][q.task] = {{"jobs", q.jobs},
+                          {"r2", q.r2},
+                          {"measured_s", q.measured_s},
+                          {"predicted_s", q.predicted_s},
+                          {"relative_residual", q.relative_residual()}};
   const board::HostCalibration& host = run.host;
   const std::string stored = StoreHostCalibration(args, host);
   j["host_calibration_file"] = stored;
@@ -155,15 +167,20 @@ void Run(const CalibrateArgs& args) {
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
-  std::printf("calibration of %s: %d jobs, R^2 %.3f, speed %.3f x the reference core\n", fit.costs.reference_cpu.c_str(),
-              fit.samples, fit.r2, speed);
-  std::printf("  %-18s %12s\n", "unit", "ns/unit");
-  std::printf("  %-18s %12.1f\n", "(per job)", fit.costs.ns.ns_per_job);
-  for (std::size_t u = 0; u < navstack::kWorkUnitNames.size(); ++u)
-    std::printf("  %-18s %12.4f\n", std::string(navstack::kWorkUnitNames[u]).c_str(), fit.costs.ns.ns_per_unit[u]);
-  std::printf("  %-12s %6s %12s %12s\n", "task", "jobs", "measured s", "model s");
-  for (const auto& [task, q] : fit.per_task)
-    std::printf("  %-12s %6d %12.3f %12.3f\n", task.c_str(), q.jobs, q.measured_s, q.predicted_s);
+  std::printf("calibration of %s: %d jobs, R^2 %.3f, speed %.3f x the reference core (load %.2f -> %.2f)\n",
+              fit.costs.reference_cpu.c_str(), fit.samples, fit.r2, run.relative_speed, run.load_before,
+              run.load_after);
+  std::printf("  %-22s %12s %7s %7s\n", "coefficient", "ns", "jobs", "time %");
+  auto print_coefficient = [](const std::string& label, const board::CoefficientFit& c) {
+    std::printf("  %-22s %12.4f %7d %7.1f%s%s\n", label.c_str(), c.ns, c.jobs, 100 * c.share,
+                c.zero_reason.empty() ? "" : "  0: ", c.zero_reason.c_str());
+  };
+  for (const board::CoefficientFit& c : fit.overheads) print_coefficient("per job of " + c.name, c);
+  for (const board::CoefficientFit& c : fit.units) print_coefficient(c.name, c);
+  std::printf("  %-12s %7s %7s %12s %12s %9s\n", "task", "jobs", "R^2", "measured s", "model s", "residual");
+  for (const board::TaskFitQuality& q : fit.per_task)
+    std::printf("  %-12s %7d %7.3f %12.3f %12.3f %+8.1f%%\n", q.task.c_str(), q.jobs, q.r2, q.measured_s,
+                q.predicted_s, 100 * q.relative_residual());
   PrintBoardTable(host);
   if (!stored.empty()) std::printf("host calibration written to %s\n", stored.c_str());
 }

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "navstack/adapt/action_grid.h"
+#include "navstack/adapt/resolution_adapter.h"
 #include "navstack/rl/policy_io.h"
 #include "workers/sim/episode.h"
 
@@ -63,12 +64,28 @@ class ScratchPolicy {
   std::string path_;
 };
 
+double LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double load = 0;
+  in >> load;
+  return load;
+}
+
 }  // namespace
 
 std::vector<CalibrationFlight> CalibrationPlan() {
-  return {{"fixed", "s1", 0.1, 0},  {"fixed", "s2", 0.1, 15}, {"fixed", "s3", 0.1, 0},
-          {"fixed", "s4", 0.1, 0},  {"fixed", "s5", 0.1, 30}, {"fixed", "s2", 0.2, 0},
-          {"fixed", "s3", 0.3, 0},  {"enavi", "s2", 0.0, 0}};
+  // Each method flies each level of E-Navi's ladder once, on scenarios rotated so that no level
+  // is tied to one scene; fixed also runs difference detection on some flights (the baseline has
+  // none). E-Navi picks its own resolution (its adapter walks the ladder) and rates.
+  const std::vector<double> ladder = navstack::ResolutionAdapterOptions{}.ladder;
+  const std::vector<std::string> worlds = {"s1", "s2", "s3", "s4", "s5"};
+  const double f_dif[] = {0, 15, 0, 30};
+  std::vector<CalibrationFlight> plan;
+  for (std::size_t i = 0; i < ladder.size(); ++i) plan.push_back({"baseline", worlds[i % 5], ladder[i], 0});
+  for (std::size_t i = 0; i < ladder.size(); ++i)
+    plan.push_back({"fixed", worlds[(i + 2) % 5], ladder[i], f_dif[i % 4]});
+  for (const std::string& w : worlds) plan.push_back({"enavi", w, 0, 0});
+  return plan;
 }
 
 CalibrationRun RunCalibration(const CalibrationOptions& options) {
@@ -78,6 +95,7 @@ CalibrationRun RunCalibration(const CalibrationOptions& options) {
     run.samples.push_back({task, work, cpu});
   };
   const ScratchPolicy policy;
+  run.load_before = LoadAverage();
   for (const CalibrationFlight& flight : CalibrationPlan()) {
     api::EpisodeSpec spec;
     spec.world = flight.world;
@@ -86,12 +104,16 @@ CalibrationRun RunCalibration(const CalibrationOptions& options) {
     spec.cost = "measured";
     spec.timeout_s = options.episode_seconds;
     spec.method = flight.method;
-    if (flight.method == "enavi") spec.policy = policy.path();
+    if (flight.method == "enavi") {
+      spec.policy = policy.path();
+      spec.overrides["strategy.explore"] = 1;  // sampled actions: rates across the policy's grid
+    }
     if (flight.resolution > 0) spec.overrides["map.resolution"] = flight.resolution;
     if (flight.method == "fixed") spec.overrides["rates.f_dif"] = flight.f_dif;
     if (options.on_flight) options.on_flight(flight);
     sim::RunEpisode(spec, episode);
   }
+  run.load_after = LoadAverage();
   run.fit = FitCosts(run.samples);
   run.reference = LoadReferenceCosts();
   run.relative_speed = RelativeSpeed(run.samples, run.reference);
@@ -103,13 +125,21 @@ CalibrationRun RunCalibration(const CalibrationOptions& options) {
   return run;
 }
 
-void WriteReferenceCosts(const std::string& path, const CostFit& fit, const std::string& note) {
+void WriteReferenceCosts(const std::string& path, const CalibrationRun& run) {
+  const CostFit& fit = run.fit;
   utsname uts{};
   uname(&uts);
-  std::string comment = "Nanoseconds per work unit on the reference core, fitted by `enavi calibrate --write-reference` on " +
-                        fit.costs.reference_cpu + " (" + uts.release + "), R^2 " + std::to_string(fit.r2) + " over " +
-                        std::to_string(fit.samples) + " jobs.";
-  if (!note.empty()) comment += " " + note;
+  char load[160];
+  std::snprintf(load, sizeof load, "Host load average (1 min) %.2f before the flights, %.2f after.", run.load_before,
+                run.load_after);
+  std::string comment = "Nanoseconds per job of each task and per work unit on the reference core, fitted by\n"
+                        "`enavi calibrate --write-reference` on " + fit.costs.reference_cpu + " (" + uts.release +
+                        "), R^2 " + std::to_string(fit.r2) + " over " + std::to_string(fit.samples) + " jobs of " +
+                        std::to_string(CalibrationPlan().size()) + " flights.\n" + load + "\n";
+  for (const std::vector<CoefficientFit>* group : {&fit.overheads, &fit.units})
+    for (const CoefficientFit& c : *group)
+      if (!c.zero_reason.empty())
+        comment += (group == &fit.units ? "" : "per job of ") + c.name + " = 0: " + c.zero_reason + "\n";
   std::ofstream out(path);
   out << ReferenceCostsYaml(fit.costs, comment);
   if (!out) throw std::runtime_error("cannot write " + path);

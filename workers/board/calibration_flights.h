@@ -20,8 +20,9 @@ struct CalibrationFlight {
   double f_dif = 0;  ///< difference detection rate (fixed only; 0 = off)
 };
 
-/// The flights `enavi calibrate` makes: a mix of scenes and resolutions so that every unit of
-/// work varies independently enough to fit.
+/// The flights `enavi calibrate` makes: every method (the baseline, fixed, E-Navi) and every
+/// level of E-Navi's resolution ladder (0.1-0.5 m), over all five scenarios, so that every unit
+/// of work and every task's per-job overhead varies independently enough to fit.
 std::vector<CalibrationFlight> CalibrationPlan();
 
 struct CalibrationOptions {
@@ -36,14 +37,17 @@ struct CalibrationRun {
   ReferenceCosts reference;   ///< the embedded reference the speed was measured against
   double relative_speed = 0;  ///< this host's core vs the reference core
   HostCalibration host;       ///< what the host calibration file stores
+  /// The host's 1-minute load average before the first and after the last flight (/proc/loadavg):
+  /// other work on the host inflates measured job times, so a fit says what it was made under.
+  double load_before = 0, load_after = 0;
 };
 
 /// Flies the plan and fits. Throws if the fit cannot be made (too few samples).
 CalibrationRun RunCalibration(const CalibrationOptions& options);
 
-/// Writes `costs` as a reference costs file (workers/board/profiles/reference_costs.yaml) with a
-/// header comment saying where and how it was fitted plus `note`. Throws std::runtime_error if
-/// the file cannot be written.
-void WriteReferenceCosts(const std::string& path, const CostFit& fit, const std::string& note);
+/// Writes the run's fit as a reference costs file (workers/board/profiles/reference_costs.yaml)
+/// with a header comment saying where, how and under what load it was fitted, and why any
+/// coefficient is 0. Throws std::runtime_error if the file cannot be written.
+void WriteReferenceCosts(const std::string& path, const CalibrationRun& run);
 
 }  // namespace enavi::board
