@@ -85,8 +85,11 @@ std::string ZeroReason(const Eigen::MatrixXd& As, const Eigen::VectorXd& b, cons
   const int last = static_cast<int>(Q.cols()) - 1;
   const double est = z[last] / scale[k];
   const double se = std::sqrt(std::max(0.0, cov(last, last))) / scale[k];
-  return "too small to see: free least squares gives " + Number(est, "%.3g") + " +- " + Number(se, "%.2g") +
-         " ns, not above 0";
+  const std::string free_fit = "free least squares gives " + Number(est, "%.3g") + " +- " + Number(se, "%.2g") + " ns";
+  // Clearly negative: the other coefficients of the same jobs already over-price them, i.e. the
+  // linear model does not fit these jobs (e.g. one unit costing differently in two methods).
+  if (est + 2 * se < 0) return "the data wants it negative (" + free_fit + "): the same jobs' other units over-price them";
+  return "too small to see (" + free_fit + ", not above 0)";
 }
 
 }  // namespace
