@@ -22,16 +22,19 @@ class CostModel {
   virtual bool uses_host_cpu() const = 0;
 };
 
-/// model: time = fixed per-job overhead + sum(count x ns_per_unit). Bit-reproducible.
+/// model: time = the task's fixed per-job overhead + sum(count x ns_per_unit). Bit-reproducible.
 class WorkCountCostModel final : public CostModel {
  public:
   struct Coefficients {
     std::array<double, static_cast<int>(WorkUnit::kCount)> ns_per_unit{};
-    double ns_per_job = 0.0;  ///< dispatch + bookkeeping overhead of any job
+    /// What one job of each task costs whatever its work counts: the code that runs on every
+    /// job (frame hand-over, map and trajectory look-ups, result packing) and the commit. One
+    /// per task because each task's fixed part is different code.
+    std::array<double, kTaskCount> ns_per_job{};
   };
   explicit WorkCountCostModel(const Coefficients& board) : c_(board) {}
-  double JobSeconds(TaskId, const WorkCounts& work, double) const override {
-    double ns = c_.ns_per_job;
+  double JobSeconds(TaskId task, const WorkCounts& work, double) const override {
+    double ns = c_.ns_per_job[static_cast<int>(task)];
     for (std::size_t i = 0; i < work.n.size(); ++i) ns += static_cast<double>(work.n[i]) * c_.ns_per_unit[i];
     return ns * 1e-9;
   }

@@ -171,6 +171,13 @@ const TaskStats& RealtimeExecutor::stats(TaskId task) const {
   return copy[static_cast<int>(task)];
 }
 
+std::array<std::int64_t, kTaskCount> RealtimeExecutor::ReleaseLags() const {
+  std::array<std::int64_t, kTaskCount> out{};
+  std::lock_guard l(mutex_);
+  for (int i = 0; i < kTaskCount; ++i) out[i] = slots_[i].release_lags;
+  return out;
+}
+
 std::array<double, kTaskCount> RealtimeExecutor::ExecutionWallSeconds() const {
   std::array<double, kTaskCount> out{};
   std::lock_guard l(mutex_);
@@ -265,11 +272,25 @@ void RealtimeExecutor::ReleaseLoop() {
     double earliest = std::numeric_limits<double>::infinity();
     for (int i = 0; i < kTaskCount; ++i) {
       Slot& s = slots_[i];
-      // A late wake-up releases every missed instant in turn; all but the first are skips.
+      // A late wake-up (a loaded host) finds several instants due. Those at which the task's
+      // job was still active are skips, as on the virtual clock; those at which it was not are
+      // this thread's lateness, not the task's misses: counted apart, and only the latest due
+      // instant is released.
       while (s.rate_hz > 0 && s.next_release <= now + kEps) {
         const double period = 1.0 / s.rate_hz;
-        ReleaseLocked(i, s.next_release, period);
+        const double at = s.next_release;
         s.next_release += period;
+        if (s.next_release <= now + kEps && !s.job) {
+          if (at < s.last_finish) {  // the previous job was still running then
+            ++s.stats.released;
+            ++s.stats.skipped;
+            s.last_release = at;
+          } else {
+            ++s.release_lags;
+          }
+          continue;
+        }
+        ReleaseLocked(i, at, period);
         released = true;
       }
       if (s.rate_hz > 0) earliest = std::min(earliest, s.next_release);
@@ -330,7 +351,8 @@ void RealtimeExecutor::WorkerLoop(int worker) {
       const Job job = *f.job;
       f.job.reset();
       ++f.stats.completed;
-      if (NowLocked() > job.deadline + kEps) ++f.stats.late;
+      f.last_finish = NowLocked();
+      if (f.last_finish > job.deadline + kEps) ++f.stats.late;
       const double cost = cpu * options_.host_to_board;
       f.stats.busy_s += cost;
       f.stats.cost_sum_s += cost;

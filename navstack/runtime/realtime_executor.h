@@ -117,6 +117,10 @@ class RealtimeExecutor final : public TaskExecutor {
   std::vector<pid_t> WorkerTids() const;
   pid_t ReleaseThreadTid() const;
   std::array<TaskStats, kTaskCount> AllStats() const;
+  /// Per task: release instants the release thread reached only after the next one was due (a
+  /// loaded host) while no job of the task was active. Neither released nor missed: the task did
+  /// not overrun, this clock was late; only the latest due instant is released.
+  std::array<std::int64_t, kTaskCount> ReleaseLags() const;
   /// Wall seconds each task's jobs spent executing (code and commit, not waiting for a worker
   /// or the lock): against host_cpu_s x dilation / speed it shows whether a job ran at the
   /// board's speed (1.0) or was held back further by a busy host (> 1).
@@ -136,10 +140,12 @@ class RealtimeExecutor final : public TaskExecutor {
     double rate_hz = 0;
     double next_release = 0;
     double last_release = -1;
+    double last_finish = -1;  ///< sim time the last job finished
     std::optional<Job> job;
     std::optional<double> pending_trigger;
     TaskStats stats;
     double wall_s = 0;
+    std::int64_t release_lags = 0;
   };
 
   double NowLocked() const;

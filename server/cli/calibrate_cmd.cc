@@ -1,26 +1,17 @@
 // `enavi calibrate`: fits the board cost model to this host (docs/design.md, "Time: two clocks").
-#include <sys/utsname.h>
-
-#include <unistd.h>
+#include <sched.h>
 
 #include <cstdio>
-#include <filesystem>
-#include <ctime>
-#include <fstream>
 #include <memory>
-#include <sched.h>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
-#include "navstack/adapt/action_grid.h"
-#include "navstack/rl/policy_io.h"
 #include "server/cli/commands.h"
 #include "workers/board/board_profile.h"
-#include "workers/board/calibration.h"
+#include "workers/board/calibration_flights.h"
 #include "workers/board/cgroup.h"
 #include "workers/board/host_calibration.h"
-#include "workers/sim/episode.h"
 
 namespace enavi::cli {
 namespace {
@@ -35,15 +26,6 @@ struct CalibrateArgs {
   bool status = false;
 };
 
-std::string CpuModel() {
-  std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  return "unknown";
-}
-
-
 // --- Host calibration file and board emulation table (emulated clock, docs/design.md, "Time: two clocks") ---
 
 // Host CPUs an emulation may use: this process's CPUs minus what the simulator keeps.
@@ -52,33 +34,6 @@ double EmulationCpusFree() {
   CPU_ZERO(&set);
   const double cpus = sched_getaffinity(0, sizeof(set), &set) == 0 ? CPU_COUNT(&set) : 1.0;
   return cpus - board::CgroupOptions{}.host_reserve_cpus;
-}
-
-std::string UtcNow() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
-// The host calibration from this run's fit and job samples.
-board::HostCalibration MakeHostCalibration(const board::CostFit& fit, double speed, const board::ReferenceCosts& reference,
-                                           const std::vector<board::JobSample>& samples) {
-  board::HostCalibration cal;
-  cal.relative_speed = speed;
-  cal.fitted = fit.costs.ns;
-  cal.samples = fit.samples;
-  cal.r2 = fit.r2;
-  cal.cpu_model = board::HostCpuModel();
-  cal.kernel = board::HostKernel();
-  cal.date = UtcNow();
-  cal.reference_calibration_id = reference.calibration_id;
-  std::map<std::string, std::vector<double>> times;
-  for (const board::JobSample& s : samples) times[std::string(navstack::TaskName(s.task))].push_back(s.host_cpu_s);
-  for (auto& [task, t] : times) cal.tasks[task] = board::SummariseTimes(std::move(t));
-  return cal;
 }
 
 nlohmann::json BoardTableJson(const board::HostCalibration& cal) {
@@ -167,76 +122,44 @@ void RunStatus(const CalibrateArgs& args) {
 
 void Run(const CalibrateArgs& args) {
   if (args.status) return RunStatus(args);
-  // A mix of scenes and resolutions so every unit of work varies independently enough to fit.
-  std::vector<board::JobSample> samples;
-  sim::EpisodeOptions options;
-  options.job_observer = [&](navstack::TaskId task, const navstack::WorkCounts& work, double cpu) {
-    samples.push_back({task, work, cpu});
+  board::CalibrationOptions options;
+  options.episode_seconds = args.episode_seconds;
+  if (!args.json)
+    options.on_flight = [&](const board::CalibrationFlight& f) {
+      std::fprintf(stderr, "calibrate: flying %s on %s%s for %.0f s\n", f.method.c_str(), f.world.c_str(),
+                   f.resolution > 0 ? (" at " + std::to_string(f.resolution).substr(0, 4) + " m").c_str() : "",
+                   args.episode_seconds);
+    };
+  const board::CalibrationRun run = board::RunCalibration(options);
+  const board::CostFit& fit = run.fit;
+  if (!args.write_reference.empty()) board::WriteReferenceCosts(args.write_reference, run);
+  auto coefficient_json = [](const board::CoefficientFit& c) {
+    nlohmann::json j = {{"ns", c.ns}, {"jobs", c.jobs}, {"share", c.share}};
+    if (!c.zero_reason.empty()) j["zero_reason"] = c.zero_reason;
+    return j;
   };
-  struct Run {
-    std::string world;
-    double res;
-    double f_dif;  // difference detection is off in the baseline; two runs turn it on
-    bool enavi;    // E-Navi prices the eci and the adapter's network on the board
-  };
-  const std::vector<Run> runs = {{"s1", 0.1, 0, false},  {"s2", 0.1, 15, false}, {"s3", 0.1, 0, false},
-                                 {"s4", 0.1, 0, false},  {"s5", 0.1, 30, false}, {"s2", 0.2, 0, false},
-                                 {"s3", 0.3, 0, false},  {"s2", 0.0, 0, true}};
-  // Calibration prices work, not decisions: a freshly initialised network costs what a trained one does.
-  const std::string policy = (std::filesystem::temp_directory_path() / ("enavi-calibrate-policy-" + std::to_string(getpid()) + ".json")).string();
-  navstack::rl::SavePolicyFile(policy, navstack::rl::MakeFrequencyPolicy(navstack::ActionGrid(), 1));
-  for (const auto& [world, res, f_dif, enavi] : runs) {
-    api::EpisodeSpec spec;
-    spec.world = world;
-    spec.seed = 1;
-    spec.board = "host";
-    spec.cost = "measured";
-    spec.timeout_s = args.episode_seconds;
-    if (enavi) {
-      spec.method = "enavi";
-      spec.policy = policy;
-    } else {
-      spec.method = "fixed";  // our stack at fixed rates: the loads the reference was fitted on
-      spec.overrides["map.resolution"] = res;
-      spec.overrides["rates.f_dif"] = f_dif;
-    }
-    if (!args.json)
-      std::fprintf(stderr, "calibrate: flying %s %s for %.0f s\n", world.c_str(),
-                   enavi ? "with E-Navi" : ("at " + std::to_string(res).substr(0, 4) + " m").c_str(), args.episode_seconds);
-    sim::RunEpisode(spec, options);
-  }
-  std::filesystem::remove(policy);
-  board::CostFit fit = board::FitCosts(samples);
-  const board::ReferenceCosts reference = board::LoadReferenceCosts();
-  const double speed = board::RelativeSpeed(samples, reference);
-
-  utsname uts{};
-  uname(&uts);
-  fit.costs.reference_cpu = CpuModel();
-  char id[64];
-  std::snprintf(id, sizeof id, "%ld-%d", static_cast<long>(std::time(nullptr)), fit.samples);
-  fit.costs.calibration_id = id;
-
-  if (!args.write_reference.empty()) {
-    std::ofstream out(args.write_reference);
-    out << board::ReferenceCostsYaml(fit.costs, "Nanoseconds per work unit on the reference core, fitted by `enavi calibrate --write-reference` on " +
-                                                    fit.costs.reference_cpu + " (" + uts.release + "), R^2 " +
-                                                    std::to_string(fit.r2) + " over " + std::to_string(fit.samples) + " jobs.");
-    if (!out) throw std::runtime_error("cannot write " + args.write_reference);
-  }
   nlohmann::json j;
   j["cpu"] = fit.costs.reference_cpu;
   j["samples"] = fit.samples;
   j["r2"] = fit.r2;
-  j["relative_speed_vs_reference"] = speed;
-  j["reference_calibration_id"] = reference.calibration_id;
-  j["ns_per_job"] = fit.costs.ns.ns_per_job;
-  for (std::size_t u = 0; u < navstack::kWorkUnitNames.size(); ++u)
-    j["ns_per_unit"][std::string(navstack::kWorkUnitNames[u])] = fit.costs.ns.ns_per_unit[u];
-  for (const auto& [task, q] : fit.per_task)
-    j["tasks"][task] = {{"jobs", q.jobs}, {"measured_s", q.measured_s}, {"predicted_s", q.predicted_s}};
-  j["unobserved_units"] = fit.unobserved_units;
-  const board::HostCalibration host = MakeHostCalibration(fit, speed, reference, samples);
+  j["load_average"] = {{"before", run.load_before}, {"after", run.load_after}};
+  j["relative_speed_vs_reference"] = run.relative_speed;
+  j["reference_calibration_id"] = run.reference.calibration_id;
+  for (const board::CoefficientFit& c : fit.overheads) {
+    j["ns_per_job"][c.name] = c.ns;
+    j["overheads"][c.name] = coefficient_json(c);
+  }
+  for (const board::CoefficientFit& c : fit.units) {
+    j["ns_per_unit"][c.name] = c.ns;
+    j["units"][c.name] = coefficient_json(c);
+  }
+  for (const board::TaskFitQuality& q : fit.per_task)
+    j["tasks"][q.task] = {{"jobs", q.jobs},
+                          {"r2", q.r2},
+                          {"measured_s", q.measured_s},
+                          {"predicted_s", q.predicted_s},
+                          {"relative_residual", q.relative_residual()}};
+  const board::HostCalibration& host = run.host;
   const std::string stored = StoreHostCalibration(args, host);
   j["host_calibration_file"] = stored;
   j["boards"] = BoardTableJson(host);
@@ -244,15 +167,20 @@ void Run(const CalibrateArgs& args) {
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
-  std::printf("calibration of %s: %d jobs, R^2 %.3f, speed %.3f x the reference core\n", fit.costs.reference_cpu.c_str(),
-              fit.samples, fit.r2, speed);
-  std::printf("  %-18s %12s\n", "unit", "ns/unit");
-  std::printf("  %-18s %12.1f\n", "(per job)", fit.costs.ns.ns_per_job);
-  for (std::size_t u = 0; u < navstack::kWorkUnitNames.size(); ++u)
-    std::printf("  %-18s %12.4f\n", std::string(navstack::kWorkUnitNames[u]).c_str(), fit.costs.ns.ns_per_unit[u]);
-  std::printf("  %-12s %6s %12s %12s\n", "task", "jobs", "measured s", "model s");
-  for (const auto& [task, q] : fit.per_task)
-    std::printf("  %-12s %6d %12.3f %12.3f\n", task.c_str(), q.jobs, q.measured_s, q.predicted_s);
+  std::printf("calibration of %s: %d jobs, R^2 %.3f, speed %.3f x the reference core (load %.2f -> %.2f)\n",
+              fit.costs.reference_cpu.c_str(), fit.samples, fit.r2, run.relative_speed, run.load_before,
+              run.load_after);
+  std::printf("  %-22s %12s %7s %7s\n", "coefficient", "ns", "jobs", "time %");
+  auto print_coefficient = [](const std::string& label, const board::CoefficientFit& c) {
+    std::printf("  %-22s %12.4f %7d %7.1f%s%s\n", label.c_str(), c.ns, c.jobs, 100 * c.share,
+                c.zero_reason.empty() ? "" : "  0: ", c.zero_reason.c_str());
+  };
+  for (const board::CoefficientFit& c : fit.overheads) print_coefficient("per job of " + c.name, c);
+  for (const board::CoefficientFit& c : fit.units) print_coefficient(c.name, c);
+  std::printf("  %-12s %7s %7s %12s %12s %9s\n", "task", "jobs", "R^2", "measured s", "model s", "residual");
+  for (const board::TaskFitQuality& q : fit.per_task)
+    std::printf("  %-12s %7d %7.3f %12.3f %12.3f %+8.1f%%\n", q.task.c_str(), q.jobs, q.r2, q.measured_s,
+                q.predicted_s, 100 * q.relative_residual());
   PrintBoardTable(host);
   if (!stored.empty()) std::printf("host calibration written to %s\n", stored.c_str());
 }

@@ -105,7 +105,32 @@ ReferenceCosts ParseReferenceCosts(const std::string& yaml_text, const std::stri
   ReferenceCosts r;
   r.reference_cpu = Get<std::string>(root, "reference_cpu", source);
   r.calibration_id = Get<std::string>(root, "calibration_id", source);
-  r.ns.ns_per_job = Get<double>(root, "ns_per_job", source);
+  // One overhead per task; the format before them had one number for all.
+  const YAML::Node jobs = root["ns_per_job"];
+  if (!jobs) Fail(source, root, "ns_per_job", "missing");
+  if (!jobs.IsMap())
+    Fail(source, jobs, "ns_per_job",
+         "must map each task (perception, planning, collision, difference, eci, adapter) to its ns per job; a "
+         "single number is the format before per-task overheads: refit with `enavi calibrate --write-reference`");
+  for (std::size_t t = 0; t < navstack::kTaskNames.size(); ++t) {
+    const std::string key(navstack::kTaskNames[t]);
+    const std::string field = "ns_per_job." + key;
+    const YAML::Node v = jobs[key];
+    if (!v) Fail(source, jobs, field, "missing");
+    double ns = 0;
+    try {
+      ns = v.as<double>();
+    } catch (const YAML::Exception&) {
+      Fail(source, v, field, "wrong type");
+    }
+    if (!std::isfinite(ns) || ns < 0) Fail(source, v, field, "must be finite and >= 0");
+    r.ns.ns_per_job[t] = ns;
+  }
+  for (const auto& kv : jobs) {
+    const std::string key = kv.first.as<std::string>();
+    if (std::find(navstack::kTaskNames.begin(), navstack::kTaskNames.end(), key) == navstack::kTaskNames.end())
+      Fail(source, kv.first, "ns_per_job." + key, "unknown task");
+  }
   const YAML::Node units = root["ns_per_unit"];
   if (!units || !units.IsMap()) Fail(source, root, "ns_per_unit", "missing or not a map");
   for (const auto& kv : units) {
@@ -130,7 +155,7 @@ navstack::WorkCountCostModel::Coefficients BoardCoefficients(const BoardProfile&
                                                              const ReferenceCosts& reference) {
   navstack::WorkCountCostModel::Coefficients c = reference.ns;
   const double slowdown = 1.0 / board.per_core_speed;
-  c.ns_per_job *= slowdown;
+  for (double& v : c.ns_per_job) v *= slowdown;
   for (double& v : c.ns_per_unit) v *= slowdown;
   return c;
 }

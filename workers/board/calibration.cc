@@ -1,56 +1,182 @@
 #include "workers/board/calibration.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <stdexcept>
+
+#include <Eigen/Dense>
 
 #include "workers/board/nnls.h"
 
 namespace enavi::board {
 
 namespace {
+
 constexpr int kUnits = static_cast<int>(navstack::WorkUnit::kCount);
+constexpr int kTasks = navstack::kTaskCount;
+constexpr int kColumns = kUnits + kTasks;  // units first, then one indicator per task
+
+std::string ColumnName(int j) {
+  return std::string(j < kUnits ? navstack::kWorkUnitNames[j] : navstack::kTaskNames[j - kUnits]);
 }
 
+std::string Number(double v, const char* format) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+// A task whose jobs all count the same positive amount of a unit no other task counts: its
+// per-job column is that unit's column over the count, so the two cannot be told apart. Returns
+// the unit, or -1.
+int UnitTiedToTask(const Eigen::MatrixXd& A, const std::vector<JobSample>& samples, int task) {
+  for (int u = 0; u < kUnits; ++u) {
+    double count = -1;
+    bool tied = true;
+    for (std::size_t i = 0; i < samples.size() && tied; ++i) {
+      const bool mine = static_cast<int>(samples[i].task) == task;
+      if (!mine) {
+        tied = A(i, u) == 0;
+      } else if (count < 0) {
+        count = A(i, u);
+        tied = count > 0;
+      } else {
+        tied = A(i, u) == count;
+      }
+    }
+    if (tied && count > 0) return u;
+  }
+  return -1;
+}
+
+// Why NNLS left column `j` (of the scaled matrix `As`, active columns `cols`) at 0: collinear with
+// the columns that carry cost, or its free least-squares estimate is negative or within noise.
+std::string ZeroReason(const Eigen::MatrixXd& As, const Eigen::VectorXd& b, const Eigen::VectorXd& x,
+                       const std::vector<int>& cols, const Eigen::VectorXd& scale, int k) {
+  std::vector<int> positive;
+  for (int m = 0; m < static_cast<int>(cols.size()); ++m)
+    if (x[m] > 0) positive.push_back(m);
+  Eigen::MatrixXd P(As.rows(), positive.size());
+  for (std::size_t m = 0; m < positive.size(); ++m) P.col(m) = As.col(positive[m]);
+  // Collinear: the column is (nearly) a combination of the columns that carry cost.
+  if (!positive.empty()) {
+    const Eigen::VectorXd w = P.colPivHouseholderQr().solve(As.col(k));
+    const double rel = (P * w - As.col(k)).norm() / std::max(As.col(k).norm(), 1e-300);
+    if (rel < 0.02) {
+      std::vector<std::pair<double, int>> parts;
+      for (std::size_t m = 0; m < positive.size(); ++m) parts.push_back({-std::abs(w[m]), cols[positive[m]]});
+      std::sort(parts.begin(), parts.end());
+      std::string with;
+      for (std::size_t m = 0; m < std::min<std::size_t>(2, parts.size()); ++m)
+        with += (m ? " and " : "") + ColumnName(parts[m].second);
+      return "collinear with " + with + " (" + Number(100 * rel, "%.1f") +
+             " % of its variation is not explained by them): their coefficients carry its cost";
+    }
+  }
+  // Otherwise free least squares with the column added: its estimate and standard error.
+  Eigen::MatrixXd Q(As.rows(), positive.size() + 1);
+  Q << P, As.col(k);
+  const Eigen::VectorXd z = Q.colPivHouseholderQr().solve(b);
+  const double dof = std::max<double>(1, static_cast<double>(As.rows() - Q.cols()));
+  const double sigma2 = (Q * z - b).squaredNorm() / dof;
+  const Eigen::MatrixXd cov = sigma2 * (Q.transpose() * Q).inverse();
+  const int last = static_cast<int>(Q.cols()) - 1;
+  const double est = z[last] / scale[k];
+  const double se = std::sqrt(std::max(0.0, cov(last, last))) / scale[k];
+  const std::string free_fit = "free least squares gives " + Number(est, "%.3g") + " +- " + Number(se, "%.2g") + " ns";
+  // Clearly negative: the other coefficients of the same jobs already over-price them, i.e. the
+  // linear model does not fit these jobs (e.g. one unit costing differently in two methods).
+  if (est + 2 * se < 0) return "the data wants it negative (" + free_fit + "): the same jobs' other units over-price them";
+  return "too small to see (" + free_fit + ", not above 0)";
+}
+
+}  // namespace
+
 CostFit FitCosts(const std::vector<JobSample>& samples) {
-  // One coefficient per unit and no per-job intercept: the eci's pixel count never varies, so an
-  // intercept would absorb its whole cost and charge it to every other task's jobs.
-  const int n_coef = kUnits;
-  if (static_cast<int>(samples.size()) < 2 * n_coef)
-    throw std::invalid_argument("calibration: " + std::to_string(samples.size()) + " job samples, need at least " +
-                                std::to_string(2 * n_coef));
-  Eigen::MatrixXd A(samples.size(), n_coef);
-  Eigen::VectorXd b(samples.size());
-  for (std::size_t i = 0; i < samples.size(); ++i) {
+  const int n = static_cast<int>(samples.size());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, kColumns);
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) {
     for (int u = 0; u < kUnits; ++u) A(i, u) = static_cast<double>(samples[i].work.n[u]);
+    A(i, kUnits + static_cast<int>(samples[i].task)) = 1.0;
     b[i] = samples[i].host_cpu_s * 1e9;
   }
-  // Unit-norm columns: counts span 1 to 1e6, which would otherwise swamp the solver's tolerance.
-  Eigen::VectorXd scale(n_coef);
-  for (int j = 0; j < n_coef; ++j) {
-    const double norm = A.col(j).norm();
-    scale[j] = norm > 0 ? norm : 1.0;
-    A.col(j) /= scale[j];
+
+  // Columns the data can price: used by some job, and not a task overhead tied to a unit.
+  std::vector<std::string> reason(kColumns);
+  for (int j = 0; j < kColumns; ++j)
+    if (A.col(j).isZero()) reason[j] = j < kUnits ? "no job counted it" : "no job of this task in the sample";
+  for (int t = 0; t < kTasks; ++t) {
+    if (!reason[kUnits + t].empty()) continue;
+    const int u = UnitTiedToTask(A, samples, t);
+    if (u >= 0)
+      reason[kUnits + t] = "not separable from " + ColumnName(u) + ": every " + ColumnName(kUnits + t) + " job counts " +
+                           Number(A.col(u).maxCoeff(), "%.0f") + " of it, whose price carries the per-job cost";
   }
-  const NnlsResult nnls = SolveNnls(A, b);
+  std::vector<int> cols;
+  for (int j = 0; j < kColumns; ++j)
+    if (reason[j].empty()) cols.push_back(j);
+  const int n_coef = static_cast<int>(cols.size());
+  if (n < 2 * std::max(n_coef, 1))
+    throw std::invalid_argument("calibration: " + std::to_string(n) + " job samples, need at least " +
+                                std::to_string(2 * std::max(n_coef, 1)));
+
+  // Unit-norm columns: counts span 1 to 1e6, which would otherwise swamp the solver's tolerance.
+  Eigen::MatrixXd As(n, n_coef);
+  Eigen::VectorXd scale(n_coef);
+  for (int k = 0; k < n_coef; ++k) {
+    As.col(k) = A.col(cols[k]);
+    scale[k] = As.col(k).norm();
+    As.col(k) /= scale[k];
+  }
+  const NnlsResult nnls = SolveNnls(As, b);
   if (!nnls.converged) throw std::runtime_error("calibration: the cost fit did not converge");
-  const Eigen::VectorXd coef = nnls.x.cwiseQuotient(scale);
+  Eigen::VectorXd coef = Eigen::VectorXd::Zero(kColumns);
+  for (int k = 0; k < n_coef; ++k) coef[cols[k]] = nnls.x[k] / scale[k];
+  for (int k = 0; k < n_coef; ++k)
+    if (nnls.x[k] <= 0) reason[cols[k]] = ZeroReason(As, b, nnls.x, cols, scale, k);
 
   CostFit fit;
-  fit.samples = static_cast<int>(samples.size());
-  fit.costs.ns.ns_per_job = 0.0;
-  for (int u = 0; u < kUnits; ++u) {
-    fit.costs.ns.ns_per_unit[u] = coef[u];
-    if (A.col(u).isZero()) fit.unobserved_units.emplace_back(navstack::kWorkUnitNames[u]);
-  }
-  const Eigen::VectorXd predicted = A * nnls.x;
-  const double mean = b.mean();
-  const double ss_tot = (b.array() - mean).square().sum();
+  fit.samples = n;
+  const Eigen::VectorXd predicted = A * coef;
+  const double total = b.sum();
+  const double ss_tot = (b.array() - b.mean()).square().sum();
   fit.r2 = ss_tot > 0 ? 1.0 - (b - predicted).squaredNorm() / ss_tot : 0.0;
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    TaskFitQuality& q = fit.per_task[std::string(navstack::TaskName(samples[i].task))];
-    ++q.jobs;
-    q.measured_s += samples[i].host_cpu_s;
-    q.predicted_s += predicted[i] * 1e-9;
+  for (int j = 0; j < kColumns; ++j) {
+    CoefficientFit c;
+    c.name = ColumnName(j);
+    c.ns = coef[j];
+    c.jobs = static_cast<int>((A.col(j).array() != 0).count());
+    c.share = total > 0 ? coef[j] * A.col(j).sum() / total : 0.0;
+    if (coef[j] <= 0) c.zero_reason = reason[j];
+    if (j < kUnits) {
+      fit.costs.ns.ns_per_unit[j] = coef[j];
+      fit.units.push_back(c);
+    } else {
+      fit.costs.ns.ns_per_job[j - kUnits] = coef[j];
+      fit.overheads.push_back(c);
+    }
+  }
+  for (int t = 0; t < kTasks; ++t) {
+    TaskFitQuality q;
+    q.task = ColumnName(kUnits + t);
+    double sum = 0, ss_res = 0;
+    for (int i = 0; i < n; ++i) {
+      if (static_cast<int>(samples[i].task) != t) continue;
+      ++q.jobs;
+      q.measured_s += b[i] * 1e-9;
+      q.predicted_s += predicted[i] * 1e-9;
+      sum += b[i];
+      ss_res += (b[i] - predicted[i]) * (b[i] - predicted[i]);
+    }
+    if (q.jobs == 0) continue;
+    double ss = 0;
+    for (int i = 0; i < n; ++i)
+      if (static_cast<int>(samples[i].task) == t) ss += (b[i] - sum / q.jobs) * (b[i] - sum / q.jobs);
+    q.r2 = ss > 0 ? 1.0 - ss_res / ss : 0.0;
+    fit.per_task.push_back(q);
   }
   return fit;
 }
@@ -67,12 +193,17 @@ double RelativeSpeed(const std::vector<JobSample>& samples, const ReferenceCosts
 }
 
 std::string ReferenceCostsYaml(const ReferenceCosts& costs, const std::string& comment) {
-  std::string out = "# " + comment + "\n";
+  std::string out;
+  std::istringstream lines(comment);
+  for (std::string line; std::getline(lines, line);) out += "# " + line + "\n";
   out += "reference_cpu: \"" + costs.reference_cpu + "\"\n";
   out += "calibration_id: \"" + costs.calibration_id + "\"\n";
   char line[160];
-  std::snprintf(line, sizeof line, "ns_per_job: %.1f\n", costs.ns.ns_per_job);
-  out += line;
+  out += "ns_per_job:\n";
+  for (int t = 0; t < kTasks; ++t) {
+    std::snprintf(line, sizeof line, "  %s: %.1f\n", std::string(navstack::kTaskNames[t]).c_str(), costs.ns.ns_per_job[t]);
+    out += line;
+  }
   out += "ns_per_unit:\n";
   for (int u = 0; u < kUnits; ++u) {
     std::snprintf(line, sizeof line, "  %s: %.4f\n", std::string(navstack::kWorkUnitNames[u]).c_str(),

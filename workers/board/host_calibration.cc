@@ -58,7 +58,8 @@ void SaveHostCalibration(const HostCalibration& c, const std::string& path) {
   j["reference_calibration_id"] = c.reference_calibration_id;
   j["samples"] = c.samples;
   j["r2"] = c.r2;
-  j["fitted"]["ns_per_job"] = c.fitted.ns_per_job;
+  for (std::size_t t = 0; t < navstack::kTaskNames.size(); ++t)
+    j["fitted"]["ns_per_job"][std::string(navstack::kTaskNames[t])] = c.fitted.ns_per_job[t];
   for (std::size_t u = 0; u < navstack::kWorkUnitNames.size(); ++u)
     j["fitted"]["ns_per_unit"][std::string(navstack::kWorkUnitNames[u])] = c.fitted.ns_per_unit[u];
   for (const auto& [task, t] : c.tasks)
@@ -87,7 +88,8 @@ HostCalibration LoadHostCalibration(const std::string& path) {
   const int version = Field<int>(j, "version", path);
   if (version != HostCalibration::kFormatVersion)
     throw std::invalid_argument(path + ": field 'version' is " + std::to_string(version) + ", this build reads " +
-                                std::to_string(HostCalibration::kFormatVersion));
+                                std::to_string(HostCalibration::kFormatVersion) +
+                                " (since version 2 the fit has one ns per job for each task)");
   HostCalibration c;
   c.relative_speed = Field<double>(j, "relative_speed", path);
   if (!(c.relative_speed > 0.01 && c.relative_speed < 100))
@@ -100,7 +102,13 @@ HostCalibration LoadHostCalibration(const std::string& path) {
   c.samples = Field<int>(j, "samples", path);
   c.r2 = Field<double>(j, "r2", path);
   const nlohmann::json fitted = Field<nlohmann::json>(j, "fitted", path);
-  c.fitted.ns_per_job = Field<double>(fitted, "ns_per_job", path + ": fitted");
+  const nlohmann::json jobs = Field<nlohmann::json>(fitted, "ns_per_job", path + ": fitted");
+  for (std::size_t t = 0; t < navstack::kTaskNames.size(); ++t) {
+    const std::string name(navstack::kTaskNames[t]);
+    c.fitted.ns_per_job[t] = Field<double>(jobs, name, path + ": fitted.ns_per_job");
+    if (!(c.fitted.ns_per_job[t] >= 0))
+      throw std::invalid_argument(path + ": fitted.ns_per_job." + name + " is negative");
+  }
   const nlohmann::json units = Field<nlohmann::json>(fitted, "ns_per_unit", path + ": fitted");
   for (std::size_t u = 0; u < navstack::kWorkUnitNames.size(); ++u) {
     const std::string name(navstack::kWorkUnitNames[u]);

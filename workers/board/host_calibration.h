@@ -26,7 +26,8 @@ struct TaskTiming {
 };
 
 struct HostCalibration {
-  static constexpr int kFormatVersion = 1;
+  /// 2: one ns per job per task (version 1 had one for all, and is refused: calibrate again).
+  static constexpr int kFormatVersion = 2;
   /// This host's single-core speed relative to the reference core (> 1: faster).
   double relative_speed = 1.0;
   /// The cost model fitted on this host (ns per unit on THIS host's cores).

@@ -203,9 +203,11 @@ int RunNavstackChild(const ChildArgs& a) {
   auto publish_stats = [&] {
     const auto all = exec.AllStats();
     const auto wall = exec.ExecutionWallSeconds();
+    const auto lags = exec.ReleaseLags();
     for (int i = 0; i < navstack::kTaskCount; ++i) {
       stats->tasks[i] = all[i];
       stats->execution_wall_s[i] = wall[i];
+      stats->release_lags[i] = lags[i];
     }
     {
       std::lock_guard l(model_mutex);

@@ -718,6 +718,15 @@ NavAccounting EmulatedNavLink::Accounting() const {
         "the virtual clock's cost model prices the same jobs at this fraction of their measured board time: " +
         cost_check;
   }
+  std::string lags;
+  for (int i = 0; i < navstack::kTaskCount; ++i)
+    if (s.release_lags[i] > 0)
+      lags += (lags.empty() ? "" : ", ") + std::string(navstack::TaskName(static_cast<navstack::TaskId>(i))) + " " +
+              std::to_string(s.release_lags[i]);
+  acc.notes["emulation.release_lag"] =
+      (lags.empty() ? std::string("none") : lags) +
+      " (release instants the release thread reached after the next was due, no job active: not counted as released "
+      "or missed)";
   acc.notes["emulation.lock"] = std::to_string(s.lock.commits) + " commits waited " +
                                 Fixed(1e3 * s.lock.commit_wait_s, 1) + " ms in total (longest " +
                                 Fixed(1e3 * s.lock.commit_wait_max_s, 1) + " ms wall) for running jobs";

@@ -87,6 +87,8 @@ struct StatsWire {
   /// What the virtual clock's cost model charges for the same jobs on this board (their work
   /// counts priced per unit), board seconds: the in-situ check of the cost model.
   double model_board_s[navstack::kTaskCount] = {};
+  /// Release instants reached late with no job active (RealtimeExecutor::ReleaseLags).
+  std::int64_t release_lags[navstack::kTaskCount] = {};
   double child_now = 0;            ///< the stack's sim time at this snapshot
   std::int64_t frames_received = 0;
   std::int64_t frames_dropped = 0;  ///< published but overwritten before the stack took them

@@ -32,7 +32,8 @@ std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spe
   const auto coefficients = board::BoardCoefficients(board, reference);
   std::string bytes(reinterpret_cast<const char*>(coefficients.ns_per_unit.data()),
                     sizeof(double) * coefficients.ns_per_unit.size());
-  bytes.append(reinterpret_cast<const char*>(&coefficients.ns_per_job), sizeof(double));
+  bytes.append(reinterpret_cast<const char*>(coefficients.ns_per_job.data()),
+               sizeof(double) * coefficients.ns_per_job.size());
   notes["provenance.cost_model_sha256"] = api::Sha256Hex(bytes).substr(0, 16);
   notes["provenance.calibration_id"] = reference.calibration_id;
   return notes;

@@ -1,6 +1,8 @@
 #include "workers/board/calibration.h"
 
+#include <algorithm>
 #include <random>
+#include <stdexcept>
 
 #include <gtest/gtest.h>
 
@@ -33,23 +35,35 @@ TEST(NnlsTest, ClampsANegativeCoefficientToZero) {
   EXPECT_NEAR(r.x[0], 2.0, 1e-9) << "mean of b";
 }
 
-TEST(CalibrationTest, FitRecoversPerUnitCostsFromNoisyJobs) {
-  // Two tasks with different unit mixes, 3 % multiplicative timing noise.
+const CoefficientFit& Named(const std::vector<CoefficientFit>& group, const std::string& name) {
+  const auto it = std::find_if(group.begin(), group.end(), [&](const CoefficientFit& c) { return c.name == name; });
+  if (it == group.end()) throw std::logic_error("no coefficient " + name);
+  return *it;
+}
+
+TEST(CalibrationTest, FitRecoversPerUnitCostsAndPerTaskOverheadsFromNoisyJobs) {
+  // Two tasks with different unit mixes and overheads (30 us a perception job, 5 us a planning
+  // job), 3 % multiplicative timing noise; a tenth of the perception jobs find nothing to do.
   std::mt19937_64 rng(7);
   auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * ((rng() >> 11) * 0x1.0p-53); };
   std::vector<JobSample> samples;
   for (int i = 0; i < 400; ++i) {
     JobSample s;
     s.task = i % 2 ? TaskId::kPerception : TaskId::kPlanning;
+    double ns = 0;
     if (s.task == TaskId::kPerception) {
-      s.work.Add(WorkUnit::kRayStep, static_cast<std::int64_t>(uniform(1e5, 3e5)));
-      s.work.Add(WorkUnit::kVoxelUpdate, static_cast<std::int64_t>(uniform(1e4, 5e4)));
+      if (i % 20 != 1) {
+        s.work.Add(WorkUnit::kRayStep, static_cast<std::int64_t>(uniform(1e5, 3e5)));
+        s.work.Add(WorkUnit::kVoxelUpdate, static_cast<std::int64_t>(uniform(1e4, 5e4)));
+      }
+      ns = 30e3;
     } else {
       s.work.Add(WorkUnit::kDistanceCell, static_cast<std::int64_t>(uniform(1e5, 9e5)));
       s.work.Add(WorkUnit::kStateCheck, static_cast<std::int64_t>(uniform(1e3, 2e4)));
+      ns = 5e3;
     }
-    const double ns = 17.0 * s.work.Get(WorkUnit::kRayStep) + 48.0 * s.work.Get(WorkUnit::kVoxelUpdate) +
-                      20.0 * s.work.Get(WorkUnit::kDistanceCell) + 150.0 * s.work.Get(WorkUnit::kStateCheck);
+    ns += 17.0 * s.work.Get(WorkUnit::kRayStep) + 48.0 * s.work.Get(WorkUnit::kVoxelUpdate) +
+          20.0 * s.work.Get(WorkUnit::kDistanceCell) + 150.0 * s.work.Get(WorkUnit::kStateCheck);
     s.host_cpu_s = ns * 1e-9 * uniform(0.97, 1.03);
     samples.push_back(s);
   }
@@ -59,13 +73,93 @@ TEST(CalibrationTest, FitRecoversPerUnitCostsFromNoisyJobs) {
   EXPECT_NEAR(c[static_cast<int>(WorkUnit::kVoxelUpdate)], 48.0, 4.0);
   EXPECT_NEAR(c[static_cast<int>(WorkUnit::kDistanceCell)], 20.0, 1.0);
   EXPECT_NEAR(c[static_cast<int>(WorkUnit::kStateCheck)], 150.0, 15.0);
+  // The empty perception jobs pin the overhead; the 3 % noise of the full ones (150-400 us a
+  // job, ten times the overhead) leaves it known to a quarter.
+  EXPECT_NEAR(fit.costs.ns.ns_per_job[static_cast<int>(TaskId::kPerception)], 30e3, 8e3);
   EXPECT_GT(fit.r2, 0.99);
   EXPECT_EQ(c[static_cast<int>(WorkUnit::kPixel)], 0.0);
-  EXPECT_NE(std::find(fit.unobserved_units.begin(), fit.unobserved_units.end(), "pixel"), fit.unobserved_units.end());
-  // A reference twice as slow per unit: this host is 2x faster.
+  EXPECT_EQ(Named(fit.units, "pixel").zero_reason, "no job counted it");
+  EXPECT_EQ(Named(fit.overheads, "eci").zero_reason, "no job of this task in the sample");
+  EXPECT_EQ(Named(fit.units, "ray_step").jobs, 180);
+  EXPECT_TRUE(Named(fit.units, "ray_step").zero_reason.empty());
+  // Shares add up to the explained time; per-task figures cover every job.
+  double share = 0;
+  for (const auto* group : {&fit.units, &fit.overheads})
+    for (const CoefficientFit& x : *group) share += x.share;
+  EXPECT_NEAR(share, 1.0, 0.01);
+  ASSERT_EQ(fit.per_task.size(), 2u);
+  EXPECT_EQ(fit.per_task[0].task, "perception");
+  EXPECT_EQ(fit.per_task[0].jobs, 200);
+  EXPECT_GT(fit.per_task[0].r2, 0.99);
+  EXPECT_NEAR(fit.per_task[1].relative_residual(), 0.0, 0.01);
+  // A reference twice as slow per unit and per job: this host is 2x faster.
   ReferenceCosts slow = fit.costs;
   for (double& v : slow.ns.ns_per_unit) v *= 2.0;
+  for (double& v : slow.ns.ns_per_job) v *= 2.0;
   EXPECT_NEAR(RelativeSpeed(samples, slow), 2.0, 0.05);
+}
+
+TEST(CalibrationTest, ATaskWhoseJobsAllCountTheSameOfItsOwnUnitLeavesTheCostToTheUnit) {
+  // Every eci job bins the same 76,800 pixels: its per-job column is the pixel column / 76,800.
+  std::vector<JobSample> samples;
+  for (int i = 0; i < 100; ++i) {
+    JobSample eci;
+    eci.task = TaskId::kEci;
+    eci.work.Add(WorkUnit::kPixel, 76800);
+    eci.host_cpu_s = (76800 * 0.6 + 2000) * 1e-9 * (1 + 0.01 * (i % 3));
+    JobSample col;
+    col.task = TaskId::kCollision;
+    col.work.Add(WorkUnit::kCellProbe, 1000 + 37 * i);
+    col.host_cpu_s = (9.0 * (1000 + 37 * i) + 4000) * 1e-9;
+    samples.push_back(eci);
+    samples.push_back(col);
+  }
+  const CostFit fit = FitCosts(samples);
+  EXPECT_EQ(fit.costs.ns.ns_per_job[static_cast<int>(TaskId::kEci)], 0.0);
+  EXPECT_NEAR(fit.costs.ns.ns_per_unit[static_cast<int>(WorkUnit::kPixel)], 0.6 + 2000.0 / 76800, 0.02);
+  EXPECT_NE(Named(fit.overheads, "eci").zero_reason.find("not separable from pixel"), std::string::npos)
+      << Named(fit.overheads, "eci").zero_reason;
+  EXPECT_NEAR(fit.costs.ns.ns_per_job[static_cast<int>(TaskId::kCollision)], 4000.0, 1.0);
+  EXPECT_NEAR(fit.costs.ns.ns_per_unit[static_cast<int>(WorkUnit::kCellProbe)], 9.0, 1e-3);
+}
+
+TEST(CalibrationTest, AZeroCoefficientSaysWhy) {
+  // Collision jobs: cell probes cost 9 ns; trajectory samples always come 4 per probe (collinear
+  // with them); the planning jobs' state checks cost nothing above noise.
+  std::mt19937_64 rng(3);
+  auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * ((rng() >> 11) * 0x1.0p-53); };
+  std::vector<JobSample> samples;
+  for (int i = 0; i < 300; ++i) {
+    JobSample s;
+    s.task = TaskId::kCollision;
+    const auto probes = static_cast<std::int64_t>(uniform(1e3, 1e5));
+    s.work.Add(WorkUnit::kCellProbe, probes);
+    s.work.Add(WorkUnit::kTrajectorySample, 4 * probes);
+    s.host_cpu_s = 45.0 * probes * 1e-9 * uniform(0.98, 1.02);
+    JobSample p;
+    p.task = TaskId::kPlanning;
+    const auto cells = static_cast<std::int64_t>(uniform(1e5, 1e6));
+    p.work.Add(WorkUnit::kDistanceCell, cells);
+    p.work.Add(WorkUnit::kStateCheck, static_cast<std::int64_t>(uniform(1, 100)));
+    p.host_cpu_s = 20.0 * cells * 1e-9 * uniform(0.98, 1.02);
+    samples.push_back(s);
+    samples.push_back(p);
+  }
+  const CostFit fit = FitCosts(samples);
+  const CoefficientFit& probe = Named(fit.units, "cell_probe");
+  const CoefficientFit& sample = Named(fit.units, "trajectory_sample");
+  // Exactly one of the pair carries the 45 ns per probe; the other is 0, collinear with it.
+  ASSERT_TRUE((probe.ns == 0) != (sample.ns == 0)) << probe.ns << " " << sample.ns;
+  const CoefficientFit& zero = probe.ns == 0 ? probe : sample;
+  EXPECT_NE(zero.zero_reason.find("collinear with " + (probe.ns == 0 ? sample.name : probe.name)), std::string::npos)
+      << zero.zero_reason;
+  const CoefficientFit& check = Named(fit.units, "state_check");
+  if (check.ns == 0) {
+    EXPECT_NE(check.zero_reason.find("too small to see (free least squares gives"), std::string::npos)
+        << check.zero_reason;
+  } else {
+    EXPECT_LT(check.ns, 2000.0) << "1-100 checks hidden in 2 % noise of 2-20 ms jobs";
+  }
 }
 
 TEST(CalibrationTest, TooFewSamplesIsAnError) {
@@ -108,12 +202,44 @@ TEST(BoardProfileTest, BadProfileNamesFileLineAndField) {
   }
 }
 
+TEST(BoardProfileTest, ReferenceCostsWithOneOverheadForAllTasksNameFileAndField) {
+  const std::string old_format = "reference_cpu: \"X\"\ncalibration_id: \"1\"\nns_per_job: 0.0\nns_per_unit:\n  pixel: 0.5\n";
+  try {
+    ParseReferenceCosts(old_format, "ref.yaml");
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("ref.yaml:3: ns_per_job: must map each task"), std::string::npos) << e.what();
+  }
+  const std::string missing_task =
+      "reference_cpu: \"X\"\ncalibration_id: \"1\"\nns_per_job:\n  perception: 1.0\nns_per_unit:\n  pixel: 0.5\n";
+  try {
+    ParseReferenceCosts(missing_task, "ref.yaml");
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("ns_per_job.planning: missing"), std::string::npos) << e.what();
+  }
+}
+
+TEST(BoardProfileTest, TheReferenceCostsFileReadsBackWhatTheFitWrites) {
+  ReferenceCosts costs;
+  costs.reference_cpu = "AMD EPYC";
+  costs.calibration_id = "42-7";
+  costs.ns.ns_per_job[static_cast<int>(TaskId::kAdapter)] = 1234.5;
+  costs.ns.ns_per_unit[static_cast<int>(WorkUnit::kRayStep)] = 18.25;
+  const ReferenceCosts back = ParseReferenceCosts(ReferenceCostsYaml(costs, "two\nlines"), "written.yaml");
+  EXPECT_EQ(back.calibration_id, "42-7");
+  EXPECT_EQ(back.ns.ns_per_job, costs.ns.ns_per_job);
+  EXPECT_EQ(back.ns.ns_per_unit, costs.ns.ns_per_unit);
+}
+
 TEST(BoardProfileTest, CoefficientsScaleWithPerCoreSpeed) {
   ReferenceCosts ref;
   ref.ns.ns_per_unit[static_cast<int>(WorkUnit::kRayStep)] = 10.0;
+  ref.ns.ns_per_job[static_cast<int>(TaskId::kPlanning)] = 3000.0;
   BoardProfile b;
   b.per_core_speed = 0.5;
   EXPECT_DOUBLE_EQ(BoardCoefficients(b, ref).ns_per_unit[static_cast<int>(WorkUnit::kRayStep)], 20.0);
+  EXPECT_DOUBLE_EQ(BoardCoefficients(b, ref).ns_per_job[static_cast<int>(TaskId::kPlanning)], 6000.0);
 }
 
 }  // namespace

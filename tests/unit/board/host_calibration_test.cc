@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 
@@ -29,6 +30,7 @@ class HostCalibrationTest : public ::testing::Test {
     HostCalibration c;
     c.relative_speed = 1.25;
     c.fitted.ns_per_unit[static_cast<int>(navstack::WorkUnit::kRayStep)] = 21.5;
+    c.fitted.ns_per_job[static_cast<int>(navstack::TaskId::kCollision)] = 3500.0;
     c.samples = 1234;
     c.r2 = 0.93;
     c.cpu_model = "Test CPU 9000";
@@ -50,6 +52,8 @@ TEST_F(HostCalibrationTest, SaveLoadRoundTrip) {
   const HostCalibration c = LoadHostCalibration(path);
   EXPECT_EQ(c.relative_speed, 1.25);
   EXPECT_EQ(c.fitted.ns_per_unit[static_cast<int>(navstack::WorkUnit::kRayStep)], 21.5);
+  EXPECT_EQ(c.fitted.ns_per_job[static_cast<int>(navstack::TaskId::kCollision)], 3500.0);
+  EXPECT_EQ(c.fitted.ns_per_job[static_cast<int>(navstack::TaskId::kPlanning)], 0.0);
   EXPECT_EQ(c.samples, 1234);
   EXPECT_EQ(c.cpu_model, "Test CPU 9000");
   EXPECT_EQ(c.kernel, "6.1.0-test");
@@ -97,7 +101,7 @@ TEST_F(HostCalibrationTest, CorruptFileIsInvalidWithTheFieldNamed) {
   const std::string path = Path("c.json");
   {
     std::ofstream out(path);
-    out << R"({"format": "enavi-host-calibration", "version": 1, "relative_speed": -3})";
+    out << R"({"format": "enavi-host-calibration", "version": 2, "relative_speed": -3})";
   }
   const CalibrationCheck check = CheckHostCalibration(path, "Test CPU 9000", "ref-1");
   EXPECT_EQ(check.status, CalibrationCheck::Status::kInvalid);
@@ -107,6 +111,39 @@ TEST_F(HostCalibrationTest, CorruptFileIsInvalidWithTheFieldNamed) {
     out << "not json";
   }
   EXPECT_THROW(LoadHostCalibration(path), std::invalid_argument);
+}
+
+// A file from before per-task overheads (version 1: one ns_per_job for all tasks) is refused,
+// naming the file and the field, with the command that rewrites it.
+TEST_F(HostCalibrationTest, FileWithOneOverheadForAllTasksIsRefusedNamingFileAndField) {
+  const std::string path = Path("old.json");
+  const std::string fitted = R"("fitted": {"ns_per_job": 0.0, "ns_per_unit": {}})";
+  {
+    std::ofstream out(path);
+    out << R"({"format": "enavi-host-calibration", "version": 1, )" << fitted << "}";
+  }
+  const CalibrationCheck check = CheckHostCalibration(path, "Test CPU 9000", "ref-1");
+  EXPECT_EQ(check.status, CalibrationCheck::Status::kInvalid);
+  EXPECT_NE(check.message.find(path + ": field 'version' is 1"), std::string::npos) << check.message;
+  EXPECT_NE(check.message.find("enavi calibrate"), std::string::npos) << check.message;
+  // The same fit under the current version number: the per-task field is named.
+  SaveHostCalibration(Sample(), path);
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto at = text.find("\"ns_per_job\": {");
+  ASSERT_NE(at, std::string::npos) << text;
+  text.replace(at, text.find('}', at) - at + 1, "\"ns_per_job\": 0.0");
+  {
+    std::ofstream out(path);
+    out << text;
+  }
+  try {
+    LoadHostCalibration(path);
+    FAIL() << "a single ns_per_job must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": fitted.ns_per_job: field 'perception'"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST_F(HostCalibrationTest, PathPrecedenceFlagThenEnvThenXdgThenHome) {

@@ -1,0 +1,148 @@
+#include "workers/board/calibration_flights.h"
+
+#include <sys/utsname.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+
+#include "navstack/adapt/action_grid.h"
+#include "navstack/adapt/resolution_adapter.h"
+#include "navstack/rl/policy_io.h"
+#include "workers/sim/episode.h"
+
+namespace enavi::board {
+namespace {
+
+std::string UtcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+// The host calibration from this run's fit and job samples.
+HostCalibration MakeHostCalibration(const CostFit& fit, double speed, const ReferenceCosts& reference,
+                                    const std::vector<JobSample>& samples) {
+  HostCalibration cal;
+  cal.relative_speed = speed;
+  cal.fitted = fit.costs.ns;
+  cal.samples = fit.samples;
+  cal.r2 = fit.r2;
+  cal.cpu_model = HostCpuModel();
+  cal.kernel = HostKernel();
+  cal.date = UtcNow();
+  cal.reference_calibration_id = reference.calibration_id;
+  std::map<std::string, std::vector<double>> times;
+  for (const JobSample& s : samples) times[std::string(navstack::TaskName(s.task))].push_back(s.host_cpu_s);
+  for (auto& [task, t] : times) cal.tasks[task] = SummariseTimes(std::move(t));
+  return cal;
+}
+
+// A policy file for E-Navi's flights. Calibration prices work, not decisions: a freshly
+// initialised network costs what a trained one does. Removed when the run ends.
+class ScratchPolicy {
+ public:
+  ScratchPolicy()
+      : path_((std::filesystem::temp_directory_path() / ("enavi-calibrate-policy-" + std::to_string(getpid()) + ".json"))
+                  .string()) {
+    navstack::rl::SavePolicyFile(path_, navstack::rl::MakeFrequencyPolicy(navstack::ActionGrid(), 1));
+  }
+  ~ScratchPolicy() {
+    std::error_code ec;
+    std::filesystem::remove(path_, ec);
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+double LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double load = 0;
+  in >> load;
+  return load;
+}
+
+}  // namespace
+
+std::vector<CalibrationFlight> CalibrationPlan() {
+  // Each method flies each level of E-Navi's ladder once, on scenarios rotated so that no level
+  // is tied to one scene; fixed also runs difference detection on some flights (the baseline has
+  // none). E-Navi picks its own resolution (its adapter walks the ladder) and rates.
+  const std::vector<double> ladder = navstack::ResolutionAdapterOptions{}.ladder;
+  const std::vector<std::string> worlds = {"s1", "s2", "s3", "s4", "s5"};
+  const double f_dif[] = {0, 15, 0, 30};
+  std::vector<CalibrationFlight> plan;
+  for (std::size_t i = 0; i < ladder.size(); ++i) plan.push_back({"baseline", worlds[i % 5], ladder[i], 0});
+  for (std::size_t i = 0; i < ladder.size(); ++i)
+    plan.push_back({"fixed", worlds[(i + 2) % 5], ladder[i], f_dif[i % 4]});
+  for (const std::string& w : worlds) plan.push_back({"enavi", w, 0, 0});
+  return plan;
+}
+
+CalibrationRun RunCalibration(const CalibrationOptions& options) {
+  CalibrationRun run;
+  sim::EpisodeOptions episode;
+  episode.job_observer = [&](navstack::TaskId task, const navstack::WorkCounts& work, double cpu) {
+    run.samples.push_back({task, work, cpu});
+  };
+  const ScratchPolicy policy;
+  run.load_before = LoadAverage();
+  for (const CalibrationFlight& flight : CalibrationPlan()) {
+    api::EpisodeSpec spec;
+    spec.world = flight.world;
+    spec.seed = 1;
+    spec.board = "host";
+    spec.cost = "measured";
+    spec.timeout_s = options.episode_seconds;
+    spec.method = flight.method;
+    if (flight.method == "enavi") {
+      spec.policy = policy.path();
+      spec.overrides["strategy.explore"] = 1;  // sampled actions: rates across the policy's grid
+    }
+    if (flight.resolution > 0) spec.overrides["map.resolution"] = flight.resolution;
+    if (flight.method == "fixed") spec.overrides["rates.f_dif"] = flight.f_dif;
+    if (options.on_flight) options.on_flight(flight);
+    sim::RunEpisode(spec, episode);
+  }
+  run.load_after = LoadAverage();
+  run.fit = FitCosts(run.samples);
+  run.reference = LoadReferenceCosts();
+  run.relative_speed = RelativeSpeed(run.samples, run.reference);
+  run.fit.costs.reference_cpu = HostCpuModel();
+  char id[64];
+  std::snprintf(id, sizeof id, "%ld-%d", static_cast<long>(std::time(nullptr)), run.fit.samples);
+  run.fit.costs.calibration_id = id;
+  run.host = MakeHostCalibration(run.fit, run.relative_speed, run.reference, run.samples);
+  return run;
+}
+
+void WriteReferenceCosts(const std::string& path, const CalibrationRun& run) {
+  const CostFit& fit = run.fit;
+  utsname uts{};
+  uname(&uts);
+  char load[160];
+  std::snprintf(load, sizeof load, "Host load average (1 min) %.2f before the flights, %.2f after.", run.load_before,
+                run.load_after);
+  std::string comment = "Nanoseconds per job of each task and per work unit on the reference core, fitted by\n"
+                        "`enavi calibrate --write-reference` on " + fit.costs.reference_cpu + " (" + uts.release +
+                        "), R^2 " + std::to_string(fit.r2) + " over " + std::to_string(fit.samples) + " jobs of " +
+                        std::to_string(CalibrationPlan().size()) + " flights.\n" + load + "\n";
+  for (const std::vector<CoefficientFit>* group : {&fit.overheads, &fit.units})
+    for (const CoefficientFit& c : *group)
+      if (!c.zero_reason.empty())
+        comment += (group == &fit.units ? "" : "per job of ") + c.name + " = 0: " + c.zero_reason + "\n";
+  std::ofstream out(path);
+  out << ReferenceCostsYaml(fit.costs, comment);
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+}  // namespace enavi::board

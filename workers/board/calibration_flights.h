@@ -1,0 +1,53 @@
+#pragma once
+// `enavi calibrate`'s work (docs/design.md, "Time: two clocks"): fly the calibration plan on this
+// host with every job's host CPU time measured, fit the cost model to it, and derive this host's
+// speed against the reference core. The CLI only parses flags and prints.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "workers/board/calibration.h"
+#include "workers/board/host_calibration.h"
+
+namespace enavi::board {
+
+/// One calibration flight: a method on a world, at a map resolution (0: the method's own).
+struct CalibrationFlight {
+  std::string method;
+  std::string world;
+  double resolution = 0;
+  double f_dif = 0;  ///< difference detection rate (fixed only; 0 = off)
+};
+
+/// The flights `enavi calibrate` makes: every method (the baseline, fixed, E-Navi) and every
+/// level of E-Navi's resolution ladder (0.1-0.5 m), over all five scenarios, so that every unit
+/// of work and every task's per-job overhead varies independently enough to fit.
+std::vector<CalibrationFlight> CalibrationPlan();
+
+struct CalibrationOptions {
+  double episode_seconds = 15.0;  ///< sim seconds per flight
+  /// Called before each flight (progress output).
+  std::function<void(const CalibrationFlight&)> on_flight;
+};
+
+struct CalibrationRun {
+  std::vector<JobSample> samples;
+  CostFit fit;                ///< reference_cpu and calibration_id filled in for this host
+  ReferenceCosts reference;   ///< the embedded reference the speed was measured against
+  double relative_speed = 0;  ///< this host's core vs the reference core
+  HostCalibration host;       ///< what the host calibration file stores
+  /// The host's 1-minute load average before the first and after the last flight (/proc/loadavg):
+  /// other work on the host inflates measured job times, so a fit says what it was made under.
+  double load_before = 0, load_after = 0;
+};
+
+/// Flies the plan and fits. Throws if the fit cannot be made (too few samples).
+CalibrationRun RunCalibration(const CalibrationOptions& options);
+
+/// Writes the run's fit as a reference costs file (workers/board/profiles/reference_costs.yaml)
+/// with a header comment saying where, how and under what load it was fitted, and why any
+/// coefficient is 0. Throws std::runtime_error if the file cannot be written.
+void WriteReferenceCosts(const std::string& path, const CalibrationRun& run);
+
+}  // namespace enavi::board
