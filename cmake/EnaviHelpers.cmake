@@ -8,6 +8,7 @@ function(enavi_add_test name)
   endif()
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
+  target_compile_options(${name} PRIVATE ${ENAVI_TEST_COMPILE_OPTIONS})
   target_compile_definitions(${name} PRIVATE
     ENAVI_SOURCE_DIR="${PROJECT_SOURCE_DIR}" ENAVI_BINARY_DIR="${PROJECT_BINARY_DIR}")
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)

@@ -5,7 +5,8 @@
            every project header a library's sources include against the library's link closure
            (a target includes only its own headers and those of targets it links);
   depfiles: the compiler's dependency output (*.o.d under the build tree) of every navstack and
-           workers object, which also sees headers reached through other headers.
+           workers object, which also sees headers reached through other headers (a unity
+           build's object counts for the sources it includes).
 
 Exits 1 listing each violation as FILE:LINE: rule, 2 on bad arguments, 0 when the tree is clean.
 """
@@ -41,6 +42,8 @@ FORBIDDEN = {
     "workers": [(re.compile(r"^server/"), "workers includes server/")],
 }
 
+# The generated file a CMake unity build compiles in place of a target's sources.
+UNITY_SOURCE = re.compile(r"/Unity/unity_\d+_\w+\.\w+$")
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
 SOURCE_EXT = (".h", ".cc", ".cpp", ".hpp")
 
@@ -187,6 +190,11 @@ def check_depfile(path, source_root, build_root):
             resolved.append(os.path.normpath(os.path.join(anchor, d)))
     source_root = os.path.abspath(source_root)
     rel_source = os.path.relpath(os.path.abspath(resolved[0]), source_root)
+    if UNITY_SOURCE.search(resolved[0]):
+        # A unity object: its layer is that of the target's sources the generated file includes.
+        included = (os.path.relpath(os.path.abspath(p), source_root) for p in resolved[1:]
+                    if p.endswith((".cc", ".cpp")))
+        rel_source = next((r for r in included if layer_of(r)), rel_source)
     layer = layer_of(rel_source)
     if layer not in ("navstack", "workers"):
         return []

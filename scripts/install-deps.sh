@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config git ca-certificates
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev lld
   libbullet-dev libeigen3-dev liboctomap-dev libembree-dev
   cyclonedds-dev cyclonedds-tools
   libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev liblbfgs-dev

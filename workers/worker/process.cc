@@ -117,7 +117,7 @@ ChildProcess ChildProcess::Spawn(const SpawnOptions& options) {
     sigemptyset(&none);
     sigprocmask(SIG_SETMASK, &none, nullptr);
     signal(SIGPIPE, SIG_DFL);
-    if (options.memory_limit_bytes > 0) {
+    if (kAddressSpaceLimitApplies && options.memory_limit_bytes > 0) {
       const rlimit lim{static_cast<rlim_t>(options.memory_limit_bytes),
                        static_cast<rlim_t>(options.memory_limit_bytes)};
       if (setrlimit(RLIMIT_AS, &lim) != 0) ChildFail("setrlimit(RLIMIT_AS)");

@@ -89,6 +89,9 @@ WorkerStats Worker::stats() const {
 void Worker::Run() {
   spdlog::info("worker {}: {} slots, episode command: {} ...", options_.worker_id, options_.slots,
                options_.episode_command.front());
+  if (!kAddressSpaceLimitApplies && options_.limits.memory_bytes > 0) {
+    spdlog::warn("worker {}: {}", options_.worker_id, kAddressSpaceLimitOff);
+  }
   // Results finished before a restart go out again first.
   std::vector<std::string> problems;
   for (auto& m : spool_.LoadAll(&problems)) {

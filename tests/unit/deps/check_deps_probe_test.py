@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """scripts/check_deps.py fails on a planted upward include in a navstack probe and passes on a
 clean one, through both of its routes: the source scan and the compiler's dependency output
-(the probe is run through the compiler with -M, as the build does with -MD).
+(the probe is run through the compiler with -M, as the build does with -MD), the latter also
+with the probe compiled through a generated file that includes it, as in a unity build.
 
 Usage: check_deps_probe_test.py --checker PY --compiler CXX --source-dir REPO [--system-include DIR]...
 """
@@ -27,13 +28,21 @@ def make_tree(root, repo, probe_text):
         f.write(probe_text)
 
 
-def depfile_of(root, compiler, system_includes):
-    """The compiler's dependency output for the probe (headers it cannot find count as generated)."""
+def depfile_of(root, compiler, system_includes, unity):
+    """The compiler's dependency output for the probe (headers it cannot find count as generated);
+    unity: compiled through a generated file that includes it, as a CMake unity build does."""
+    source = os.path.join(root, "navstack", "probe", "probe.cc")
+    if unity:
+        unity_dir = os.path.join(root, "build", "navstack", "CMakeFiles", "probe.dir", "Unity")
+        os.makedirs(unity_dir)
+        with open(os.path.join(unity_dir, "unity_0_cxx.cxx"), "w") as f:
+            f.write(f'#include "{source}"\n')
+        source = os.path.join(unity_dir, "unity_0_cxx.cxx")
     out = os.path.join(root, "probe.cc.o.d")
     cmd = [compiler, "-std=c++20", "-M", "-MG", "-MT", "probe.cc.o", "-MF", out, "-I", root]
     for d in system_includes:
         cmd += ["-isystem", d]
-    cmd.append(os.path.join(root, "navstack", "probe", "probe.cc"))
+    cmd.append(source)
     subprocess.run(cmd, check=True, cwd=root)
     return out
 
@@ -64,17 +73,19 @@ def main():
         ('#include "navstack/runtime/task.h"\n#include "api/episode.h"\n', 0, "clean"),
     ]
     failures = []
+    routes = (("sources", False), ("depfiles", False), ("unity", True))
     for probe, expected, needle in cases:
-        with tempfile.TemporaryDirectory() as root:
-            make_tree(root, repo, probe)
-            depfile = depfile_of(root, args.compiler, args.system_include)
-            for only in ("sources", "depfiles"):
-                r = run_checker(args.checker, root, only, depfile if only == "depfiles" else None)
+        for route, unity in routes:
+            with tempfile.TemporaryDirectory() as root:
+                make_tree(root, repo, probe)
+                only = "sources" if route == "sources" else "depfiles"
+                depfile = depfile_of(root, args.compiler, args.system_include, unity) if only == "depfiles" else None
+                r = run_checker(args.checker, root, only, depfile)
                 report = r.stdout + r.stderr
                 ok = r.returncode == expected and needle in report
-                print(f"{'ok  ' if ok else 'FAIL'} {only:8} exit {r.returncode} (want {expected}) for {probe.strip()!r}")
+                print(f"{'ok  ' if ok else 'FAIL'} {route:8} exit {r.returncode} (want {expected}) for {probe.strip()!r}")
                 if not ok:
-                    failures.append(f"{only}: {probe.strip()!r}: exit {r.returncode}, wanted {expected} "
+                    failures.append(f"{route}: {probe.strip()!r}: exit {r.returncode}, wanted {expected} "
                                     f"and '{needle}' in:\n{report}")
     for f in failures:
         print(f, file=sys.stderr)

@@ -56,6 +56,7 @@ TEST_F(ProcessTest, DeathBySignalIsReported) {
 }
 
 TEST_F(ProcessTest, MemoryAndCpuLimitsAreApplied) {
+  if (!kAddressSpaceLimitApplies) GTEST_SKIP() << kAddressSpaceLimitOff;
   SpawnOptions o;
   o.memory_limit_bytes = std::int64_t{512} << 20;
   o.cpu_limit_s = 77;
@@ -63,6 +64,18 @@ TEST_F(ProcessTest, MemoryAndCpuLimitsAreApplied) {
   const auto [status, out] = Sh("ulimit -v; ulimit -t", o);
   ASSERT_TRUE(status.ok()) << status.Describe();
   EXPECT_EQ(out, "524288\n77\n");
+}
+
+// The sanitizer build's rule: the CPU limit still applies, the address-space limit does not (the
+// test's own process has none, so the child's is unlimited).
+TEST_F(ProcessTest, UnderAddressSanitizerOnlyTheCpuLimitIsApplied) {
+  if (kAddressSpaceLimitApplies) GTEST_SKIP() << "not an AddressSanitizer build";
+  SpawnOptions o;
+  o.memory_limit_bytes = std::int64_t{512} << 20;
+  o.cpu_limit_s = 77;
+  const auto [status, out] = Sh("ulimit -v; ulimit -t", o);
+  ASSERT_TRUE(status.ok()) << status.Describe();
+  EXPECT_EQ(out, "unlimited\n77\n");
 }
 
 TEST_F(ProcessTest, EnvironmentAndWorkingDirectoryAreSet) {
