@@ -7,6 +7,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "api/yaml_read.h"
+
 namespace enavi::board {
 
 // Generated from profiles/*.yaml by cmake/EmbedFiles.cmake.
@@ -16,28 +18,11 @@ namespace {
 
 constexpr const char* kReferenceFile = "reference_costs.yaml";
 
-[[noreturn]] void Fail(const std::string& source, const YAML::Node& node, const std::string& field,
-                       const std::string& reason) {
-  const int line = node.IsDefined() ? node.Mark().line + 1 : 0;
-  throw std::invalid_argument(source + ":" + std::to_string(line) + ": " + field + ": " + reason);
-}
+using api::YamlReader;
 
-template <typename T>
-T Get(const YAML::Node& parent, const char* key, const std::string& source) {
-  const YAML::Node n = parent[key];
-  if (!n) Fail(source, parent, key, "missing");
-  try {
-    return n.as<T>();
-  } catch (const YAML::Exception&) {
-    Fail(source, n, key, "wrong type");
-  }
-}
-
-double GetPositive(const YAML::Node& parent, const char* key, const std::string& source, double max) {
-  const double v = Get<double>(parent, key, source);
-  if (!std::isfinite(v) || v <= 0 || v > max)
-    Fail(source, parent[key], key, "must be in (0, " + std::to_string(max) + "], got " + std::to_string(v));
-  return v;
+// A positive number of at most `max`, "must be > 0.0 (got ...)" otherwise.
+double Positive(const YamlReader& r, const YamlReader::Map& m, const std::string& key, double max) {
+  return r.Range(m.Get(key), m.Field(key), 0.0, max, true);
 }
 
 }  // namespace
@@ -53,32 +38,28 @@ std::vector<std::string> KnownBoards() {
 }
 
 BoardProfile ParseBoardProfile(const std::string& yaml_text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw std::invalid_argument(source + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
+  const YamlReader r(source);
+  const YamlReader::Map top(r, r.Load(yaml_text), "",
+                            {"id", "name", "cpu", "cores", "clock_ghz", "memory_gb", "paper_gflops", "per_core_speed", "notes"});
   BoardProfile b;
-  b.id = Get<std::string>(root, "id", source);
-  b.name = Get<std::string>(root, "name", source);
-  b.cpu = Get<std::string>(root, "cpu", source);
-  const YAML::Node cores = root["cores"];
-  if (cores && cores.IsScalar() && cores.Scalar() == "auto") {
+  b.id = r.String(top.Get("id"), "id");
+  b.name = r.String(top.Get("name"), "name");
+  b.cpu = r.String(top.Get("cpu"), "cpu");
+  if (r.Scalar(top.Get("cores"), "cores") == "auto") {
     b.is_host = true;
     b.cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   } else {
-    b.cores = static_cast<int>(GetPositive(root, "cores", source, 256));
+    b.cores = static_cast<int>(r.Integer(top.Get("cores"), "cores"));
+    if (b.cores < 1 || b.cores > 256) r.Fail(top.Get("cores"), "cores", "must be in [1, 256] (got " + std::to_string(b.cores) + ")");
   }
-  if (root["clock_ghz"] && root["clock_ghz"].Scalar() != "auto")
-    b.clock_ghz = GetPositive(root, "clock_ghz", source, 10);
-  if (root["paper_gflops"] && !root["paper_gflops"].IsNull())
-    b.paper_gflops = GetPositive(root, "paper_gflops", source, 1e6);
-  const YAML::Node speed = root["per_core_speed"];
-  if (!speed) Fail(source, root, "per_core_speed", "missing");
-  b.per_core_speed = GetPositive(speed, "value", source, 100);
-  if (speed["benchmark"]) b.speed_benchmark = speed["benchmark"].as<std::string>();
-  if (root["notes"]) b.notes = root["notes"].as<std::string>();
+  if (top.Has("clock_ghz") && r.Scalar(top.Get("clock_ghz"), "clock_ghz") != "auto") b.clock_ghz = Positive(r, top, "clock_ghz", 10);
+  if (top.Has("memory_gb") && r.Scalar(top.Get("memory_gb"), "memory_gb") != "auto") Positive(r, top, "memory_gb", 1e6);
+  if (top.Has("paper_gflops") && !top.Get("paper_gflops").IsNull()) b.paper_gflops = Positive(r, top, "paper_gflops", 1e6);
+  const YamlReader::Map speed(r, top.Get("per_core_speed"), "per_core_speed",
+                              {"value", "benchmark", "board_score", "reference_score", "sources"});
+  b.per_core_speed = Positive(r, speed, "value", 100);
+  if (speed.Has("benchmark")) b.speed_benchmark = r.String(speed.Get("benchmark"), speed.Field("benchmark"), 4096);
+  if (top.Has("notes")) b.notes = r.String(top.Get("notes"), "notes", 65536);
   return b;
 }
 
@@ -96,52 +77,36 @@ BoardProfile LoadBoard(const std::string& id) {
 }
 
 ReferenceCosts ParseReferenceCosts(const std::string& yaml_text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw std::invalid_argument(source + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
-  ReferenceCosts r;
-  r.reference_cpu = Get<std::string>(root, "reference_cpu", source);
-  r.calibration_id = Get<std::string>(root, "calibration_id", source);
+  const YamlReader r(source);
+  const YamlReader::Map top(r, r.Load(yaml_text), "", {"reference_cpu", "calibration_id", "ns_per_job", "ns_per_unit"});
+  ReferenceCosts costs;
+  costs.reference_cpu = r.String(top.Get("reference_cpu"), "reference_cpu");
+  costs.calibration_id = r.String(top.Get("calibration_id"), "calibration_id");
+  constexpr double kMaxNs = 1e12;
   // One overhead per task; the format before them had one number for all.
-  const YAML::Node jobs = root["ns_per_job"];
-  if (!jobs) Fail(source, root, "ns_per_job", "missing");
+  const YAML::Node& jobs = top.Get("ns_per_job");
   if (!jobs.IsMap())
-    Fail(source, jobs, "ns_per_job",
-         "must map each task (perception, planning, collision, difference, eci, adapter) to its ns per job; a "
-         "single number is the format before per-task overheads: refit with `enavi calibrate --write-reference`");
+    r.Fail(jobs, "ns_per_job",
+           "must map each task (perception, planning, collision, difference, eci, adapter) to its ns per job; a "
+           "single number is the format before per-task overheads: refit with `enavi calibrate --write-reference`");
+  const YamlReader::Map per_task(r, jobs, "ns_per_job", {});
+  for (const auto& kv : jobs) {
+    const std::string key = kv.first.Scalar();
+    if (std::find(navstack::kTaskNames.begin(), navstack::kTaskNames.end(), key) == navstack::kTaskNames.end())
+      r.Fail(kv.first, per_task.Field(YamlReader::Shown(key)), "unknown task");
+  }
   for (std::size_t t = 0; t < navstack::kTaskNames.size(); ++t) {
     const std::string key(navstack::kTaskNames[t]);
-    const std::string field = "ns_per_job." + key;
-    const YAML::Node v = jobs[key];
-    if (!v) Fail(source, jobs, field, "missing");
-    double ns = 0;
-    try {
-      ns = v.as<double>();
-    } catch (const YAML::Exception&) {
-      Fail(source, v, field, "wrong type");
-    }
-    if (!std::isfinite(ns) || ns < 0) Fail(source, v, field, "must be finite and >= 0");
-    r.ns.ns_per_job[t] = ns;
+    costs.ns.ns_per_job[t] = r.Range(per_task.Get(key), per_task.Field(key), 0.0, kMaxNs);
   }
-  for (const auto& kv : jobs) {
-    const std::string key = kv.first.as<std::string>();
-    if (std::find(navstack::kTaskNames.begin(), navstack::kTaskNames.end(), key) == navstack::kTaskNames.end())
-      Fail(source, kv.first, "ns_per_job." + key, "unknown task");
-  }
-  const YAML::Node units = root["ns_per_unit"];
-  if (!units || !units.IsMap()) Fail(source, root, "ns_per_unit", "missing or not a map");
-  for (const auto& kv : units) {
-    const std::string key = kv.first.as<std::string>();
+  const YamlReader::Map per_unit(r, top.Get("ns_per_unit"), "ns_per_unit", {});
+  for (const auto& kv : per_unit.node()) {
+    const std::string key = kv.first.Scalar();
     const auto name_it = std::find(navstack::kWorkUnitNames.begin(), navstack::kWorkUnitNames.end(), key);
-    if (name_it == navstack::kWorkUnitNames.end()) Fail(source, kv.first, "ns_per_unit." + key, "unknown work unit");
-    const double v = kv.second.as<double>();
-    if (!std::isfinite(v) || v < 0) Fail(source, kv.second, "ns_per_unit." + key, "must be finite and >= 0");
-    r.ns.ns_per_unit[name_it - navstack::kWorkUnitNames.begin()] = v;
+    if (name_it == navstack::kWorkUnitNames.end()) r.Fail(kv.first, per_unit.Field(YamlReader::Shown(key)), "unknown work unit");
+    costs.ns.ns_per_unit[name_it - navstack::kWorkUnitNames.begin()] = r.Range(kv.second, per_unit.Field(key), 0.0, kMaxNs);
   }
-  return r;
+  return costs;
 }
 
 ReferenceCosts LoadReferenceCosts() {

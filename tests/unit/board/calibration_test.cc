@@ -198,7 +198,13 @@ TEST(BoardProfileTest, BadProfileNamesFileLineAndField) {
     ParseBoardProfile(text, "x.yaml");
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("x.yaml:6: value"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()), "x.yaml:6: per_core_speed.value: must be > 0.0 (got -1)");
+  }
+  try {
+    ParseBoardProfile("id: x\nname: X\ncpu: c\ncores: 4\ncors: 8\nper_core_speed:\n  value: 1\n", "x.yaml");
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("x.yaml:5: cors: unknown key"), std::string::npos) << e.what();
   }
 }
 
