@@ -328,7 +328,7 @@ void BuildS3(Rng& rng, const Params& p, World* w) {
   const bool first_full = rng.Chance(0.5);
   for (int k = 0; k < 2; ++k) {
     const double x = (k == 0 ? -L / 6.0 : L / 6.0) + rng.Uniform(-0.5, 0.5);
-    const double door = rng.Uniform(1.6, 2.2), door_y = rng.Uniform(-hy + 1.8, hy - 1.8);
+    const double door = rng.Uniform(2.2, 3.0), door_y = rng.Uniform(-hy + 1.8, hy - 1.8);
     const double height = (k == 0) == first_full ? H : rng.Uniform(2.2, 2.5);
     const double y_lo = door_y - 0.5 * door, y_hi = door_y + 0.5 * door;
     b.AddBox(x, 0.5 * (-hy + y_lo), 0.0, 0.15, y_lo + hy, height);
