@@ -1,7 +1,7 @@
 #pragma once
 // Work counts: what a navstack job did, in units the board cost model prices
-// (time = sum(count x ns_per_unit[board]), docs/design.md, "Time: two clocks"). Counting, not timing, is what
-// makes the virtual clock bit-reproducible on any host.
+// (time = ns_per_job[task] + sum(count x ns_per_unit[board]), docs/design.md, "Time: two clocks").
+// Counting, not timing, is what makes the virtual clock bit-reproducible on any host.
 
 #include <array>
 #include <cstdint>
