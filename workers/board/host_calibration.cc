@@ -34,6 +34,26 @@ T Field(const nlohmann::json& j, const std::string& key, const std::string& path
   }
 }
 
+// The fit's prices by name (a task's per-job overhead, a unit's price), as written and read.
+template <typename Names, typename Values>
+nlohmann::json PricesJson(const Names& names, const Values& values) {
+  nlohmann::json out = nlohmann::json::object();
+  for (std::size_t i = 0; i < names.size(); ++i) out[std::string(names[i])] = values[i];
+  return out;
+}
+
+template <typename Names, typename Values>
+void ReadPrices(const nlohmann::json& fitted, const char* key, const Names& names, Values& values,
+                const std::string& path) {
+  const std::string where = path + ": fitted." + key;
+  const nlohmann::json prices = Field<nlohmann::json>(fitted, key, path + ": fitted");
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const std::string name(names[i]);
+    values[i] = Field<double>(prices, name, where);
+    if (!(values[i] >= 0)) throw std::invalid_argument(where + "." + name + " is negative");
+  }
+}
+
 }  // namespace
 
 std::string CalibrationPath(const std::string& flag) {
@@ -58,10 +78,8 @@ void SaveHostCalibration(const HostCalibration& c, const std::string& path) {
   j["reference_calibration_id"] = c.reference_calibration_id;
   j["samples"] = c.samples;
   j["r2"] = c.r2;
-  for (std::size_t t = 0; t < navstack::kTaskNames.size(); ++t)
-    j["fitted"]["ns_per_job"][std::string(navstack::kTaskNames[t])] = c.fitted.ns_per_job[t];
-  for (std::size_t u = 0; u < navstack::kWorkUnitNames.size(); ++u)
-    j["fitted"]["ns_per_unit"][std::string(navstack::kWorkUnitNames[u])] = c.fitted.ns_per_unit[u];
+  j["fitted"]["ns_per_job"] = PricesJson(navstack::kTaskNames, c.fitted.ns_per_job);
+  j["fitted"]["ns_per_unit"] = PricesJson(navstack::kWorkUnitNames, c.fitted.ns_per_unit);
   for (const auto& [task, t] : c.tasks)
     j["tasks"][task] = {{"jobs", t.jobs}, {"mean_s", t.mean_s}, {"p99_s", t.p99_s}, {"max_s", t.max_s}};
   const std::filesystem::path p(path);
@@ -102,20 +120,8 @@ HostCalibration LoadHostCalibration(const std::string& path) {
   c.samples = Field<int>(j, "samples", path);
   c.r2 = Field<double>(j, "r2", path);
   const nlohmann::json fitted = Field<nlohmann::json>(j, "fitted", path);
-  const nlohmann::json jobs = Field<nlohmann::json>(fitted, "ns_per_job", path + ": fitted");
-  for (std::size_t t = 0; t < navstack::kTaskNames.size(); ++t) {
-    const std::string name(navstack::kTaskNames[t]);
-    c.fitted.ns_per_job[t] = Field<double>(jobs, name, path + ": fitted.ns_per_job");
-    if (!(c.fitted.ns_per_job[t] >= 0))
-      throw std::invalid_argument(path + ": fitted.ns_per_job." + name + " is negative");
-  }
-  const nlohmann::json units = Field<nlohmann::json>(fitted, "ns_per_unit", path + ": fitted");
-  for (std::size_t u = 0; u < navstack::kWorkUnitNames.size(); ++u) {
-    const std::string name(navstack::kWorkUnitNames[u]);
-    c.fitted.ns_per_unit[u] = Field<double>(units, name, path + ": fitted.ns_per_unit");
-    if (!(c.fitted.ns_per_unit[u] >= 0))
-      throw std::invalid_argument(path + ": fitted.ns_per_unit." + name + " is negative");
-  }
+  ReadPrices(fitted, "ns_per_job", navstack::kTaskNames, c.fitted.ns_per_job, path);
+  ReadPrices(fitted, "ns_per_unit", navstack::kWorkUnitNames, c.fitted.ns_per_unit, path);
   if (j.contains("tasks")) {
     for (const auto& [task, t] : j.at("tasks").items()) {
       const std::string where = path + ": tasks." + task;
