@@ -24,7 +24,8 @@ double SpeedBound(const UniformBspline& s, double tau_from, double tau_to) {
 }  // namespace
 
 CollisionCheckResult CheckTrajectory(const Trajectory& trajectory, double t_from, double t_to,
-                                     const VoxelGrid& grid, double radius, WorkCounts* work) {
+                                     const VoxelGrid& grid, double radius, WorkCounts* work,
+                                     const ObservedSpaceRule* observed) {
   if (!(radius >= 0.0) || !(grid.resolution > 0.0) ||
       grid.cells.size() != static_cast<std::size_t>(grid.dims.cast<long long>().prod())) {
     std::ostringstream msg;
@@ -50,6 +51,13 @@ CollisionCheckResult CheckTrajectory(const Trajectory& trajectory, double t_from
     const double t = i == n ? b : a + (b - a) * i / n;
     const Eigen::Vector3d p = trajectory.Sample(t).p;
     ++samples;
+    if (observed != nullptr && grid.At(p) == CellState::kUnknown && observed->Blocks(p)) {
+      result.collides = true;
+      result.unobserved = true;
+      result.t_hit = t;
+      result.p_hit = p;
+      break;
+    }
     // Cells whose box is within radius of p.
     const Eigen::Vector3i lo = grid.CellOf(p - Eigen::Vector3d::Constant(radius)).cwiseMax(0);
     const Eigen::Vector3i hi =

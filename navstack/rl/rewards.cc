@@ -11,7 +11,7 @@ void RewardWeights::Validate() const {
   const std::pair<const char*, double> fields[] = {
       {"w_util", w_util},         {"w_over", w_over}, {"w_progress", w_progress},
       {"w_path", w_path},         {"w_collision", w_collision},
-      {"w_goal", w_goal},         {"w_time", w_time}};
+      {"w_goal", w_goal},         {"w_time", w_time}, {"w_stop", w_stop}};
   for (const auto& [name, v] : fields) {
     if (!(v >= 0.0 && v <= 1000.0)) {
       std::ostringstream os;
@@ -24,7 +24,7 @@ void RewardWeights::Validate() const {
 nlohmann::json RewardWeightsToJson(const RewardWeights& w) {
   return {{"w_util", w.w_util},         {"w_over", w.w_over}, {"w_progress", w.w_progress},
           {"w_path", w.w_path},         {"w_collision", w.w_collision},
-          {"w_goal", w.w_goal},         {"w_time", w.w_time}};
+          {"w_goal", w.w_goal},         {"w_time", w.w_time}, {"w_stop", w.w_stop}};
 }
 
 RewardTerms ComputeReward(const RewardInputs& in, const RewardWeights& w) {
@@ -32,10 +32,10 @@ RewardTerms ComputeReward(const RewardInputs& in, const RewardWeights& w) {
                   in.dist >= 0.0 && in.straight_length > 0.0 && !std::isnan(in.path_prev) &&
                   !std::isnan(in.path) && std::isfinite(in.dt) && std::isfinite(in.u_nav) &&
                   std::isfinite(in.dist_prev) && std::isfinite(in.dist) &&
-                  std::isfinite(in.straight_length);
+                  std::isfinite(in.straight_length) && in.stops >= 0;
   if (!ok) {
     throw std::domain_error("ComputeReward: inputs must be finite with dt, u_nav, distances >= 0 "
-                            "and u_total, straight_length > 0");
+                            "and u_total, straight_length > 0, stops >= 0");
   }
   RewardTerms r;
   // R_c: CPU as a rate, with a steep hinge above capacity.
@@ -51,7 +51,8 @@ RewardTerms ComputeReward(const RewardInputs& in, const RewardWeights& w) {
   r.collision = in.collided ? -w.w_collision : 0.0;
   r.goal = in.reached_goal ? w.w_goal : 0.0;
   r.time = -w.w_time * in.dt;
-  r.r_f = r.progress + r.path_growth + r.collision + r.goal + r.time;
+  r.stops = -w.w_stop * in.stops;
+  r.r_f = r.progress + r.path_growth + r.collision + r.goal + r.time + r.stops;
   r.total = r.r_c + r.r_f;
   return r;
 }

@@ -17,6 +17,7 @@
 //        - w_collision * I_col                            collision (episode ends)
 //        + w_goal * I_goal                                goal reached (episode ends)
 //        - w_time * dt                                    flight time
+//        - w_stop * n_stop                                emergency stops and fail-safe hovers
 //   d = distance to the goal, |Lbar| = straight-line start -> goal distance of the episode, and
 //   |L_e| = flown length + remaining planned length at epoch e (the expected total path), so a
 //   replan that lengthens the route is penalised and one that shortens it is rewarded. The paper's
@@ -24,9 +25,18 @@
 //   which telescopes to w_progress * (d_0 - d_T) / |Lbar| over an episode and so does not depend
 //   on how many decisions were taken or how long the flight lasted.
 //
+// Flight performance depends on how the stack uses the board: rates too slow for what is ahead
+// cost speed (the reaction constraint's limit), detours (path growth) and emergency stops (a
+// check that found the wall late). The stop term counts each stop the epoch began (n_stop); the
+// time and path terms see the rest. Progress telescopes, so two successful flights differ in R_f
+// only by time, path growth and stops.
+//
 // Default weights: a goal (+10) and a collision (-20) dominate; a full flight's progress is worth
 // +10; CPU costs 2 per second at a fully loaded board (e.g. -7.5 for a 30 s flight using one of
-// four cores at 50 %), overload 20 per second per unit over capacity; time 0.2 per second.
+// four cores at 50 %), overload 20 per second per unit over capacity. A second of flight costs
+// 0.5, as much as one core of a four-core board busy for that second (w_util / 4), so that a
+// second saved in the air is worth a core-second saved on the board; an emergency stop costs 2:
+// the seconds it loses (braking, hovering, accelerating again) and the margin it used up.
 
 #include <nlohmann/json.hpp>
 
@@ -40,7 +50,8 @@ struct RewardWeights {
   double w_path = 2.0;
   double w_collision = 20.0;
   double w_goal = 10.0;
-  double w_time = 0.2;
+  double w_time = 0.5;
+  double w_stop = 2.0;
 
   /// @throws std::invalid_argument "reward weight <field> = <v> must be in [0, 1000]".
   void Validate() const;
@@ -58,6 +69,7 @@ struct RewardInputs {
   double straight_length = 1.0;  ///< m, |Lbar| of the episode, > 0
   double path_prev = 0.0;        ///< m, |L_{e-1}|; <= 0 when unknown (no path yet): term 0
   double path = 0.0;             ///< m, |L_e|; <= 0 when unknown: term 0
+  int stops = 0;                 ///< emergency stops and fail-safe hovers begun in the epoch, >= 0
   bool collided = false;
   bool reached_goal = false;
 };
@@ -72,6 +84,7 @@ struct RewardTerms {
   double collision = 0.0;
   double goal = 0.0;
   double time = 0.0;
+  double stops = 0.0;
   double r_f = 0.0;
   double total = 0.0;
 };

@@ -7,6 +7,7 @@
 
 #include "navstack/methods/method_util.h"
 #include "navstack/planning/collision_check.h"
+#include "navstack/planning/observed_space.h"
 
 namespace enavi::navstack {
 
@@ -49,6 +50,7 @@ void NavStack::OnState(const VehicleState& state) {
 
 void NavStack::Stop(const char* why) {
   stopped_ = true;
+  ++stops_;
   hold_ = HoldAt(state_.p_WB, YawOf(state_.q_WB));
   AddEvent(why);
 }
@@ -141,17 +143,18 @@ JobOutput NavStack::CollisionJob() {
   if (!traj || stopped_ || t >= traj->end_time()) return out;
   const double radius = options_.planner.robot_radius;
   const VoxelGrid grid = map_->ExtractGrid(SweptBox(*traj, t, traj->end_time(), radius + map_->resolution()), &out.work);
-  CollisionCheckResult hit = CheckTrajectory(*traj, t, traj->end_time(), grid, radius, &out.work);
+  const ObservedSpaceRule observed = ObservedRule(state_.p_WB);
+  CollisionCheckResult hit = CheckTrajectory(*traj, t, traj->end_time(), grid, radius, &out.work, &observed);
   // A hit right where the vehicle is means it is already inside inflated space and the plan is
   // escaping from it (the planner relaxes clearance near its start): look further along instead
   // of stopping the escape over and over.
   if (hit.collides && hit.t_hit - t < options_.escape_window_s && t + 2 * options_.escape_window_s < traj->end_time())
-    hit = CheckTrajectory(*traj, t + 2 * options_.escape_window_s, traj->end_time(), grid, radius, &out.work);
+    hit = CheckTrajectory(*traj, t + 2 * options_.escape_window_s, traj->end_time(), grid, radius, &out.work, &observed);
   if (!hit.collides) return out;
   out.commit = [this, traj, hit] {
     if (trajectory_ != traj) return;  // a newer plan landed meanwhile
     const double now = executor_->now();
-    AddEvent("collision_predicted", "in " + std::to_string(hit.t_hit - now) + " s");
+    AddEvent("collision_predicted", (hit.unobserved ? "unobserved space in " : "in ") + std::to_string(hit.t_hit - now) + " s");
     if (hit.t_hit - now < options_.emergency_horizon_s) Stop("emergency_stop");
     if (strategy_) strategy_->OnCollisionTrigger(now);
     RequestReplan("collision");
@@ -198,8 +201,17 @@ JobOutput NavStack::PlanningJob() {
   request.goal_W = options_.goal;
   request.flight_bounds_W = options_.flight_bounds;
   request.seed = PlanSeed(options_.seed, plan_calls_++);
-  request.grid = std::make_shared<const VoxelGrid>(
-      map_->ExtractGrid(PlanningVolume(start.p, options_.goal, options_.flight_bounds, options_.planner), &out.work));
+  VoxelGrid grid = map_->ExtractGrid(PlanningVolume(start.p, options_.goal, options_.flight_bounds, options_.planner), &out.work);
+  // The Resolution Adapter scores the path against the map's obstacle density (paper Sec. V.A):
+  // what was seen, before unobserved space near the vehicle is blocked.
+  PathScoreInputs score;
+  if (strategy_) {
+    for (const CellState c : grid.cells) score.occupied_cells += c == CellState::kOccupied;
+    score.total_cells = static_cast<double>(grid.cells.size());
+    out.work.Add(WorkUnit::kGridCell, static_cast<std::int64_t>(grid.cells.size()));
+  }
+  BlockUnobserved(ObservedRule(start.p), &grid, &out.work);
+  request.grid = std::make_shared<const VoxelGrid>(std::move(grid));
   // The planner measures clearance to occupied cell centres (minus half a cell); the collision
   // check to whole cells. At a coarse resolution a cell's corner is up to (sqrt(3) - 1) / 2 of a
   // cell nearer than that, so plan with that much more radius, or every plan is "in collision".
@@ -208,12 +220,7 @@ JobOutput NavStack::PlanningJob() {
   planner.v_max = std::min(planner.v_max, speed_limit_);  // E-Navi: the reaction constraint's limit
   auto result = std::make_shared<PlanResult>(Plan(request, planner));
   out.work += result->work;
-  // The Resolution Adapter scores the path against the map's obstacle density (paper Sec. V.A).
-  PathScoreInputs score;
   if (strategy_ && result->ok()) {
-    for (const CellState c : request.grid->cells) score.occupied_cells += c == CellState::kOccupied;
-    score.total_cells = static_cast<double>(request.grid->cells.size());
-    out.work.Add(WorkUnit::kGridCell, static_cast<std::int64_t>(request.grid->cells.size()));
     score.path_length = result->path_length;
     score.straight_length = (result->goal_used_W - start.p).norm();
   }
@@ -237,6 +244,23 @@ JobOutput NavStack::PlanningJob() {
     AddEvent("replan", trigger);
   };
   return out;
+}
+
+TaskWcets NavStack::RecentWcets() const {
+  return {executor_->stats(TaskId::kPerception).cost_recent_s, executor_->stats(TaskId::kPlanning).cost_recent_s,
+          executor_->stats(TaskId::kCollision).cost_recent_s, executor_->stats(TaskId::kDifference).cost_recent_s};
+}
+
+ObservedSpaceRule NavStack::ObservedRule(const Eigen::Vector3d& start) const {
+  // Reaction time at the current rates (reaction_constraint.h): frame, map update, check, plan.
+  const TaskFrequencies f{rates_.f_per, rates_.collision_on_map_update ? rates_.f_per : rates_.f_col, rates_.f_dif};
+  const double speed = std::min(options_.planner.v_max, speed_limit_);
+  ObservedSpaceRule rule = ObservedSpaceRule::For(state_.p_WB, start, speed, ReactionTime(f, RecentWcets(), options_.f_sen),
+                                                  options_.planner.a_max, options_.planner.robot_radius,
+                                                  map_->resolution(), options_.camera);
+  // Never ask to have seen beyond what the map is built from.
+  rule.reach = std::min(rule.reach, options_.perception.max_range);
+  return rule;
 }
 
 JobOutput NavStack::EciJob() {
@@ -267,8 +291,7 @@ StrategyInputs NavStack::GatherStrategyInputs(double t) {
   in.u_cur = t > last_adapt_t_ ? (busy - last_adapt_busy_) / (t - last_adapt_t_) : 0.0;
   last_adapt_t_ = t;
   last_adapt_busy_ = busy;
-  in.wcet = {executor_->stats(TaskId::kPerception).cost_recent_s, executor_->stats(TaskId::kPlanning).cost_recent_s,
-             executor_->stats(TaskId::kCollision).cost_recent_s, executor_->stats(TaskId::kDifference).cost_recent_s};
+  in.wcet = RecentWcets();
   in.trajectory_duration = trajectory_ ? trajectory_->duration() : std::numeric_limits<double>::infinity();
   in.current = {rates_.f_per, rates_.f_col, rates_.f_dif};
   in.d_ahead = d_ahead_;
@@ -296,6 +319,7 @@ StrategyInputs NavStack::GatherStrategyInputs(double t) {
     end = p;
   }
   in.expected_path = flown_ + planned + (options_.goal - end).norm();
+  in.stops = stops_;
   return in;
 }
 

@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include "navstack/methods/navigator.h"
+#include "navstack/planning/observed_space.h"
 #include "navstack/runtime/executor.h"
 
 namespace enavi::navstack {
@@ -61,6 +62,10 @@ class NavStack final : public Navigator {
   JobOutput EciJob();
   JobOutput AdapterJob();
   StrategyInputs GatherStrategyInputs(double t);
+  /// Unobserved space the vehicle could reach before it stops (planning/observed_space.h), for a
+  /// plan from `start` at the current rates, speed limit and resolution.
+  ObservedSpaceRule ObservedRule(const Eigen::Vector3d& start) const;
+  TaskWcets RecentWcets() const;  ///< each task's recent job time, board seconds
   void Stop(const char* why);
   void AddEvent(std::string kind, std::string detail = {});
   void RequestReplan(const char* why);
@@ -78,6 +83,7 @@ class NavStack final : public Navigator {
   std::shared_ptr<const Trajectory> previous_trajectory_;
   TrajectorySample hold_;              ///< reference while no trajectory exists or after a stop
   bool stopped_ = false;               ///< emergency stop active until the next plan lands
+  int stops_ = 0;                      ///< emergency stops and fail-safe hovers so far
   std::vector<Eigen::Vector3d> last_search_path_;
   std::int64_t replans_ = 0;
   std::int64_t plan_failures_ = 0;

@@ -56,6 +56,7 @@ double StrategyController::Reward(const StrategyInputs& in, bool collided, bool 
   r.straight_length = std::max(in.straight_length, 1e-3);
   r.path_prev = previous_ ? previous_->expected_path : 0.0;
   r.path = in.expected_path;
+  r.stops = in.stops - (previous_ ? previous_->stops : 0);
   r.collided = collided;
   r.reached_goal = reached_goal;
   return rl::ComputeReward(r, options_.rewards).total;

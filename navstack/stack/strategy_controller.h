@@ -47,6 +47,7 @@ struct StrategyInputs {
   double distance_to_goal = 0;
   double straight_length = 1;          ///< |Lbar| of the episode
   double expected_path = 0;            ///< |L_e|: flown + planned + rest to the goal, m
+  int stops = 0;                       ///< emergency stops and fail-safe hovers so far
   /// Reaction constraint: the nearest obstacle ahead in the latest frame (EciResult::d_ahead;
   /// +inf before the first), the emergency stop's deceleration and the robot radius. The speed
   /// is |flight.v_WB|, the margin the radius plus half a cell of flight.resolution.

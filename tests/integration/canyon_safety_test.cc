@@ -24,5 +24,19 @@ TEST(CanyonSafetyTest, EnaviSeesTheWallRoundTheCornerInTimeToAvoidItWithoutAnEme
   EXPECT_EQ(r.emergency_stops, 0) << Describe(r);
 }
 
+TEST(CanyonSafetyTest, EnaviDoesNotFlyIntoSpaceItNeverSaw) {
+  // canyon seed 5 on x86, 30.7 s in: flying 1 m beside a wall, a replan reversed the vehicle and
+  // dived it 2 m towards the foot of that wall, unknown (so free to the planner) because the level
+  // camera never saw it from that close; the check saw the wall 0.15 s before the hit. Unknown
+  // space within stopping reach now counts as an obstacle (navstack/planning/observed_space.h).
+  api::EpisodeSpec spec = Spec("canyon", 5);
+  spec.board = "x86";
+  spec.method = "enavi";
+  const api::EpisodeResult r = sim::RunEpisode(spec);
+  ASSERT_TRUE(r.success) << Describe(r);
+  EXPECT_FALSE(r.collided);
+  EXPECT_EQ(r.emergency_stops, 0) << Describe(r);
+}
+
 }  // namespace
 }  // namespace enavi::integration

@@ -61,5 +61,26 @@ TEST(CollisionCheckTest, UnknownSpaceIsNotACollision) {
   EXPECT_FALSE(CheckTrajectory(c.traj, 0.0, 1e9, c.grid, 0.3, nullptr).collides);
 }
 
+TEST(CollisionCheckTest, UnobservedSpaceWithinReachIsAHitGivenTheRule) {
+  Corridor c;
+  // Unknown cells on the path from x = 2.4 on, 1.4 m ahead of the vehicle at the start (x = 1).
+  testing::FillBox(&c.grid, Eigen::Vector3d(2.4, 1.7, 1.2), Eigen::Vector3d(9.5, 2.3, 1.8), CellState::kUnknown);
+  ObservedSpaceRule rule;
+  rule.vehicle = rule.start = Eigen::Vector3d(1, 2, 1.5);
+  rule.body = 0.5;
+  rule.reach = 2.0;
+  const CollisionCheckResult r = CheckTrajectory(c.traj, 0.0, 1e9, c.grid, 0.3, nullptr, &rule);
+  ASSERT_TRUE(r.collides);
+  EXPECT_TRUE(r.unobserved);
+  EXPECT_NEAR(r.p_hit.x(), 2.4, 0.06) << r.p_hit.transpose();
+  // Beyond the reach, unknown stays optimistic.
+  rule.reach = 1.2;
+  EXPECT_FALSE(CheckTrajectory(c.traj, 0.0, 1e9, c.grid, 0.3, nullptr, &rule).collides);
+  // Within the body, too.
+  rule.reach = 2.0;
+  rule.body = 2.1;
+  EXPECT_FALSE(CheckTrajectory(c.traj, 0.0, 1e9, c.grid, 0.3, nullptr, &rule).collides);
+}
+
 }  // namespace
 }  // namespace enavi::navstack

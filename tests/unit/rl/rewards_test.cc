@@ -68,6 +68,19 @@ TEST(RewardsTest, TerminalEventsDominate) {
   EXPECT_GT(ComputeReward(arrive).total, 5.0);
 }
 
+TEST(RewardsTest, EachEmergencyStopCostsAndTimeIsWorthAQuarterOfAFourCoreBoard) {
+  RewardInputs calm = Quiet(), stopped = Quiet();
+  stopped.stops = 2;
+  const RewardWeights w;
+  EXPECT_EQ(ComputeReward(calm).stops, 0.0);
+  EXPECT_NEAR(ComputeReward(stopped).stops, -2.0 * w.w_stop, 1e-15);
+  EXPECT_NEAR(ComputeReward(calm).total - ComputeReward(stopped).total, 2.0 * w.w_stop, 1e-12);
+  // A second in the air costs as much as one of four cores busy for that second.
+  EXPECT_NEAR(w.w_time, w.w_util / 4.0, 1e-15);
+  stopped.stops = -1;
+  EXPECT_THROW(ComputeReward(stopped), std::domain_error);
+}
+
 TEST(RewardsTest, ProgressTelescopesOverAnEpisode) {
   // 40 epochs from 20 m to 0 m in uneven steps, with one detour: the sum is w_progress.
   double d = 20.0, sum = 0.0;
