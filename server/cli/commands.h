@@ -31,6 +31,8 @@ void AddPlacementOptions(CLI::App* app, std::string* units, double* scale, std::
 void RegisterWorldCommands(CLI::App& app);
 /// `enavi fly` (server/cli/fly_cmd.cc).
 void RegisterFlyCommand(CLI::App& app);
+/// `enavi episode`, the farm worker's child (server/cli/episode_cmd.cc).
+void RegisterEpisodeCommand(CLI::App& app);
 /// `enavi bench raycast|...` (server/cli/bench_cmd.cc).
 void RegisterBenchCommands(CLI::App& app);
 /// `enavi calibrate` (server/cli/calibrate_cmd.cc).

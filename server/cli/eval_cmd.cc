@@ -59,7 +59,7 @@ void ApplyPreset(EvalFlags* f, const CLI::App& sub) {
 
 void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
   ApplyPreset(&f, sub);
-  RequireFlyUnlessEpisodeCmd(root, f.options.episode_command);
+  RequireEpisodeUnlessEpisodeCmd(root, f.options.episode_command);
   StopSignals signals;
   SetupLogging(f.verbose);
   if (!f.verbose) spdlog::set_level(spdlog::level::warn);
@@ -140,7 +140,7 @@ void RegisterEvalCommand(CLI::App& app) {
   sub->add_option("--workers", o.workers, "local worker processes")->capture_default_str();
   sub->add_option("--slots", o.slots, "episodes per worker at once")->capture_default_str();
   sub->add_option("--episode-cmd", o.episode_command,
-                  "episode command for the workers (default: enavi fly)")
+                  "episode command for the workers (default: enavi episode)")
       ->envname("ENAVI_EPISODE_CMD");
   sub->add_option("--episode-timeout", f->episode_timeout_s, "wall-clock limit per episode, s")
       ->check(CLI::Range(1.0, 7 * 24 * 3600.0))

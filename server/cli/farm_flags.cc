@@ -114,14 +114,14 @@ void StopSignals::Watch(std::function<void(int)> on_signal) {
   });
 }
 
-void RequireFlyUnlessEpisodeCmd(const CLI::App& root, const std::string& episode_cmd) {
+void RequireEpisodeUnlessEpisodeCmd(const CLI::App& root, const std::string& episode_cmd) {
   if (!episode_cmd.empty()) return;
   for (const CLI::App* sub : root.get_subcommands([](const CLI::App*) { return true; })) {
-    if (sub->get_name() == "fly") return;
+    if (sub->get_name() == "episode") return;
   }
   throw std::runtime_error(
-      "this enavi build has no `fly` subcommand, the default episode command "
-      "(`enavi fly --spec-file S --result-file R`); pass --episode-cmd PROGRAM");
+      "this enavi build has no `episode` subcommand, the default episode command "
+      "(`enavi episode --spec-file S --result-file R`); pass --episode-cmd PROGRAM");
 }
 
 std::pair<std::string, int> ParseHostPort(const std::string& text, const std::string& flag) {

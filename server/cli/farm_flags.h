@@ -49,10 +49,10 @@ class StopSignals {
   std::thread watcher_;
 };
 
-/// Without --episode-cmd the farm runs `enavi fly`: refuse to start when this build has no `fly`
+/// Without --episode-cmd the farm runs `enavi episode`: refuse to start when this build has no `episode`
 /// subcommand, instead of failing every episode three times.
 /// @throws std::runtime_error naming the missing command.
-void RequireFlyUnlessEpisodeCmd(const CLI::App& root, const std::string& episode_cmd);
+void RequireEpisodeUnlessEpisodeCmd(const CLI::App& root, const std::string& episode_cmd);
 
 /// Splits "host:port" ("[v6]:port"); @throws std::invalid_argument naming `flag`.
 std::pair<std::string, int> ParseHostPort(const std::string& text, const std::string& flag);

@@ -3,7 +3,6 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
@@ -17,7 +16,6 @@
 #include "server/report/flight_report.h"
 #include "workers/board/board_profile.h"
 #include "navstack/methods/registry.h"
-#include "navstack/rl/rollout.h"
 #include "workers/sim/episode.h"
 #include "workers/sim/episode_config.h"
 #include "worlds/resolve.h"
@@ -32,72 +30,24 @@ struct FlyArgs {
   std::vector<std::string> overrides;
   std::string out_dir;
   bool json = false;
-  std::string spec_file, result_file;
-  std::string rollout_file;
   double dilation = 0.0;  // emulated clock; 0 (absent): the smallest that fits the host
   std::string calibration;
   sim::EmulationOptions emulation;  // experiments: hidden flags
 };
 
-// A spec file is one JSON object of EpisodeSpec fields: anything else (an array, a misspelt
-// field) would otherwise fly the default spec instead of the one meant.
-void CheckSpecFields(const nlohmann::json& j, const std::string& file) {
-  if (!j.is_object())
-    throw std::invalid_argument(file + ": not an episode spec: expected a JSON object, got " + j.type_name());
-  api::EpisodeSpec every;  // every optional field set, so its JSON names all fields
-  every.start = every.goal = api::Vec3{};
-  every.world_params = {{"k", "v"}};
-  every.policy = "p";
-  every.overrides = {{"k", 0.0}};
-  every.units = every.up = "m";
-  every.scale = 2.0;
-  every.recenter = true;
-  every.model_path = {"d"};
-  const nlohmann::json known = every;
-  for (const auto& item : j.items()) {
-    if (known.contains(item.key())) continue;
-    std::string names;
-    for (const auto& k : known.items()) names += (names.empty() ? "" : ", ") + k.key();
-    throw std::invalid_argument(file + ": " + item.key() + ": unknown field (known: " + names + ")");
-  }
-}
-
 void Run(FlyArgs args) {
   api::EpisodeSpec spec = args.spec;
-  if (!args.spec_file.empty()) {
-    std::ifstream in(args.spec_file);
-    if (!in) throw std::invalid_argument(args.spec_file + ": cannot read the spec file");
-    nlohmann::json j;
-    try {
-      j = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-      throw std::invalid_argument(args.spec_file + ": not an episode spec: " + e.what());
-    }
-    CheckSpecFields(j, args.spec_file);
-    try {
-      spec = j.get<api::EpisodeSpec>();
-    } catch (const std::invalid_argument& e) {  // a field of the wrong type, named by the reader
-      throw std::invalid_argument(args.spec_file + ": not an episode spec: " + e.what());
-    }
-    if (!(spec.timeout_s >= 0 && spec.timeout_s <= api::kMaxTimeoutS))
-      throw std::invalid_argument(args.spec_file + ": timeout_s: must be in [0, " +
-                                  std::to_string(static_cast<int>(api::kMaxTimeoutS)) + "] s (got " +
-                                  nlohmann::json(spec.timeout_s).dump() + ")");
-  } else {
-    if (!args.start.empty()) spec.start = ParsePoint("--start", args.start);
-    if (!args.goal.empty()) spec.goal = ParsePoint("--goal", args.goal);
-    spec.world_params = ParseNameValues("--param", args.params);
-    for (const auto& [k, v] : ParseNameValues("--set", args.overrides)) spec.overrides[k] = ParseNumber("--set", k, v);
-  }
+  if (!args.start.empty()) spec.start = ParsePoint("--start", args.start);
+  if (!args.goal.empty()) spec.goal = ParsePoint("--goal", args.goal);
+  spec.world_params = ParseNameValues("--param", args.params);
+  for (const auto& [k, v] : ParseNameValues("--set", args.overrides)) spec.overrides[k] = ParseNumber("--set", k, v);
 
   sim::EpisodeOptions options;
-  navstack::rl::Rollout rollout;
-  if (!args.rollout_file.empty()) options.rollout = &rollout;
   options.emulation = args.emulation;
   options.emulation.calibration_file = args.calibration;
-  // Emulated clock on the command line: an absent --dilation means "the smallest that fits"
-  // (spec.dilation 0; the value used is in the result's notes). A spec file says what it wants.
-  if (args.spec_file.empty() && (spec.clock == "emulated" || args.dilation > 0)) spec.dilation = args.dilation;
+  // An absent --dilation means "the smallest that fits" (spec.dilation 0; the value used is in
+  // the result's notes).
+  if (spec.clock == "emulated" || args.dilation > 0) spec.dilation = args.dilation;
   const bool tty = isatty(STDERR_FILENO) && !args.json;
   if (tty) {
     options.progress = [](double t, double distance) {
@@ -109,13 +59,6 @@ void Run(FlyArgs args) {
   const api::EpisodeResult result = sim::RunEpisode(spec, *world, options);
   if (tty) std::fprintf(stderr, "\n");
 
-  if (!args.result_file.empty()) api::WriteFileAtomic(args.result_file, nlohmann::json(result).dump() + "\n");
-  if (!args.rollout_file.empty()) {
-    rollout.id = spec.world + "-" + std::to_string(spec.seed) + "-" + spec.board;
-    rollout.info = {{"success", result.success ? 1.0 : 0.0}, {"collided", result.collided ? 1.0 : 0.0},
-                    {"flight_time_s", result.flight_time_s}, {"nav_cpu_util_pct", result.nav_cpu_util_pct}};
-    api::WriteFileAtomic(args.rollout_file, navstack::rl::SerializeRollout(rollout));
-  }
   if (!args.out_dir.empty()) {
     const std::filesystem::path dir(args.out_dir);
     std::filesystem::create_directories(dir);
@@ -127,7 +70,7 @@ void Run(FlyArgs args) {
   }
   if (args.json) {
     std::printf("%s\n", api::ResultSummaryJson(result).dump().c_str());
-  } else if (args.result_file.empty()) {
+  } else {
     std::printf("%s %s on %s (seed %llu): %s, %.1f s, %.1f m, nav CPU %.1f %%, deadline misses %.2f %%\n",
                 spec.method.c_str(), result.scenario.c_str(), spec.board.c_str(),
                 static_cast<unsigned long long>(spec.seed), result.end_reason.c_str(), result.flight_time_s,
@@ -200,9 +143,6 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--set", args->overrides, tunables);
   fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv and plots here");
   fly->add_flag("--json", args->json, "print one JSON object with the results on stdout");
-  fly->add_option("--spec-file", args->spec_file, "read the episode spec (JSON) from this file")->group("");
-  fly->add_option("--result-file", args->result_file, "write the full result (JSON) to this file")->group("");
-  fly->add_option("--rollout-file", args->rollout_file, "E-Navi: write the training rollout to this file")->group("");
   fly->callback([args] { Run(*args); });
 }
 

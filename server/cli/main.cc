@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   RegisterWorldCommands(app);
   RegisterFlyCommand(app);
+  RegisterEpisodeCommand(app);
   RegisterBenchCommands(app);
   RegisterCalibrateCommand(app);
   RegisterTrainCommand(app);

@@ -43,7 +43,7 @@ std::vector<std::string> Served(const std::string& flag, const std::string& what
 }
 
 void RunWorker(const WorkerFlags& f, const CLI::App& root) {
-  RequireFlyUnlessEpisodeCmd(root, f.episode_cmd);
+  RequireEpisodeUnlessEpisodeCmd(root, f.episode_cmd);
   StopSignals signals;
   SetupLogging(f.verbose);
   BusFlags bus_flags = f.bus;
@@ -93,7 +93,7 @@ void RegisterWorkerCommand(CLI::App& app) {
       ->delimiter(',');
   sub->add_option("--calibration-id", f->calibration_id, "host calibration the episodes use");
   sub->add_option("--episode-cmd", f->episode_cmd,
-                  "episode command; gets --spec-file F --result-file F (default: enavi fly)")
+                  "episode command; gets --spec-file F --result-file F (default: enavi episode)")
       ->envname("ENAVI_EPISODE_CMD");
   sub->add_option("--episode-timeout", f->episode_timeout_s, "wall-clock limit per episode, s")
       ->check(CLI::Range(1.0, 7 * 24 * 3600.0))

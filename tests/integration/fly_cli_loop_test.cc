@@ -1,5 +1,5 @@
 // Closed-loop episodes through the built `enavi fly`: byte-identical outputs, the files `--out`
-// writes, the `--json` record, and the worker contract (`--spec-file S --result-file R`).
+// writes, the `--json` record, and the worker contract (`enavi episode --spec-file S --result-file R`).
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -121,7 +121,7 @@ TEST(FlyCliTest, SpecFileAndResultFileRoundTripLikeTheWorkerRunsThem) {
   const auto spec_file = dir.Write("spec.json", nlohmann::json(spec).dump(2));
   const auto result_file = dir.path() / "result.json";
 
-  const CliRun r = Enavi(dir, "fly --spec-file " + spec_file.string() + " --result-file " + result_file.string());
+  const CliRun r = Enavi(dir, "episode --spec-file " + spec_file.string() + " --result-file " + result_file.string());
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.out, "") << "the worker reads the result file; stdout stays quiet";
 

@@ -1,4 +1,4 @@
-// A stand-in for `enavi fly --spec-file SPEC --result-file RESULT` in farm tests: it writes a
+// A stand-in for `enavi episode --spec-file SPEC --result-file RESULT` in farm tests: it writes a
 // synthetic but schema-valid api::EpisodeResult derived only from the spec (so results are
 // deterministic; tests/support/synthetic_result.h), and misbehaves on demand to exercise the
 // farm's fault handling.

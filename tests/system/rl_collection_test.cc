@@ -12,7 +12,7 @@ fs::path PolicyFile() { return fs::path(ENAVI_SOURCE_DIR) / "navstack/rl/policie
 
 class RlCollectionTest : public FarmFixture {
  protected:
-  std::string RealEpisodes() const { return EnaviBinary().string() + " fly"; }
+  std::string RealEpisodes() const { return EnaviBinary().string() + " episode"; }
 
   // Runs a command to its end; returns its exit status.
   worker::ExitStatus Run(const std::string& name, std::vector<std::string> argv,

@@ -39,7 +39,7 @@ EpisodeOutcome Error(std::string message, double wall_s) {
 
 }  // namespace
 
-std::vector<std::string> DefaultEpisodeCommand() { return {SelfExecutable().string(), "fly"}; }
+std::vector<std::string> DefaultEpisodeCommand() { return {SelfExecutable().string(), "episode"}; }
 
 EpisodeOutcome RunEpisode(const api::EpisodeSpec& spec, const EpisodeRun& run,
                           const std::atomic<bool>& abort) {

@@ -36,6 +36,11 @@ CliRun Enavi(const TempDir& dir, const std::string& args) {
 }
 
 CliRun Fly(const TempDir& dir, const std::string& args) { return Enavi(dir, "fly " + args); }
+// The worker's child command; a result file unless the test names one.
+CliRun Episode(const TempDir& dir, const std::string& args) {
+  const bool has_result = args.find("--result-file") != std::string::npos;
+  return Enavi(dir, "episode " + args + (has_result ? "" : " --result-file " + (dir.path() / "r.json").string()));
+}
 
 bool Has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
@@ -96,28 +101,28 @@ TEST(FlyCliInputTest, ObjWorldNeedsStartAndGoal) {
                 "no goal");
 }
 
-TEST(FlyCliInputTest, MissingOrCorruptSpecFileIsRefusedNamingTheFile) {
+TEST(EpisodeCliInputTest, MissingOrCorruptSpecFileIsRefusedNamingTheFile) {
   TempDir dir;
   const std::string missing = (dir.path() / "none.json").string();
-  ExpectRefused(Fly(dir, "--spec-file " + missing), {missing.c_str(), "cannot read"}, "missing spec file");
+  ExpectRefused(Episode(dir, "--spec-file " + missing), {missing.c_str(), "cannot read"}, "missing spec file");
 
   const std::string truncated = dir.Write("truncated.json", "{\"world\": \"s3\", \"seed\": ").string();
-  ExpectRefused(Fly(dir, "--spec-file " + truncated), {truncated.c_str(), "not an episode spec", "parse error"},
+  ExpectRefused(Episode(dir, "--spec-file " + truncated), {truncated.c_str(), "not an episode spec", "parse error"},
                 "truncated JSON");
   const std::string wrong_type = dir.Write("type.json", "{\"world\": \"s3\", \"seed\": \"one\"}").string();
-  ExpectRefused(Fly(dir, "--spec-file " + wrong_type), {wrong_type.c_str(), "not an episode spec"},
+  ExpectRefused(Episode(dir, "--spec-file " + wrong_type), {wrong_type.c_str(), "not an episode spec"},
                 "seed is a string");
   const std::string board = dir.Write("board.json", "{\"world\": \"s3\", \"board\": \"zz\"}").string();
-  ExpectRefused(Fly(dir, "--spec-file " + board), {"board", "'zz'"}, "unknown board in the spec");
+  ExpectRefused(Episode(dir, "--spec-file " + board), {"board", "'zz'"}, "unknown board in the spec");
 }
 
-TEST(FlyCliInputTest, SpecFileThatIsNotAnObjectOrHasUnknownFieldsIsRefused) {
+TEST(EpisodeCliInputTest, SpecFileThatIsNotAnObjectOrHasUnknownFieldsIsRefused) {
   // Either would otherwise fly the default spec (s1 on host) instead of the one meant.
   TempDir dir;
   const std::string array = dir.Write("array.json", "[\"s3\", 1]").string();
-  ExpectRefused(Fly(dir, "--spec-file " + array), {array.c_str(), "object"}, "a JSON array");
+  ExpectRefused(Episode(dir, "--spec-file " + array), {array.c_str(), "object"}, "a JSON array");
   const std::string typo = dir.Write("typo.json", "{\"world\": \"s3\", \"bord\": \"tx2\"}").string();
-  ExpectRefused(Fly(dir, "--spec-file " + typo), {typo.c_str(), "bord", "unknown field", "board"}, "misspelt field");
+  ExpectRefused(Episode(dir, "--spec-file " + typo), {typo.c_str(), "bord", "unknown field", "board"}, "misspelt field");
 }
 
 TEST(FlyCliInputTest, NegativeSeedOrTimeoutIsRefused) {
@@ -125,7 +130,7 @@ TEST(FlyCliInputTest, NegativeSeedOrTimeoutIsRefused) {
   ExpectRefused(Fly(dir, "--world empty --seed -3"), {"--seed"}, "negative seed");
   ExpectRefused(Fly(dir, "--world empty --timeout -1"), {"--timeout"}, "negative timeout");
   const std::string spec = dir.Write("spec.json", "{\"world\": \"empty\", \"timeout_s\": -1}").string();
-  ExpectRefused(Fly(dir, "--spec-file " + spec), {"timeout_s", "-1"}, "negative timeout in a spec file");
+  ExpectRefused(Episode(dir, "--spec-file " + spec), {"timeout_s", "-1"}, "negative timeout in a spec file");
 }
 
 TEST(FlyCliInputTest, BadInputWritesNoOutput) {
@@ -135,7 +140,7 @@ TEST(FlyCliInputTest, BadInputWritesNoOutput) {
   ExpectRefused(Fly(dir, "--world empty --set planner.v_max=99 --out " + out.string()), {"planner.v_max"}, "--out");
   EXPECT_FALSE(std::filesystem::exists(out)) << "bad input must not create the output directory";
   const std::string spec = dir.Write("spec.json", "{\"world\": \"empty\", \"overrides\": {\"nope\": 1}}").string();
-  ExpectRefused(Fly(dir, "--spec-file " + spec + " --result-file " + result.string()), {"overrides.nope"},
+  ExpectRefused(Episode(dir, "--spec-file " + spec + " --result-file " + result.string()), {"overrides.nope"},
                 "--result-file");
   EXPECT_FALSE(std::filesystem::exists(result)) << "bad input must not write a result file";
 }
