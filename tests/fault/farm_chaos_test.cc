@@ -538,7 +538,7 @@ void ChaosFarm::Verify(const ChaosPlan& plan, const std::string& job) {
     for (const auto& [node, id] : worker_ids_) {
       std::error_code ec;
       for (auto it = fs::directory_iterator(dir_ / id / "spool", ec); !ec && it != fs::directory_iterator(); ++it) {
-        n += it->path().string().find(".result.json") != std::string::npos ? 1 : 0;
+        n += it->path().filename().string().ends_with(".result.json") ? 1 : 0;
       }
     }
     return n;

@@ -33,8 +33,13 @@ std::vector<api::ResultMessage> ResultSpool::LoadAll(std::vector<std::string>* p
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(dir_)) {
     const std::string name = entry.path().filename().string();
-    if (name.size() > 12 && name.compare(name.size() - 12, 12, ".result.json") == 0) {
-      files.push_back(entry.path());
+    if (name.ends_with(".result.json")) files.push_back(entry.path());
+    // A write cut off by a crash (the atomic write's temporary): the result was never sent (Send
+    // spools before it publishes), so its episode's lease runs out and it runs again elsewhere.
+    if (name.ends_with(".result.json.tmp")) {
+      if (problems) problems->push_back(entry.path().string() + ": an interrupted write, removed");
+      std::error_code ec;
+      fs::remove(entry.path(), ec);
     }
   }
   std::sort(files.begin(), files.end());

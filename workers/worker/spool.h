@@ -18,7 +18,8 @@ class ResultSpool {
 
   void Save(const api::ResultMessage& message);
   void Remove(const std::string& episode_id, int attempt);
-  /// Every spooled result; unreadable files are renamed to *.bad and reported in `problems`.
+  /// Every spooled result; unreadable files are renamed to *.bad, temporaries of interrupted
+  /// writes removed, both reported in `problems`.
   std::vector<api::ResultMessage> LoadAll(std::vector<std::string>* problems);
   const std::filesystem::path& dir() const { return dir_; }
 

@@ -98,7 +98,7 @@ void Worker::Run() {
     spdlog::info("re-sending spooled result {} attempt {}", m.episode_id, m.attempt);
     Send(std::move(m), /*spool=*/false);
   }
-  for (const auto& p : problems) spdlog::warn("unreadable spooled result set aside: {}", p);
+  for (const auto& p : problems) spdlog::warn("spool: {}", p);
 
   auto next_heartbeat = Clock::now();
   Clock::time_point drain_deadline = Clock::time_point::max();

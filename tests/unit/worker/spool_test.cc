@@ -74,5 +74,19 @@ TEST_F(SpoolTest, CorruptFileIsSetAsideAndReported) {
   EXPECT_TRUE(fs::exists(dir_ / "j1-00009.1.result.json.bad"));
 }
 
+TEST_F(SpoolTest, TemporaryOfAWriteCutOffByACrashIsRemovedAndReported) {
+  // SIGKILL between the atomic write's open and its rename leaves NAME.result.json.tmp; a
+  // restarted worker on the same spool must not keep it (nor anyone count it as unacknowledged).
+  ResultSpool spool(dir_);
+  spool.Save(Message("j1-00001", 1));
+  std::ofstream(dir_ / "j1-00002.1.result.json.tmp") << "{ \"episode_id\": ";
+  std::vector<std::string> problems;
+  const auto loaded = spool.LoadAll(&problems);
+  EXPECT_EQ(loaded.size(), 1u);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("interrupted write"), std::string::npos) << problems[0];
+  EXPECT_FALSE(fs::exists(dir_ / "j1-00002.1.result.json.tmp"));
+}
+
 }  // namespace
 }  // namespace enavi::worker
