@@ -31,15 +31,16 @@ THIRD_PARTY_DIRS = (
 
 # What each layer must not include: (pattern on the include text, what it is).
 FORBIDDEN = {
-    "api": [(re.compile(r"^(navstack|workers|server)/"), "api includes a higher layer")],
-    "worlds": [(re.compile(r"^(navstack|workers|server)/"), "worlds includes a higher layer")],
+    "api": [(re.compile(r"^(navstack|workers|server|bench)/"), "api includes a higher layer or bench/")],
+    "worlds": [(re.compile(r"^(navstack|workers|server|bench)/"), "worlds includes a higher layer or bench/")],
     "navstack": [
-        (re.compile(r"^(workers|server)/"), "navstack includes workers/ or server/"),
+        (re.compile(r"^(workers|server|bench)/"), "navstack includes workers/, server/ or bench/"),
         (BULLET, "navstack includes a Bullet header"),
         (EMBREE, "navstack includes an Embree header"),
         (CYCLONE, "navstack includes a Cyclone DDS header"),
     ],
-    "workers": [(re.compile(r"^server/"), "workers includes server/")],
+    # Bench code (bench/) is never compiled into a library an episode links.
+    "workers": [(re.compile(r"^(server|bench)/"), "workers includes server/ or bench/")],
 }
 
 # The generated file a CMake unity build compiles in place of a target's sources.
@@ -89,7 +90,7 @@ def cmake_targets(root):
     """{target: {"dir", "headers", "links"}} for every enavi library with a source list."""
     targets, aliases = {}, {}
     for dirpath, dirs, names in os.walk(root):
-        dirs[:] = [d for d in dirs if not d.startswith(".") and d not in ("build", "tests", "bench")]
+        dirs[:] = [d for d in dirs if not d.startswith(".") and d not in ("build", "tests")]
         if "CMakeLists.txt" not in names:
             continue
         rel_dir = os.path.relpath(dirpath, root)
@@ -204,7 +205,9 @@ def check_depfile(path, source_root, build_root):
         rel = os.path.relpath(real, source_root)
         if not rel.startswith(".."):
             dep_layer = layer_of(rel)
-            if layer == "navstack" and dep_layer in ("workers", "server"):
+            if rel.split("/", 1)[0] == "bench":
+                problems.append(f"{rel_source}: {layer} depends on bench code {rel}")
+            elif layer == "navstack" and dep_layer in ("workers", "server"):
                 problems.append(f"{rel_source}: navstack depends on {rel}")
             elif layer == "workers" and dep_layer == "server":
                 problems.append(f"{rel_source}: workers depends on {rel}")

@@ -7,7 +7,7 @@
 
 #include <chrono>
 
-#include "workers/board/shm_channel.h"
+#include "workers/emulation/shm_channel.h"
 
 namespace enavi::board {
 namespace {

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "workers/board/throttle_bench.h"
+#include "bench/board/throttle_bench.h"
 
 int main(int argc, char** argv) {
   using namespace enavi::board;

@@ -20,7 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "navstack/runtime/sched_deadline.h"
-#include "workers/board/cgroup.h"
+#include "workers/emulation/cgroup_manager.h"
 
 namespace {
 

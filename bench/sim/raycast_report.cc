@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "bench/sim/raycast_bench.h"
 #include "tests/unit/sim/mesh_builders.h"
-#include "workers/sim/raycast_bench.h"
 
 namespace {
 

@@ -5,21 +5,18 @@
 #include <limits>
 #include <stdexcept>
 
+#include "navstack/common/argument_check.h"
+
 namespace enavi::navstack {
 namespace {
 
-void RequireNonNegative(double v, const char* name) {
-  if (!(v >= 0.0) || std::isnan(v) || std::isinf(v)) {
-    throw std::domain_error(std::string("frequency constraints: ") + name + " = " +
-                            std::to_string(v) + " must be finite and >= 0");
-  }
-}
+constexpr ArgumentCheck kCheck("frequency constraints");
 
 void ValidateFrequencies(const TaskFrequencies& f, const char* name) {
   const std::string n(name);
-  RequireNonNegative(f.f_per, (n + ".f_per").c_str());
-  RequireNonNegative(f.f_col, (n + ".f_col").c_str());
-  RequireNonNegative(f.f_dif, (n + ".f_dif").c_str());
+  kCheck.NonNegative(f.f_per, (n + ".f_per").c_str());
+  kCheck.NonNegative(f.f_col, (n + ".f_col").c_str());
+  kCheck.NonNegative(f.f_dif, (n + ".f_dif").c_str());
 }
 
 void Validate(const ConstraintInputs& in, const ConstraintOptions& opt) {
@@ -31,17 +28,17 @@ void Validate(const ConstraintInputs& in, const ConstraintOptions& opt) {
                             std::to_string(in.trajectory_duration) +
                             " must be > 0 (+infinity when there is no trajectory)");
   }
-  RequireNonNegative(in.wcet.per, "wcet.per");
-  RequireNonNegative(in.wcet.plan, "wcet.plan");
-  RequireNonNegative(in.wcet.col, "wcet.col");
-  RequireNonNegative(in.wcet.dif, "wcet.dif");
+  kCheck.NonNegative(in.wcet.per, "wcet.per");
+  kCheck.NonNegative(in.wcet.plan, "wcet.plan");
+  kCheck.NonNegative(in.wcet.col, "wcet.col");
+  kCheck.NonNegative(in.wcet.dif, "wcet.dif");
   if (in.num_cores < 1) throw std::domain_error("frequency constraints: num_cores must be >= 1");
-  RequireNonNegative(in.u_cur, "u_cur");
+  kCheck.NonNegative(in.u_cur, "u_cur");
   ValidateFrequencies(in.current, "current");
   if (!(opt.capacity_fraction > 0.0 && opt.capacity_fraction <= 1.0)) {
     throw std::domain_error("frequency constraints: capacity_fraction must be in (0, 1]");
   }
-  RequireNonNegative(opt.tolerance, "tolerance");
+  kCheck.NonNegative(opt.tolerance, "tolerance");
   // The reaction inputs are validated by CheckReaction; check them once here for the grid loop.
   (void)CheckReaction(in.reaction, in.current, in.wcet, in.f_sen);
 }

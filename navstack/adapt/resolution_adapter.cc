@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "navstack/common/argument_check.h"
+
 namespace enavi::navstack {
 namespace {
 
@@ -11,12 +13,7 @@ namespace {
 constexpr double kTimeSlack = 1e-9;
 
 
-void RequireNonNegative(double v, const char* name) {
-  if (!(v >= 0.0) || std::isinf(v)) {
-    throw std::domain_error(std::string("path score: ") + name + " = " + std::to_string(v) +
-                            " must be finite and >= 0");
-  }
-}
+constexpr ArgumentCheck kCheck("path score");
 
 void RequireRange(double v, double lo, double hi, const char* name, bool lo_open = false) {
   const bool ok = (lo_open ? v > lo : v >= lo) && v <= hi;
@@ -30,11 +27,11 @@ void RequireRange(double v, double lo, double hi, const char* name, bool lo_open
 }  // namespace
 
 double PathScore(const PathScoreInputs& in, double gamma) {
-  RequireNonNegative(in.path_length, "path_length");
-  RequireNonNegative(in.straight_length, "straight_length");
-  RequireNonNegative(in.occupied_cells, "occupied_cells");
-  RequireNonNegative(in.total_cells, "total_cells");
-  RequireNonNegative(gamma, "gamma");
+  kCheck.NonNegative(in.path_length, "path_length");
+  kCheck.NonNegative(in.straight_length, "straight_length");
+  kCheck.NonNegative(in.occupied_cells, "occupied_cells");
+  kCheck.NonNegative(in.total_cells, "total_cells");
+  kCheck.NonNegative(gamma, "gamma");
   if (in.straight_length <= 0.0) return 1.0;
   const double density = in.total_cells > 0.0 ? in.occupied_cells / in.total_cells : 0.0;
   const double l_ref = (1.0 + gamma * density) * in.straight_length;

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "navstack/common/argument_check.h"
+
 // Why the occlusion rule (EciOptions::count_occluded): with the normalisation of docs/design.md, "Our reading of the paper"
 // eci = sum(w Occ) / sum(w) and Occ taken only from the pixels inside each zone and layer, a
 // wall filling the view at range r occupies one layer only, and layer 0 = [0, d0) is empty by
@@ -58,12 +60,7 @@ ENAVI_ECI_VEC(4)
 ENAVI_ECI_VEC(8)
 #undef ENAVI_ECI_VEC
 
-void Require(bool ok, const char* field, double value, const char* range) {
-  if (!ok) {
-    throw std::invalid_argument(std::string("EciOptions.") + field + ": " +
-                                std::to_string(value) + " is out of range " + range);
-  }
-}
+constexpr ArgumentCheck kCheck("EciOptions");
 
 // Squared Euclidean range of a pixel: r^2 = z^2 (1 + x_u^2 + y_v^2) = z^2 (row_c[v] + col_a[u]).
 // Every variant, vector or scalar, evaluates it with the same exact float operations (and
@@ -238,14 +235,14 @@ std::vector<int> ZoneBounds(int n, double f, double c, double angle_lo, double a
 }  // namespace
 
 void EciOptions::Validate() const {
-  Require(zones >= 1 && zones <= 15 && zones % 2 == 1, "zones", zones, "odd in [1, 15]");
-  Require(sigma > 0.0 && sigma <= 100.0, "sigma", sigma, "(0, 100]");
-  Require(d_per <= 1000.0, "d_per", d_per, "<= 0 (use the camera's max range) or (0, 1000]");
-  Require(d_min > 0.0 && (d_per <= 0.0 || d_min <= d_per), "d_min", d_min, "(0, d_per]");
-  Require(min_pixels >= 1 && min_pixels <= 1000000000, "min_pixels", min_pixels, "[1, 1e9]");
-  Require(occluded_fraction > 0.0 && occluded_fraction <= 1.0, "occluded_fraction",
+  kCheck.Range(zones >= 1 && zones <= 15 && zones % 2 == 1, "zones", zones, "odd in [1, 15]");
+  kCheck.Range(sigma > 0.0 && sigma <= 100.0, "sigma", sigma, "(0, 100]");
+  kCheck.Range(d_per <= 1000.0, "d_per", d_per, "<= 0 (use the camera's max range) or (0, 1000]");
+  kCheck.Range(d_min > 0.0 && (d_per <= 0.0 || d_min <= d_per), "d_min", d_min, "(0, d_per]");
+  kCheck.Range(min_pixels >= 1 && min_pixels <= 1000000000, "min_pixels", min_pixels, "[1, 1e9]");
+  kCheck.Range(occluded_fraction > 0.0 && occluded_fraction <= 1.0, "occluded_fraction",
           occluded_fraction, "(0, 1]");
-  Require(hover_speed >= 0.0 && hover_speed <= 100.0, "hover_speed", hover_speed, "[0, 100]");
+  kCheck.Range(hover_speed >= 0.0 && hover_speed <= 100.0, "hover_speed", hover_speed, "[0, 100]");
 }
 
 namespace {

@@ -7,15 +7,12 @@
 #include <string>
 #include <vector>
 
+#include "navstack/common/argument_check.h"
+
 namespace enavi::navstack {
 namespace {
 
-void Require(bool ok, const char* field, double value, const char* range) {
-  if (!ok) {
-    throw std::invalid_argument(std::string("DifferenceOptions.") + field + ": " +
-                                std::to_string(value) + " is out of range " + range);
-  }
-}
+constexpr ArgumentCheck kCheck("DifferenceOptions");
 
 void RequireMatches(const DepthImage& image, const CameraIntrinsics& k, const char* which) {
   if (image.width != k.width || image.height != k.height ||
@@ -33,12 +30,12 @@ constexpr float kNoReturn = std::numeric_limits<float>::infinity();
 }  // namespace
 
 void DifferenceOptions::Validate() const {
-  Require(stride >= 1 && stride <= 64, "stride", stride, "[1, 64]");
-  Require(relevant_depth > 0.0 && relevant_depth <= 100.0, "relevant_depth", relevant_depth,
+  kCheck.Range(stride >= 1 && stride <= 64, "stride", stride, "[1, 64]");
+  kCheck.Range(relevant_depth > 0.0 && relevant_depth <= 100.0, "relevant_depth", relevant_depth,
           "(0, 100]");
-  Require(abs_tolerance >= 0.0 && abs_tolerance <= 10.0, "abs_tolerance", abs_tolerance, "[0, 10]");
-  Require(rel_tolerance >= 0.0 && rel_tolerance <= 1.0, "rel_tolerance", rel_tolerance, "[0, 1]");
-  Require(trigger_fraction > 0.0 && trigger_fraction <= 1.0, "trigger_fraction", trigger_fraction,
+  kCheck.Range(abs_tolerance >= 0.0 && abs_tolerance <= 10.0, "abs_tolerance", abs_tolerance, "[0, 10]");
+  kCheck.Range(rel_tolerance >= 0.0 && rel_tolerance <= 1.0, "rel_tolerance", rel_tolerance, "[0, 1]");
+  kCheck.Range(trigger_fraction > 0.0 && trigger_fraction <= 1.0, "trigger_fraction", trigger_fraction,
           "(0, 1]");
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 #include <utility>
 
+#include "navstack/common/argument_check.h"
 #include "navstack/perception/cell_store.h"
 
 namespace enavi::navstack {
@@ -24,12 +25,7 @@ std::unique_ptr<detail::CellStore> MakeStore(const MapOptions& o) {
                                           : detail::MakeOctreeStore(o, o.resolution);
 }
 
-void Require(bool ok, const char* field, double value, const char* range) {
-  if (!ok) {
-    throw std::invalid_argument(std::string("MapOptions.") + field + ": " +
-                                std::to_string(value) + " is out of range " + range);
-  }
-}
+constexpr ArgumentCheck kCheck("MapOptions");
 
 void RequireResolution(double res, const char* where) {
   if (!(res >= kMinResolution && res <= kMaxResolution)) {
@@ -279,21 +275,21 @@ class RayCaster {
 }  // namespace
 
 void MapOptions::Validate() const {
-  Require(resolution >= kMinResolution && resolution <= kMaxResolution, "resolution", resolution,
+  kCheck.Range(resolution >= kMinResolution && resolution <= kMaxResolution, "resolution", resolution,
           "[0.02, 5]");
-  Require(occupancy_threshold > 0.0 && occupancy_threshold < 1.0, "occupancy_threshold",
+  kCheck.Range(occupancy_threshold > 0.0 && occupancy_threshold < 1.0, "occupancy_threshold",
           occupancy_threshold, "(0, 1)");
-  Require(prob_hit > 0.5 && prob_hit < 1.0, "prob_hit", prob_hit, "(0.5, 1)");
-  Require(prob_miss > 0.0 && prob_miss < 0.5, "prob_miss", prob_miss, "(0, 0.5)");
-  Require(clamp_min > 0.0 && clamp_min < occupancy_threshold, "clamp_min", clamp_min,
+  kCheck.Range(prob_hit > 0.5 && prob_hit < 1.0, "prob_hit", prob_hit, "(0.5, 1)");
+  kCheck.Range(prob_miss > 0.0 && prob_miss < 0.5, "prob_miss", prob_miss, "(0, 0.5)");
+  kCheck.Range(clamp_min > 0.0 && clamp_min < occupancy_threshold, "clamp_min", clamp_min,
           "(0, occupancy_threshold)");
-  Require(clamp_max > occupancy_threshold && clamp_max < 1.0, "clamp_max", clamp_max,
+  kCheck.Range(clamp_max > occupancy_threshold && clamp_max < 1.0, "clamp_max", clamp_max,
           "(occupancy_threshold, 1)");
   for (int a = 0; a < 3; ++a) {
-    Require(local_half_extent[a] > 0.0 && local_half_extent[a] <= 1000.0, "local_half_extent",
+    kCheck.Range(local_half_extent[a] > 0.0 && local_half_extent[a] <= 1000.0, "local_half_extent",
             local_half_extent[a], "(0, 1000]");
   }
-  Require(rebuild_frames >= 0 && rebuild_frames <= 1000, "rebuild_frames", rebuild_frames,
+  kCheck.Range(rebuild_frames >= 0 && rebuild_frames <= 1000, "rebuild_frames", rebuild_frames,
           "[0, 1000]");
 }
 

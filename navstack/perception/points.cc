@@ -3,22 +3,19 @@
 #include <stdexcept>
 #include <string>
 
+#include "navstack/common/argument_check.h"
+
 namespace enavi::navstack {
 namespace {
 
-void Require(bool ok, const char* field, double value, const char* range) {
-  if (!ok) {
-    throw std::invalid_argument(std::string("PerceptionOptions.") + field + ": " +
-                                std::to_string(value) + " is out of range " + range);
-  }
-}
+constexpr ArgumentCheck kCheck("PerceptionOptions");
 
 }  // namespace
 
 void PerceptionOptions::Validate() const {
-  Require(stride >= 1 && stride <= 64, "stride", stride, "[1, 64]");
-  Require(max_range > 0.0 && max_range <= 100.0, "max_range", max_range, "(0, 100]");
-  Require(min_range >= 0.0 && min_range < max_range, "min_range", min_range, "[0, max_range)");
+  kCheck.Range(stride >= 1 && stride <= 64, "stride", stride, "[1, 64]");
+  kCheck.Range(max_range > 0.0 && max_range <= 100.0, "max_range", max_range, "(0, 100]");
+  kCheck.Range(min_range >= 0.0 && min_range < max_range, "min_range", min_range, "[0, max_range)");
 }
 
 ScanPoints BackProject(const DepthFrame& frame, const CameraIntrinsics& intrinsics,

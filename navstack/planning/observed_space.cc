@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
-#include <string>
+
+#include "navstack/common/argument_check.h"
 
 namespace enavi::navstack {
 namespace {
@@ -15,21 +15,18 @@ double DistanceToSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, con
   return (p - (a + s * ab)).norm();
 }
 
-void RequireNonNegative(const char* name, double v) {
-  if (!(std::isfinite(v) && v >= 0.0))
-    throw std::invalid_argument(std::string("ObservedSpaceRule: ") + name + " must be finite and >= 0");
-}
+constexpr ArgumentCheck kCheck("ObservedSpaceRule");
 
 }  // namespace
 
 ObservedSpaceRule ObservedSpaceRule::For(const Eigen::Vector3d& vehicle, const Eigen::Vector3d& start, double speed,
                                          double t_react, double a_brake, double radius, double resolution,
                                          const CameraIntrinsics& camera) {
-  RequireNonNegative("speed", speed);
-  RequireNonNegative("t_react", t_react);
-  RequireNonNegative("radius", radius);
-  if (!(a_brake > 0.0) || !(resolution > 0.0) || !std::isfinite(a_brake) || !std::isfinite(resolution))
-    throw std::invalid_argument("ObservedSpaceRule: a_brake and resolution must be finite and > 0");
+  kCheck.NonNegative(speed, "speed");
+  kCheck.NonNegative(t_react, "t_react");
+  kCheck.NonNegative(radius, "radius");
+  kCheck.Range(a_brake > 0.0 && std::isfinite(a_brake), "a_brake", a_brake, "(0, inf)");
+  kCheck.Range(resolution > 0.0 && std::isfinite(resolution), "resolution", resolution, "(0, inf)");
   // The narrower half-angle of the view cone: vertical on the farm's 87 x 58 deg camera.
   const double half_angle = std::min({std::atan(camera.cx / camera.fx), std::atan((camera.width - camera.cx) / camera.fx),
                                       std::atan(camera.cy / camera.fy), std::atan((camera.height - camera.cy) / camera.fy)});

@@ -40,8 +40,9 @@ struct ObservedSpaceRule {
   /// The rule for a vehicle at `vehicle` (plan start `start`) flying at up to `speed` with
   /// reaction time `t_react`, braking at `a_brake`, with body radius `radius`, on a map of cell
   /// size `resolution`, seen by `camera`.
-  /// @throws std::invalid_argument if speed, t_react or radius is negative or not finite,
-  ///         a_brake or resolution not positive, or the camera's field of view is empty.
+  /// @throws std::domain_error if speed, t_react or radius is negative or not finite;
+  ///         std::invalid_argument if a_brake or resolution is not positive and finite, or the
+  ///         camera's field of view is empty.
   static ObservedSpaceRule For(const Eigen::Vector3d& vehicle, const Eigen::Vector3d& start, double speed,
                                double t_react, double a_brake, double radius, double resolution,
                                const CameraIntrinsics& camera);

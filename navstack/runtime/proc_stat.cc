@@ -29,6 +29,51 @@ std::string TaskDir(pid_t pid, pid_t tid) {
 
 }  // namespace
 
+const std::string* ProcStatLine::Field(int index) const {
+  const int i = index - 3;
+  if (i < 0 || i >= static_cast<int>(fields.size())) return nullptr;
+  return &fields[static_cast<std::size_t>(i)];
+}
+
+std::optional<ProcStatLine> ParseProcStatLine(const std::string& line) {
+  const auto open = line.find('(');
+  const auto close = line.rfind(')');
+  if (open == std::string::npos || close == std::string::npos || close < open) return std::nullopt;
+  ProcStatLine out;
+  out.comm = line.substr(open + 1, close - open - 1);
+  std::istringstream rest(line.substr(close + 1));
+  std::string field;
+  while (rest >> field) out.fields.push_back(field);
+  return out;
+}
+
+std::optional<std::uint64_t> ProcessStartTime(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!in || !std::getline(in, line)) return std::nullopt;
+  const auto parsed = ParseProcStatLine(line);
+  if (!parsed) return std::nullopt;
+  const std::string* state = parsed->Field(3);
+  const std::string* start = parsed->Field(22);
+  if (state == nullptr || start == nullptr || *state == "Z" || *state == "X") return std::nullopt;
+  return std::stoull(*start);
+}
+
+pid_t ThreadGroupOf(pid_t tid) {
+  std::ifstream in("/proc/" + std::to_string(tid) + "/status");
+  std::string key;
+  while (in >> key) {
+    if (key == "Tgid:") {
+      long v = 0;
+      in >> v;
+      return static_cast<pid_t>(v);
+    }
+    std::string rest;
+    std::getline(in, rest);
+  }
+  return 0;
+}
+
 double ThreadCpuTimes::CpuSeconds() const {
   if (sum_exec_ns >= 0) return static_cast<double>(sum_exec_ns) * 1e-9;
   return static_cast<double>(utime_ticks + stime_ticks) * TickSeconds();
@@ -44,23 +89,19 @@ std::optional<ThreadCpuTimes> ReadThreadCpu(pid_t pid, pid_t tid) {
   ThreadCpuTimes t;
   t.tid = tid;
   t.sampled_ns = MonotonicNs();
-  // The name (field 2) is in parentheses and may itself contain spaces and ')'.
-  const auto open = line.find('(');
-  const auto close = line.rfind(')');
-  if (open == std::string::npos || close == std::string::npos || close < open) {
+  const auto parsed = ParseProcStatLine(line);
+  if (!parsed) {
     throw std::runtime_error("ReadThreadCpu: cannot parse " + dir + "/stat: '" + line + "'");
   }
-  t.comm = line.substr(open + 1, close - open - 1);
-  // After the name: field 3 (state) ... field 14 utime, field 15 stime.
-  std::istringstream rest(line.substr(close + 1));
-  std::string field;
-  for (int index = 3; index <= 15 && rest >> field; ++index) {
-    if (index == 14) t.utime_ticks = std::stoull(field);
-    if (index == 15) t.stime_ticks = std::stoull(field);
-  }
-  if (!rest) {
+  t.comm = parsed->comm;
+  // Field 14 utime, field 15 stime.
+  const std::string* utime = parsed->Field(14);
+  const std::string* stime = parsed->Field(15);
+  if (utime == nullptr || stime == nullptr) {
     throw std::runtime_error("ReadThreadCpu: " + dir + "/stat has fewer than 15 fields");
   }
+  t.utime_ticks = std::stoull(*utime);
+  t.stime_ticks = std::stoull(*stime);
   // schedstat: "sum_exec_runtime_ns run_delay_ns timeslices" (CONFIG_SCHED_INFO).
   std::ifstream schedstat(dir + "/schedstat");
   long long exec_ns = -1, delay_ns = -1;

@@ -30,6 +30,28 @@ struct ThreadCpuTimes {
   double CpuSeconds() const;
 };
 
+/// One line of /proc/<pid>/stat or /proc/<pid>/task/<tid>/stat (proc(5)): the name (field 2)
+/// and the fields after it as text.
+struct ProcStatLine {
+  std::string comm;
+  std::vector<std::string> fields;  ///< fields[0] is field 3 (state), fields[i] is field i + 3
+
+  /// Field `index` (proc(5) numbering, >= 3); nullptr when the line is shorter.
+  const std::string* Field(int index) const;
+};
+
+/// Splits a stat line. The name is in parentheses and may itself contain spaces and ')', so it
+/// ends at the last ')'. nullopt when the line has no parenthesised name.
+std::optional<ProcStatLine> ParseProcStatLine(const std::string& line);
+
+/// Start time of a live process (/proc/<pid>/stat field 22, clock ticks since boot): with the
+/// pid it names one process across pid reuse. nullopt when the process is gone or a zombie
+/// (it will never run again).
+std::optional<std::uint64_t> ProcessStartTime(pid_t pid);
+
+/// The process a thread belongs to (Tgid in /proc/<tid>/status); 0 when the thread is gone.
+pid_t ThreadGroupOf(pid_t tid);
+
 /// Reads /proc/<pid>/task/<tid>/{stat,schedstat}. nullopt if the thread does not exist (it
 /// exited). Throws std::runtime_error if the stat line cannot be parsed (a kernel contract).
 std::optional<ThreadCpuTimes> ReadThreadCpu(pid_t pid, pid_t tid);

@@ -5,12 +5,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/board/throttle_bench.h"
+#include "bench/sim/raycast_bench.h"
 #include "server/cli/commands.h"
 #include "server/cli/registry_help.h"
 #include "workers/board/board_profile.h"
 #include "workers/board/host_calibration.h"
-#include "workers/board/throttle_bench.h"
-#include "workers/sim/raycast_bench.h"
 #include "worlds/mesh.h"
 #include "worlds/resolve.h"
 

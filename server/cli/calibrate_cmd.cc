@@ -10,8 +10,9 @@
 #include "server/cli/commands.h"
 #include "workers/board/board_profile.h"
 #include "workers/board/calibration_flights.h"
-#include "workers/board/cgroup.h"
 #include "workers/board/host_calibration.h"
+#include "workers/emulation/board_emulation.h"
+#include "workers/emulation/cgroup_manager.h"
 
 namespace enavi::cli {
 namespace {

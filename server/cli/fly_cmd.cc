@@ -10,12 +10,12 @@
 #include "api/atomic_file.h"
 #include "api/episode.h"
 #include "api/job_spec.h"
+#include "navstack/methods/registry.h"
 #include "server/cli/cli_values.h"
 #include "server/cli/commands.h"
 #include "server/cli/registry_help.h"
 #include "server/report/flight_report.h"
 #include "workers/board/board_profile.h"
-#include "navstack/methods/registry.h"
 #include "workers/sim/episode.h"
 #include "workers/sim/episode_config.h"
 #include "worlds/resolve.h"
@@ -117,7 +117,7 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--calibration", args->calibration,
                   "emulated clock: host calibration file (default: $ENAVI_CALIBRATION, else "
                   "$XDG_STATE_HOME/enavi/calibration.json or ~/.local/state/enavi/calibration.json)");
-  // Experiments with the emulation itself (defaults documented in workers/sim/emulation_options.h).
+  // Experiments with the emulation itself (defaults documented in workers/emulation/emulation_options.h).
   fly->add_option("--emulation-server-period-us", args->emulation.server_period_us)->group("")->check(CLI::Range(100, 1000000));
   fly->add_option("--emulation-lead-us", args->emulation.lead_us)->group("")->check(CLI::Range(0, 1000000));
   fly->add_option("--emulation-cpus", args->emulation.cpus)->group("");

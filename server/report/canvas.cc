@@ -5,13 +5,12 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <numbers>
 #include <stdexcept>
 #include <utility>
 
 namespace enavi::report {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 cairo_t* Cr(void* p) { return static_cast<cairo_t*>(p); }
 cairo_surface_t* Surface(void* p) { return static_cast<cairo_surface_t*>(p); }
@@ -169,7 +168,7 @@ void Canvas::FillEllipse(double cx, double cy, double rx, double ry, Rgb color, 
   cairo_save(cr);
   cairo_translate(cr, cx, cy);
   cairo_scale(cr, rx, ry);
-  cairo_arc(cr, 0.0, 0.0, 1.0, 0.0, 2.0 * kPi);
+  cairo_arc(cr, 0.0, 0.0, 1.0, 0.0, 2.0 * std::numbers::pi);
   cairo_restore(cr);
   SetColor(cr, color, alpha);
   cairo_fill(cr);
@@ -181,7 +180,7 @@ void Canvas::StrokeEllipse(double cx, double cy, double rx, double ry, Rgb color
   cairo_save(cr);
   cairo_translate(cr, cx, cy);
   cairo_scale(cr, rx, ry);
-  cairo_arc(cr, 0.0, 0.0, 1.0, 0.0, 2.0 * kPi);
+  cairo_arc(cr, 0.0, 0.0, 1.0, 0.0, 2.0 * std::numbers::pi);
   cairo_restore(cr);  // stroke in device space so the line width is not scaled
   SetColor(cr, color);
   cairo_set_line_width(cr, line_width);
@@ -197,7 +196,7 @@ void Canvas::Text(double x, double y, const std::string& text, double size, Rgb 
   const double shift = align == TextAlign::kLeft ? 0.0 : (align == TextAlign::kCenter ? 0.5 : 1.0) * ext.x_advance;
   cairo_save(cr);
   cairo_translate(cr, x, y);
-  if (rotate_90) cairo_rotate(cr, -0.5 * kPi);
+  if (rotate_90) cairo_rotate(cr, -0.5 * std::numbers::pi);
   cairo_move_to(cr, -shift, 0.0);
   SetColor(cr, color);
   cairo_show_text(cr, text.c_str());

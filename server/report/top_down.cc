@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <utility>
 #include <stdexcept>
 #include <variant>
@@ -14,7 +15,6 @@
 namespace enavi::report {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr Rgb kGroundTint{0.93, 0.95, 0.89};
 constexpr Rgb kFrame{0.2, 0.2, 0.2};
 constexpr double kColorBarWidth = 18.0;
@@ -169,7 +169,7 @@ void TopDownView::DrawObstacles(const worlds::World& world) {
       const double rx = std::max(1.0, radii.x() * scale_), ry = std::max(1.0, radii.y() * scale_);
       if (item.overhead) {
         for (int k = 0; k < 48; k += 2) {
-          const double a0 = k * kPi / 24.0, a1 = (k + 1) * kPi / 24.0;
+          const double a0 = k * std::numbers::pi / 24.0, a1 = (k + 1) * std::numbers::pi / 24.0;
           canvas_.Line(px.x() + rx * std::cos(a0), px.y() + ry * std::sin(a0), px.x() + rx * std::cos(a1),
                        px.y() + ry * std::sin(a1), kFrame, 1.0);
         }

@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "workers/board/board_profile.h"
-#include "workers/board/cgroup.h"
 #include "workers/board/host_calibration.h"
+#include "workers/emulation/cgroup_manager.h"
 #include "workers/sim/episode.h"
 
 namespace enavi::sim {

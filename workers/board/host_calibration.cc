@@ -7,12 +7,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
 #include "api/atomic_file.h"
-#include "workers/board/board_quota.h"
+#include "api/json_read.h"
 
 namespace enavi::board {
 namespace {
@@ -24,16 +25,6 @@ std::string Env(const char* name) {
   return v != nullptr ? std::string(v) : std::string();
 }
 
-template <typename T>
-T Field(const nlohmann::json& j, const std::string& key, const std::string& path) {
-  if (!j.contains(key)) throw std::invalid_argument(path + ": field '" + key + "' is missing");
-  try {
-    return j.at(key).get<T>();
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(path + ": field '" + key + "' has the wrong type: " + e.what());
-  }
-}
-
 // The fit's prices by name (a task's per-job overhead, a unit's price), as written and read.
 template <typename Names, typename Values>
 nlohmann::json PricesJson(const Names& names, const Values& values) {
@@ -43,14 +34,15 @@ nlohmann::json PricesJson(const Names& names, const Values& values) {
 }
 
 template <typename Names, typename Values>
-void ReadPrices(const nlohmann::json& fitted, const char* key, const Names& names, Values& values,
-                const std::string& path) {
-  const std::string where = path + ": fitted." + key;
-  const nlohmann::json prices = Field<nlohmann::json>(fitted, key, path + ": fitted");
+void ReadPrices(const api::JsonReader& r, const nlohmann::json& fitted, const char* key, const Names& names,
+                Values& values) {
+  const std::string where = api::JsonReader::Join("fitted", key);
+  const nlohmann::json& prices = r.Object(r.Field(fitted, "fitted", key), where);
   for (std::size_t i = 0; i < names.size(); ++i) {
     const std::string name(names[i]);
-    values[i] = Field<double>(prices, name, where);
-    if (!(values[i] >= 0)) throw std::invalid_argument(where + "." + name + " is negative");
+    const std::string field = api::JsonReader::Join(where, name);
+    values[i] = r.Number(r.Field(prices, where, name), field);
+    if (!(values[i] >= 0)) r.Fail(field, "is negative");
   }
 }
 
@@ -95,41 +87,39 @@ void SaveHostCalibration(const HostCalibration& c, const std::string& path) {
 HostCalibration LoadHostCalibration(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(path + ": cannot read the host calibration file");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(path + ": not JSON: " + e.what());
-  }
-  if (!j.is_object() || j.value("format", "") != kFormat)
-    throw std::invalid_argument(path + ": field 'format' is not '" + kFormat + "'");
-  const int version = Field<int>(j, "version", path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const nlohmann::json j = api::ParseJson(text.str(), path);
+  const api::JsonReader r(path);
+  r.Object(j, "");
+  const nlohmann::json* format = r.Optional(j, "", "format");
+  if (format == nullptr || *format != kFormat) r.Fail("format", std::string("is not '") + kFormat + "'");
+  const auto version = r.Integer(r.Field(j, "", "version"), "version");
   if (version != HostCalibration::kFormatVersion)
-    throw std::invalid_argument(path + ": field 'version' is " + std::to_string(version) + ", this build reads " +
-                                std::to_string(HostCalibration::kFormatVersion) +
-                                " (since version 2 the fit has one ns per job for each task)");
+    r.Fail("version", "is " + std::to_string(version) + ", this build reads " +
+                          std::to_string(HostCalibration::kFormatVersion) +
+                          " (since version 2 the fit has one ns per job for each task)");
   HostCalibration c;
-  c.relative_speed = Field<double>(j, "relative_speed", path);
+  c.relative_speed = r.Number(r.Field(j, "", "relative_speed"), "relative_speed");
   if (!(c.relative_speed > 0.01 && c.relative_speed < 100))
-    throw std::invalid_argument(path + ": field 'relative_speed' is " + std::to_string(c.relative_speed) +
-                                ", outside (0.01, 100)");
-  c.cpu_model = Field<std::string>(j, "cpu_model", path);
-  c.kernel = Field<std::string>(j, "kernel", path);
-  c.date = Field<std::string>(j, "date", path);
-  c.reference_calibration_id = Field<std::string>(j, "reference_calibration_id", path);
-  c.samples = Field<int>(j, "samples", path);
-  c.r2 = Field<double>(j, "r2", path);
-  const nlohmann::json fitted = Field<nlohmann::json>(j, "fitted", path);
-  ReadPrices(fitted, "ns_per_job", navstack::kTaskNames, c.fitted.ns_per_job, path);
-  ReadPrices(fitted, "ns_per_unit", navstack::kWorkUnitNames, c.fitted.ns_per_unit, path);
-  if (j.contains("tasks")) {
-    for (const auto& [task, t] : j.at("tasks").items()) {
-      const std::string where = path + ": tasks." + task;
+    r.Fail("relative_speed", "is " + std::to_string(c.relative_speed) + ", outside (0.01, 100)");
+  c.cpu_model = r.String(r.Field(j, "", "cpu_model"), "cpu_model");
+  c.kernel = r.String(r.Field(j, "", "kernel"), "kernel");
+  c.date = r.String(r.Field(j, "", "date"), "date");
+  c.reference_calibration_id = r.String(r.Field(j, "", "reference_calibration_id"), "reference_calibration_id");
+  c.samples = static_cast<int>(r.Integer(r.Field(j, "", "samples"), "samples"));
+  c.r2 = r.Number(r.Field(j, "", "r2"), "r2");
+  const nlohmann::json& fitted = r.Object(r.Field(j, "", "fitted"), "fitted");
+  ReadPrices(r, fitted, "ns_per_job", navstack::kTaskNames, c.fitted.ns_per_job);
+  ReadPrices(r, fitted, "ns_per_unit", navstack::kWorkUnitNames, c.fitted.ns_per_unit);
+  if (const nlohmann::json* tasks = r.Optional(j, "", "tasks")) {
+    for (const auto& [task, t] : r.Object(*tasks, "tasks").items()) {
+      const std::string where = api::JsonReader::Join("tasks", task);
       TaskTiming timing;
-      timing.jobs = Field<int>(t, "jobs", where);
-      timing.mean_s = Field<double>(t, "mean_s", where);
-      timing.p99_s = Field<double>(t, "p99_s", where);
-      timing.max_s = Field<double>(t, "max_s", where);
+      timing.jobs = static_cast<int>(r.Integer(r.Field(t, where, "jobs"), where + ".jobs"));
+      timing.mean_s = r.Number(r.Field(t, where, "mean_s"), where + ".mean_s");
+      timing.p99_s = r.Number(r.Field(t, where, "p99_s"), where + ".p99_s");
+      timing.max_s = r.Number(r.Field(t, where, "max_s"), where + ".max_s");
       c.tasks[task] = timing;
     }
   }
@@ -193,26 +183,6 @@ CalibrationCheck CheckHostCalibration(const std::string& path) {
 double SpeedVsHost(const BoardProfile& board, const HostCalibration& host) {
   if (board.is_host) return 1.0;
   return board.per_core_speed / host.relative_speed;
-}
-
-BoardEmulation DescribeBoardEmulation(const BoardProfile& board, const HostCalibration& host,
-                                      double host_cpus_free) {
-  BoardEmulation e;
-  e.board = board.id;
-  e.cores = board.cores;
-  e.speed_vs_host = SpeedVsHost(board, host);
-  e.emulable = e.speed_vs_host <= 1.0 + kFasterBoardTolerance;
-  e.quota_cpus_k1 = board.cores * e.speed_vs_host;
-  e.min_dilation = e.emulable && host_cpus_free > 0
-                       ? MinimumDilation({board.cores, std::min(1.0, e.speed_vs_host)}, host_cpus_free)
-                       : 0.0;
-  // A job that took x host seconds takes x / speed on the board.
-  for (const auto& [task, t] : host.tasks)
-    if (t.jobs > 0) {
-      e.wcet_s[task] = t.max_s / e.speed_vs_host;
-      e.p99_s[task] = t.p99_s / e.speed_vs_host;
-    }
-  return e;
 }
 
 TaskTiming SummariseTimes(std::vector<double> seconds) {

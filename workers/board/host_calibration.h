@@ -79,23 +79,6 @@ CalibrationCheck CheckHostCalibration(const std::string& path);
 /// cannot be emulated by throttling.
 inline constexpr double kFasterBoardTolerance = 0.05;
 
-/// How a board is emulated on this host (the `enavi calibrate` table).
-struct BoardEmulation {
-  std::string board;
-  int cores = 1;
-  double speed_vs_host = 1.0;  ///< board per-core speed / host per-core speed
-  bool emulable = true;        ///< false if the board's cores are faster than the host's (beyond the tolerance)
-  double quota_cpus_k1 = 0;    ///< cores x speed: host CPUs the board takes at dilation 1
-  double min_dilation = 1.0;   ///< smallest k that fits `host_cpus_free`
-  /// Board WCET per task (max job time of the calibration flights on this board), seconds.
-  std::map<std::string, double> wcet_s;
-  /// The same for the 99th percentile (the max is often one map rebuild).
-  std::map<std::string, double> p99_s;
-};
-/// `host_cpus_free`: host CPUs an emulation may use (e.g. HostCpus - 0.25 for the simulator).
-BoardEmulation DescribeBoardEmulation(const BoardProfile& board, const HostCalibration& host,
-                                      double host_cpus_free);
-
 /// Per-core speed of `board` relative to this host: 1 for the host itself, else
 /// board.per_core_speed / host.relative_speed.
 double SpeedVsHost(const BoardProfile& board, const HostCalibration& host);

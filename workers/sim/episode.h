@@ -10,7 +10,7 @@
 #include "api/episode.h"
 #include "navstack/rl/rollout.h"
 #include "navstack/runtime/executor.h"
-#include "workers/sim/emulation_options.h"
+#include "workers/emulation/emulation_options.h"
 #include "worlds/resolve.h"
 #include "worlds/world.h"
 

@@ -164,7 +164,7 @@ TEST(FlyCliInputTest, HelpListsEveryRegisteredBoardScenarioAndClock) {
     for (const std::string& name : *names) EXPECT_TRUE(Has(r.out, "    " + name + ": ")) << name << " missing from:\n" << r.out;
 }
 
-// `enavi bench raycast` (its core is the enavi::raycast_bench library, outside the simulator's).
+// `enavi bench raycast` (its core is the enavi::raycast_bench library in bench/sim, outside the simulator's).
 TEST(BenchCliTest, RaycastRendersWithBothRenderersAndPrintsJson) {
   TempDir dir;
   const CliRun r = Enavi(dir, "bench raycast --world empty --frames 2 --bullet-frames 1 --json");

@@ -13,7 +13,7 @@ import subprocess
 import sys
 import tempfile
 
-LAYERS = ("api", "worlds", "navstack", "workers", "server")
+LAYERS = ("api", "worlds", "navstack", "workers", "server", "bench")  # the folders a probe tree links in
 
 
 def make_tree(root, repo, probe_text):
@@ -67,6 +67,7 @@ def main():
     cases = [
         ('#include "workers/sim/episode.h"\n', 1, "workers/sim/episode.h"),
         ('#include "server/cli/commands.h"\n', 1, "server/cli/commands.h"),
+        ('#include "bench/sim/raycast_bench.h"\n', 1, "bench/sim/raycast_bench.h"),
         ("#include <btBulletDynamicsCommon.h>\n", 1, "Bullet"),
         ("#include <embree3/rtcore.h>\n", 1, "Embree"),
         ('#include "api/dds.h"\n', 1, "api/dds.h"),

@@ -1,14 +1,13 @@
 #include "navstack/planning/observed_space.h"
 
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include <gtest/gtest.h>
 
 namespace enavi::navstack {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The farm's stream: 87 x 58 deg, so the narrower half-angle is 29 deg (vertical).
 ObservedSpaceRule Rule(const Eigen::Vector3d& vehicle, const Eigen::Vector3d& start, double speed, double t_react) {
@@ -27,7 +26,7 @@ TEST(ObservedSpaceTest, ReachIsTheStoppingDistanceAndBodyWhereTheViewConeHoldsTh
   // v T + v^2 / (2 a) + radius = 1 + 0.667 + 0.3.
   EXPECT_NEAR(r.reach, 1.0 + 4.0 / 6.0 + 0.3, 1e-9);
   // (radius + a cell diagonal) / sin(29 deg), within the decimated stream's pixel rounding.
-  EXPECT_NEAR(r.body, (0.3 + std::sqrt(3.0) * 0.1) / std::sin(29.0 * kPi / 180.0), 0.01);
+  EXPECT_NEAR(r.body, (0.3 + std::sqrt(3.0) * 0.1) / std::sin(29.0 * std::numbers::pi / 180.0), 0.01);
 }
 
 TEST(ObservedSpaceTest, BlocksUnknownCellsBetweenBodyAndReachOnly) {
@@ -68,8 +67,8 @@ TEST(ObservedSpaceTest, NothingIsBlockedWhenTheReachEndsInsideTheBody) {
 TEST(ObservedSpaceTest, RejectsInvalidInputs) {
   const Eigen::Vector3d o = Eigen::Vector3d::Zero();
   const CameraIntrinsics cam = CameraIntrinsics::DefaultStream();
-  EXPECT_THROW(ObservedSpaceRule::For(o, o, -1.0, 0.1, 3.0, 0.3, 0.1, cam), std::invalid_argument);
-  EXPECT_THROW(ObservedSpaceRule::For(o, o, 1.0, NAN, 3.0, 0.3, 0.1, cam), std::invalid_argument);
+  EXPECT_THROW(ObservedSpaceRule::For(o, o, -1.0, 0.1, 3.0, 0.3, 0.1, cam), std::domain_error);
+  EXPECT_THROW(ObservedSpaceRule::For(o, o, 1.0, NAN, 3.0, 0.3, 0.1, cam), std::domain_error);
   EXPECT_THROW(ObservedSpaceRule::For(o, o, 1.0, 0.1, 0.0, 0.3, 0.1, cam), std::invalid_argument);
   EXPECT_THROW(ObservedSpaceRule::For(o, o, 1.0, 0.1, 3.0, 0.3, 0.0, cam), std::invalid_argument);
   EXPECT_THROW(ObservedSpaceRule::For(o, o, 1.0, 0.1, 3.0, 0.3, 0.1, CameraIntrinsics{}), std::invalid_argument);

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <pthread.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -48,6 +49,54 @@ TEST(ProcStatTest, ReadsNameWithSpacesAndParentheses) {
   ASSERT_TRUE(times.has_value());
   EXPECT_EQ(times->comm, "a) b (c");
   EXPECT_EQ(times->tid, id);
+}
+
+TEST(ProcStatTest, StatLineFieldsCountFromTheLastParenthesis) {
+  const auto line = ParseProcStatLine("42 (a) b (c) S 1 2 3");
+  ASSERT_TRUE(line.has_value());
+  EXPECT_EQ(line->comm, "a) b (c");
+  ASSERT_NE(line->Field(3), nullptr);
+  EXPECT_EQ(*line->Field(3), "S");
+  ASSERT_NE(line->Field(6), nullptr);
+  EXPECT_EQ(*line->Field(6), "3");
+  EXPECT_EQ(line->Field(7), nullptr) << "past the end of the line";
+  EXPECT_EQ(line->Field(2), nullptr) << "the name is not a field of the list";
+  EXPECT_FALSE(ParseProcStatLine("42 no name S 1").has_value());
+}
+
+TEST(ProcStatTest, StartTimeNamesALiveProcessAndNotAZombie) {
+  const auto self = ProcessStartTime(getpid());
+  ASSERT_TRUE(self.has_value());
+  EXPECT_EQ(ProcessStartTime(getpid()), self) << "the start time of a process does not change";
+  EXPECT_FALSE(ProcessStartTime(0x7ffffff0).has_value());
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) _exit(0);
+  // Until it is reaped the child is a zombie: gone for the purpose of owning a cgroup.
+  bool zombie = false;
+  for (int i = 0; i < 500 && !zombie; ++i) {
+    zombie = !ProcessStartTime(child).has_value();
+    if (!zombie) usleep(1000);
+  }
+  EXPECT_TRUE(zombie);
+  int status = 0;
+  waitpid(child, &status, 0);
+}
+
+TEST(ProcStatTest, ThreadGroupOfAThreadIsItsProcess) {
+  std::promise<pid_t> tid;
+  std::promise<void> done;
+  std::thread t([&] {
+    tid.set_value(gettid());
+    done.get_future().wait();
+  });
+  const pid_t id = tid.get_future().get();
+  const pid_t group = ThreadGroupOf(id);
+  done.set_value();
+  t.join();
+  EXPECT_NE(id, getpid());
+  EXPECT_EQ(group, getpid());
+  EXPECT_EQ(ThreadGroupOf(0x7ffffff0), 0);
 }
 
 TEST(ProcStatTest, MissingThreadIsNullopt) {

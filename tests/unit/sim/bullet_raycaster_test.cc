@@ -6,9 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include "bench/sim/raycast_bench.h"
 #include "tests/unit/sim/mesh_builders.h"
 #include "workers/sim/depth_camera.h"
-#include "workers/sim/raycast_bench.h"
 
 namespace enavi::sim {
 namespace {

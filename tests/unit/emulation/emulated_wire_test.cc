@@ -1,6 +1,6 @@
 // What crosses the process boundary of an emulated episode: trajectories as control points,
 // the sim side's rebuild of NavStack::Reference, and the seqlock slots.
-#include "workers/sim/emulated_wire.h"
+#include "workers/emulation/emulated_wire.h"
 
 #include <cmath>
 #include <memory>

@@ -1,4 +1,4 @@
-#include "workers/sim/emulated_wire.h"
+#include "workers/emulation/emulated_wire.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <string>
 
-#include "workers/board/cgroup.h"
+#include "workers/emulation/cgroup_manager.h"
 
 namespace enavi::board {
 namespace {

@@ -14,7 +14,7 @@
 #include <thread>
 #include <vector>
 
-#include "workers/board/cgroup.h"
+#include "workers/emulation/cgroup_manager.h"
 
 namespace enavi::board {
 namespace {

@@ -1,4 +1,4 @@
-#include "workers/sim/emulated_child.h"
+#include "workers/emulation/emulated_child.h"
 
 #include <fcntl.h>
 #include <pthread.h>
@@ -22,7 +22,7 @@
 #include "api/fixed.h"
 #include "navstack/runtime/realtime_executor.h"
 #include "navstack/runtime/sched_deadline.h"
-#include "workers/board/shm_channel.h"
+#include "workers/emulation/shm_channel.h"
 
 namespace enavi::sim::emulated {
 namespace {

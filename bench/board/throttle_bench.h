@@ -21,8 +21,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "workers/board/board_quota.h"
-#include "workers/board/cgroup.h"
+#include "workers/emulation/board_quota.h"
+#include "workers/emulation/cgroup_manager.h"
 
 namespace enavi::board {
 

@@ -33,7 +33,7 @@
 
 #include "navstack/runtime/virtual_executor.h"
 #include "workers/board/board_profile.h"
-#include "workers/sim/emulation_options.h"
+#include "workers/emulation/emulation_options.h"
 #include "workers/sim/nav_link.h"
 
 namespace enavi::sim {

@@ -1,4 +1,4 @@
-#include "workers/board/board_quota.h"
+#include "workers/emulation/board_quota.h"
 
 #include <algorithm>
 #include <cmath>

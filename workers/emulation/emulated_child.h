@@ -9,10 +9,10 @@
 #include <cstdint>
 #include <string>
 
+#include "navstack/methods/method.h"
 #include "navstack/runtime/cost_model.h"
 #include "navstack/runtime/virtual_executor.h"
-#include "navstack/methods/method.h"
-#include "workers/sim/emulated_wire.h"
+#include "workers/emulation/emulated_wire.h"
 
 namespace enavi::sim::emulated {
 

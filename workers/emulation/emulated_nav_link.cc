@@ -1,4 +1,4 @@
-#include "workers/sim/emulated_nav_link.h"
+#include "workers/emulation/emulated_nav_link.h"
 
 #include <fcntl.h>
 #include <pthread.h>
@@ -33,12 +33,12 @@
 #include "navstack/runtime/realtime_executor.h"
 #include "navstack/runtime/sched_deadline.h"
 #include "navstack/stack/nav_stack.h"
-#include "workers/board/board_quota.h"
-#include "workers/board/cgroup.h"
 #include "workers/board/host_calibration.h"
-#include "workers/board/shm_channel.h"
-#include "workers/sim/emulated_child.h"
-#include "workers/sim/emulated_wire.h"
+#include "workers/emulation/board_quota.h"
+#include "workers/emulation/cgroup_manager.h"
+#include "workers/emulation/emulated_child.h"
+#include "workers/emulation/emulated_wire.h"
+#include "workers/emulation/shm_channel.h"
 
 namespace enavi::sim {
 namespace {

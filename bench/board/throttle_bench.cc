@@ -1,4 +1,4 @@
-#include "workers/board/throttle_bench.h"
+#include "bench/board/throttle_bench.h"
 
 #include <signal.h>
 #include <sys/mman.h>

@@ -1,4 +1,4 @@
-#include "workers/sim/raycast_bench.h"
+#include "bench/sim/raycast_bench.h"
 
 #include <algorithm>
 #include <chrono>

@@ -1,4 +1,4 @@
-#include "workers/board/shm_channel.h"
+#include "workers/emulation/shm_channel.h"
 
 #include <gtest/gtest.h>
 #include <fcntl.h>

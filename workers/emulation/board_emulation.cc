@@ -1,0 +1,29 @@
+#include "workers/emulation/board_emulation.h"
+
+#include <algorithm>
+
+#include "workers/emulation/board_quota.h"
+
+namespace enavi::board {
+
+BoardEmulation DescribeBoardEmulation(const BoardProfile& board, const HostCalibration& host,
+                                      double host_cpus_free) {
+  BoardEmulation e;
+  e.board = board.id;
+  e.cores = board.cores;
+  e.speed_vs_host = SpeedVsHost(board, host);
+  e.emulable = e.speed_vs_host <= 1.0 + kFasterBoardTolerance;
+  e.quota_cpus_k1 = board.cores * e.speed_vs_host;
+  e.min_dilation = e.emulable && host_cpus_free > 0
+                       ? MinimumDilation({board.cores, std::min(1.0, e.speed_vs_host)}, host_cpus_free)
+                       : 0.0;
+  // A job that took x host seconds takes x / speed on the board.
+  for (const auto& [task, t] : host.tasks)
+    if (t.jobs > 0) {
+      e.wcet_s[task] = t.max_s / e.speed_vs_host;
+      e.p99_s[task] = t.p99_s / e.speed_vs_host;
+    }
+  return e;
+}
+
+}  // namespace enavi::board

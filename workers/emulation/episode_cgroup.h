@@ -1,0 +1,73 @@
+#pragma once
+// The cgroups of one emulated episode (docs/design.md, "Time: two clocks"): a group sized to
+// the board under the `enavi` parent, one child per thread for the per-core speed, removed
+// when destroyed. Created by CgroupManager::CreateEpisode (cgroup_manager.h).
+
+#include <sys/types.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "workers/emulation/board_quota.h"
+#include "workers/emulation/cgroup_layout.h"
+
+namespace enavi::board {
+
+struct CgroupContext;  // detection result + options, shared by a manager and its groups
+
+/// Limits of one episode besides the CPU quota.
+struct EpisodeLimits {
+  std::string cpus;               ///< cpuset.cpus list ("0-1"); empty = all of the worker's CPUs
+  std::int64_t memory_bytes = 0;  ///< memory limit; 0 = none
+};
+
+/// Throttling counters of a group (cpu.stat).
+struct CpuStat {
+  std::int64_t nr_periods = 0;
+  std::int64_t nr_throttled = 0;
+  std::int64_t throttled_ns = 0;
+};
+
+/// The groups of one episode; removed (tasks of other processes killed, threads of this process
+/// moved back home) when destroyed. Move-only.
+class EpisodeCgroup {
+ public:
+  ~EpisodeCgroup();
+  EpisodeCgroup(const EpisodeCgroup&) = delete;
+  EpisodeCgroup& operator=(const EpisodeCgroup&) = delete;
+
+  const std::string& name() const { return name_; }
+  const BoardQuota& quota() const { return quota_; }
+  /// The board group in the cpu hierarchy (v2: the unified tree).
+  const std::string& cpu_dir() const { return cpu_dir_; }
+
+  /// Moves every thread of process `pid` into the episode's groups (all controllers).
+  CgroupStatus AddProcess(pid_t pid);
+  /// Gives thread `tid` its own child group with the per-core quota and moves it there. The
+  /// thread's process must already be in the episode (AddProcess), v2 requires it.
+  CgroupStatus AddThread(pid_t tid);
+  /// Gives every thread still directly in the board group its own child group (threads that
+  /// the navstack created after AddProcess inherit their creator's group), and removes the
+  /// groups of threads that exited. Call after the navstack started its threads and then
+  /// periodically (it is a directory read when nothing changed). Returns threads placed.
+  int SweepThreads(CgroupStatus* status = nullptr);
+
+  CpuStat ReadCpuStat() const;
+
+  /// Kills tasks of other processes still inside, moves threads of this process back to the
+  /// worker's own groups, removes the directories. Idempotent; the destructor calls it.
+  CgroupStatus Remove();
+
+ private:
+  friend class CgroupManager;
+  EpisodeCgroup() = default;
+
+  std::shared_ptr<const CgroupContext> context_;
+  std::string name_;
+  BoardQuota quota_;
+  std::string cpu_dir_, cpuset_dir_, memory_dir_;
+  bool removed_ = false;
+};
+
+}  // namespace enavi::board
