@@ -66,6 +66,29 @@ VehicleState Hovering() {
   return s;
 }
 
+// A frame with nothing in view, from a camera at the hovering vehicle looking along +x (camera
+// z forward, x right, y down): the stack maps the view cone free up to its mapping range.
+DepthFramePtr OpenViewAhead(const NavStackOptions& o, double t) {
+  auto frame = std::make_shared<DepthFrame>();
+  frame->t = t;
+  frame->image = DepthImage(o.camera.width, o.camera.height);
+  Eigen::Matrix3d R_WC;
+  R_WC.col(0) = -Eigen::Vector3d::UnitY();
+  R_WC.col(1) = -Eigen::Vector3d::UnitZ();
+  R_WC.col(2) = Eigen::Vector3d::UnitX();
+  frame->X_WC.linear() = R_WC;
+  frame->X_WC.translation() = Hovering().p_WB;
+  return frame;
+}
+
+// The stack plans only into space it has seen near the vehicle (observed_space.h): show it the
+// way ahead first.
+void LookAhead(NavStack* stack, ScriptedExecutor* ex, const NavStackOptions& o) {
+  stack->OnFrame(OpenViewAhead(o, ex->now()));
+  ex->Run(TaskId::kPerception);
+  ex->triggers.clear();
+}
+
 bool HasEvent(const std::vector<NavEvent>& events, const std::string& kind, const std::string& detail = {}) {
   for (const NavEvent& e : events)
     if (e.kind == kind && (detail.empty() || e.detail == detail)) return true;
@@ -105,6 +128,7 @@ TEST(NavStackTest, APlanTakesEffectAtItsCommitNotWhenItsCodeRuns) {
   NavStackOptions o = OpenVolume();
   o.rates.f_plan = 0;
   NavStack stack(o, &ex, Hovering());
+  LookAhead(&stack, &ex, o);
   JobOutput plan = ex.Start(TaskId::kPlanning);
   EXPECT_EQ(stack.trajectory(), nullptr) << "computed, not yet finished on the board";
   EXPECT_FALSE(HasEvent(stack.TakeEvents(), "replan"));
@@ -119,11 +143,27 @@ TEST(NavStackTest, APlanTakesEffectAtItsCommitNotWhenItsCodeRuns) {
   EXPECT_GT(later.p.x(), Hovering().p_WB.x() + 0.1) << "the reference now moves towards the goal";
 }
 
+TEST(NavStackTest, ItDoesNotPlanIntoSpaceItHasNotSeen) {
+  // Nothing mapped yet: everything within stopping reach is unobserved, so no plan may leave the
+  // vehicle's own bubble; once it has looked ahead, the same request plans.
+  ScriptedExecutor ex;
+  NavStackOptions o = OpenVolume();
+  o.rates.f_plan = 0;
+  NavStack stack(o, &ex, Hovering());
+  ex.Run(TaskId::kPlanning);
+  EXPECT_EQ(stack.trajectory(), nullptr);
+  EXPECT_TRUE(HasEvent(stack.TakeEvents(), "plan_failed"));
+  LookAhead(&stack, &ex, o);
+  ex.Run(TaskId::kPlanning);
+  EXPECT_NE(stack.trajectory(), nullptr);
+}
+
 TEST(NavStackTest, AMapUpdateChecksTheTrajectoryAgainstTheNewMap) {
   ScriptedExecutor ex;
   NavStackOptions o = OpenVolume();
   o.rates.f_plan = 0;
   NavStack stack(o, &ex, Hovering());
+  LookAhead(&stack, &ex, o);
   ex.Run(TaskId::kPlanning);
   ASSERT_NE(stack.trajectory(), nullptr);
   ex.triggers.clear();
