@@ -29,7 +29,7 @@ std::vector<pid_t> ReadPids(const std::string& path);
 /// The white-space separated words of `s`.
 std::set<std::string> Words(const std::string& s);
 /// Writes `value` with one write() (cgroup files take one value per write). `create` makes a
-/// missing file (fake trees in tests hold plain files).
+/// missing file (a tree on an ordinary filesystem, as the unit tests use, holds plain files).
 CgroupStatus WriteValue(const std::string& path, const std::string& value, bool create);
 
 }  // namespace enavi::board::cgroupfs

@@ -10,7 +10,7 @@ namespace enavi::board {
 enum class CgroupVersion { kNone, kV1, kV2 };
 
 struct CgroupOptions {
-  /// Where the hierarchies are mounted. Tests point this at a fake directory tree.
+  /// Where the hierarchies are mounted (unit tests point this at a directory of plain files).
   std::string root = "/sys/fs/cgroup";
   /// The worker's own membership ("id:controllers:path" lines); injectable for tests.
   std::string self_cgroup_file = "/proc/self/cgroup";

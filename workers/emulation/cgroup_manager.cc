@@ -53,7 +53,7 @@ CgroupManager::OpenResult CgroupManager::Open(const CgroupOptions& options) {
     result.error = "cgroup CPU emulation unavailable: " + ctx->layout.problem;
     return result;
   }
-  ctx->fake = !OnCgroupFs(ctx->layout.cpu_base);
+  ctx->plain_files = !OnCgroupFs(ctx->layout.cpu_base);
   ctx->owner_pid = getpid();
   const auto start = navstack::ProcessStartTime(ctx->owner_pid);
   if (!start) {

@@ -85,12 +85,12 @@ const char* TaskFile(const CgroupContext& ctx) {
 }
 
 CgroupStatus WriteValue(const CgroupContext& ctx, const std::string& path, const std::string& value) {
-  return cgroupfs::WriteValue(path, value, ctx.fake);
+  return cgroupfs::WriteValue(path, value, ctx.plain_files);
 }
 
 CgroupStatus RemoveDir(const CgroupContext& ctx, const std::string& dir) {
   if (!IsDir(dir)) return {};
-  if (ctx.fake) {
+  if (ctx.plain_files) {
     DIR* d = opendir(dir.c_str());
     if (d != nullptr) {
       while (dirent* e = readdir(d)) {
@@ -113,7 +113,7 @@ CgroupStatus RemoveEpisodeDirs(const CgroupContext& ctx, const std::vector<Hiera
     status.ok = false;
     status.message += (status.message.empty() ? "" : "; ") + message;
   };
-  if (!ctx.fake) {
+  if (!ctx.plain_files) {
     const pid_t self = getpid();
     std::set<pid_t> killed;
     bool empty = false;

@@ -19,11 +19,12 @@
 namespace enavi::board {
 
 // Everything a manager and its episode groups share: options, detection result, whether the
-// tree is a real cgroup filesystem (a fake tree in tests gets plain files and no kills).
+// tree is a real cgroup filesystem. A directory tree on an ordinary filesystem (how the unit
+// tests drive this code without root) gets plain files and no kills.
 struct CgroupContext {
   CgroupOptions options;
   CgroupLayout layout;
-  bool fake = false;
+  bool plain_files = false;  ///< not on a cgroup filesystem (statfs): plain files, no kills
   pid_t owner_pid = 0;
   std::uint64_t owner_start = 0;
   // An episode that outlives its manager removes the parent itself when it is the last one.
@@ -55,12 +56,12 @@ std::vector<std::string> ParentDirs(const CgroupContext& ctx);
 /// The file listing a group's threads: cgroup.threads (v2) or tasks (v1).
 const char* TaskFile(const CgroupContext& ctx);
 
-/// One value into a control file (a fake tree gets a plain file).
+/// One value into a control file (a plain-file tree gets a plain file).
 CgroupStatus WriteValue(const CgroupContext& ctx, const std::string& path, const std::string& value);
 /// Empties and removes an episode's directories: threads of this process go home, other
 /// processes are killed (they are the episode's navstack, or orphans of a crashed worker).
 CgroupStatus RemoveEpisodeDirs(const CgroupContext& ctx, const std::vector<HierarchyDir>& dirs);
-/// Removes a directory this code created (a fake tree's plain files first).
+/// Removes a directory this code created (a plain-file tree's files first).
 CgroupStatus RemoveDir(const CgroupContext& ctx, const std::string& dir);
 /// Creates (if needed) and configures the `enavi` parent in every hierarchy.
 CgroupStatus EnsureParents(const CgroupContext& ctx);

@@ -81,7 +81,7 @@ int EpisodeCgroup::SweepThreads(CgroupStatus* status) {
     }
   }
   // Groups of threads that exited.
-  if (!ctx.fake) {
+  if (!ctx.plain_files) {
     for (const std::string& child : Subdirs(cpu_dir_)) {
       const std::string dir = Join(cpu_dir_, child);
       if (IsThreadDirName(child) && ReadPids(Join(dir, TaskFile(ctx))).empty()) rmdir(dir.c_str());
