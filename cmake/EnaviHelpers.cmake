@@ -1,8 +1,9 @@
-# enavi_add_test(<name> SOURCES a.cc [b.cc] LIBS enavi::x [...] [LABELS unit] [LOCK name])
+# enavi_add_test(<name> SOURCES a.cc [b.cc] LIBS enavi::x [...] [LABELS unit] [LOCK name] [SERIAL])
 # One line per test binary; every TEST in it is registered with CTest. LOCK serialises the tests
-# that share a host resource (cgroups, CPU-share measurements) under `ctest -j`.
+# that share a host resource (cgroups, CPU-share measurements) under `ctest -j`; SERIAL runs each
+# of them with no other test at all (measurements that need every host CPU).
 function(enavi_add_test name)
-  cmake_parse_arguments(ARG "" "LOCK" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "SERIAL" "LOCK" "SOURCES;LIBS;LABELS" ${ARGN})
   if(NOT ARG_SOURCES)
     set(ARG_SOURCES ${name}.cc)
   endif()
@@ -28,6 +29,9 @@ function(enavi_add_test name)
   endif()
   if(ARG_LOCK)
     list(APPEND props RESOURCE_LOCK ${ARG_LOCK})
+  endif()
+  if(ARG_SERIAL)
+    list(APPEND props RUN_SERIAL TRUE)
   endif()
   gtest_discover_tests(${name} PROPERTIES ${props} DISCOVERY_TIMEOUT 60)
 endfunction()

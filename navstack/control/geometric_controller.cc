@@ -3,9 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <sstream>
 #include <stdexcept>
 #include <string>
+
+#include "navstack/common/argument_check.h"
 
 namespace enavi::navstack {
 namespace {
@@ -18,25 +19,15 @@ Eigen::Matrix3d Hat(const Eigen::Vector3d& w) {
 
 Eigen::Vector3d Vee(const Eigen::Matrix3d& m) { return {m(2, 1), m(0, 2), m(1, 0)}; }
 
-[[noreturn]] void BadOption(const std::string& field, double value, const std::string& range) {
-  std::ostringstream msg;
-  msg << "GeometricControllerOptions." << field << " = " << value << ": must be " << range;
-  throw std::invalid_argument(msg.str());
-}
+constexpr ArgumentCheck kOptions("GeometricControllerOptions");
+constexpr ArgumentCheck kVehicle("VehicleParams");
 
-void RequireNonNegative(const Eigen::Vector3d& v, const std::string& field) {
+// Each component finite and >= 0 (or > 0 when `positive`), named field[i].
+void RequireComponents(const ArgumentCheck& check, const Eigen::Vector3d& v, const std::string& field,
+                       bool positive) {
   for (int i = 0; i < 3; ++i) {
-    if (!(v[i] >= 0.0) || !std::isfinite(v[i])) {
-      BadOption(field + "[" + std::to_string(i) + "]", v[i], "finite and >= 0");
-    }
-  }
-}
-
-void RequirePositive(const Eigen::Vector3d& v, const std::string& field) {
-  for (int i = 0; i < 3; ++i) {
-    if (!(v[i] > 0.0) || !std::isfinite(v[i])) {
-      BadOption(field + "[" + std::to_string(i) + "]", v[i], "finite and > 0");
-    }
+    const bool ok = std::isfinite(v[i]) && (positive ? v[i] > 0.0 : v[i] >= 0.0);
+    check.Range(ok, (field + "[" + std::to_string(i) + "]").c_str(), v[i], positive ? "(0, inf)" : "[0, inf)");
   }
 }
 
@@ -46,39 +37,27 @@ GeometricController::GeometricController(const VehicleParams& vehicle,
                                          const GeometricControllerOptions& options)
     : vehicle_(vehicle), options_(options) {
   const auto& o = options_;
-  if (!(o.rate_hz > 0.0) || !std::isfinite(o.rate_hz)) BadOption("rate_hz", o.rate_hz, "> 0");
-  RequirePositive(o.k_position, "k_position");
-  RequirePositive(o.k_velocity, "k_velocity");
-  RequireNonNegative(o.k_integral, "k_integral");
-  RequirePositive(o.k_attitude, "k_attitude");
-  RequirePositive(o.k_rate, "k_rate");
-  if (!(o.integral_limit >= 0.0) || !std::isfinite(o.integral_limit)) {
-    BadOption("integral_limit", o.integral_limit, "finite and >= 0");
-  }
-  if (!(o.integral_error_limit >= 0.0)) {
-    BadOption("integral_error_limit", o.integral_error_limit, ">= 0");
-  }
-  if (!(o.integral_max_speed_error >= 0.0)) {
-    BadOption("integral_max_speed_error", o.integral_max_speed_error, ">= 0");
-  }
-  if (!(o.max_tilt_deg > 0.0 && o.max_tilt_deg < 80.0)) {
-    BadOption("max_tilt_deg", o.max_tilt_deg, "in (0, 80)");
-  }
+  kOptions.Range(o.rate_hz > 0.0 && std::isfinite(o.rate_hz), "rate_hz", o.rate_hz, "(0, inf)");
+  RequireComponents(kOptions, o.k_position, "k_position", true);
+  RequireComponents(kOptions, o.k_velocity, "k_velocity", true);
+  RequireComponents(kOptions, o.k_integral, "k_integral", false);
+  RequireComponents(kOptions, o.k_attitude, "k_attitude", true);
+  RequireComponents(kOptions, o.k_rate, "k_rate", true);
+  kOptions.Range(o.integral_limit >= 0.0 && std::isfinite(o.integral_limit), "integral_limit", o.integral_limit,
+                 "[0, inf)");
+  kOptions.Range(o.integral_error_limit >= 0.0, "integral_error_limit", o.integral_error_limit, "[0, inf]");
+  kOptions.Range(o.integral_max_speed_error >= 0.0, "integral_max_speed_error", o.integral_max_speed_error,
+                 "[0, inf]");
+  kOptions.Range(o.max_tilt_deg > 0.0 && o.max_tilt_deg < 80.0, "max_tilt_deg", o.max_tilt_deg, "(0, 80)");
+  kVehicle.Range(vehicle_.mass > 0.0, "mass", vehicle_.mass, "(0, inf)");
   const double weight = vehicle_.mass * vehicle_.Gravity();
   const double ceiling = 4.0 * vehicle_.MaxThrustPerRotor();
-  if (!(o.max_thrust > weight && o.max_thrust <= ceiling)) {
-    BadOption("max_thrust", o.max_thrust,
-              "in (" + std::to_string(weight) + ", " + std::to_string(ceiling) +
-                  "] N (above the weight, at most 4 x the rotor maximum)");
-  }
-  if (!(o.min_thrust >= 0.0 && o.min_thrust < weight)) {
-    BadOption("min_thrust", o.min_thrust, "in [0, " + std::to_string(weight) + ") N");
-  }
-  if (!(vehicle_.mass > 0.0)) {
-    throw std::invalid_argument("VehicleParams.mass = " + std::to_string(vehicle_.mass) +
-                                ": must be > 0");
-  }
-  RequirePositive(vehicle_.inertia_diag, "(VehicleParams) inertia_diag");
+  const std::string thrust_range = "(" + std::to_string(weight) + ", " + std::to_string(ceiling) +
+                                   "] N (above the weight, at most 4 x the rotor maximum)";
+  kOptions.Range(o.max_thrust > weight && o.max_thrust <= ceiling, "max_thrust", o.max_thrust, thrust_range.c_str());
+  const std::string min_range = "[0, " + std::to_string(weight) + ") N";
+  kOptions.Range(o.min_thrust >= 0.0 && o.min_thrust < weight, "min_thrust", o.min_thrust, min_range.c_str());
+  RequireComponents(kVehicle, vehicle_.inertia_diag, "inertia_diag", true);
 }
 
 void GeometricController::Reset() { integral_W_.setZero(); }

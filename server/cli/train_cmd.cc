@@ -38,17 +38,35 @@ void RegisterTrainCommand(CLI::App& app) {
   cmd->add_flag("--resume", o->resume, "continue from the work dir's checkpoint");
   cmd->add_option("--learning-rate", o->ppo.learning_rate, "Adam step size")->capture_default_str();
   cmd->add_option("--entropy-coef", o->ppo.entropy_coef, "entropy bonus weight")->capture_default_str();
+  cmd->add_option("--eval-every", o->eval_every,
+                  "fly the greedy policy on the fixed evaluation worlds before every N-th update and after the "
+                  "last (0: never)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--eval-seeds", o->eval_seeds,
+                  "evaluation world seeds (each scenario once per seed, boards in turn; outside training's 100-499)")
+      ->delimiter(',')
+      ->capture_default_str();
   cmd->callback([o, out, work, verbose] {
     if (!*verbose) spdlog::set_level(spdlog::level::warn);
     o->out = *out;
     o->work_dir = *work;
     o->progress = true;
     o->catalog = sim::FarmCatalog();
-    const auto log = train::Train(*o);
-    const auto& last = log.back();
+    const train::TrainResult result = train::Train(*o);
+    const auto& last = result.iterations.back();
     std::printf("trained %lld iterations: policy %s (mean return %.2f, success %.0f%%, nav cpu %.1f%%)\n",
                 static_cast<long long>(last.iteration + 1), out->c_str(), last.mean_return, 100 * last.success_rate,
                 last.mean_nav_cpu);
+    if (!result.evaluations.empty()) {
+      const auto& a = result.evaluations.front();
+      const auto& b = result.evaluations.back();
+      std::printf("evaluation (greedy, %d fixed worlds): return %.2f after %lld updates -> %.2f after %lld "
+                  "(nav cpu %.1f%% -> %.1f%%, flight %.1f s -> %.1f s, success %.0f%% -> %.0f%%)\n",
+                  b.episodes, a.mean_return, static_cast<long long>(a.policy_iteration), b.mean_return,
+                  static_cast<long long>(b.policy_iteration), a.mean_nav_cpu, b.mean_nav_cpu, a.mean_flight_time,
+                  b.mean_flight_time, 100 * a.success_rate, 100 * b.success_rate);
+    }
   });
 }
 

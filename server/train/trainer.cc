@@ -49,6 +49,12 @@ void Validate(const TrainOptions& o) {
   Check(o.episodes_per_iteration >= 1 && o.episodes_per_iteration <= 10000,
         "--episodes-per-iter: must be in [1, 10000]");
   Check(o.workers >= 1 && o.workers <= 64, "--workers: must be in [1, 64]");
+  Check(o.eval_every >= 0, "--eval-every: must be >= 0 (0: no evaluation)");
+  Check(o.eval_every == 0 || !o.eval_seeds.empty(), "--eval-seeds: at least one seed when evaluating");
+  for (const std::uint64_t s : o.eval_seeds)
+    Check(s < o.world_seed_base || s >= o.world_seed_base + o.world_seed_count,
+          "--eval-seeds: seed " + std::to_string(s) + " is a training seed (training draws [" +
+              std::to_string(o.world_seed_base) + ", " + std::to_string(o.world_seed_base + o.world_seed_count) + "))");
   o.ppo.Validate();
 }
 
@@ -64,13 +70,15 @@ struct Pick {
   std::uint64_t seed = 0;
 };
 
-// The collection job of one iteration: these episodes, the policy by hash, sampled actions.
-std::string IterationJobYaml(std::int64_t it, const std::string& policy_ref, const std::vector<Pick>& picks) {
+// A collection job: these episodes, the policy by hash, sampled (training) or greedy (evaluation)
+// actions.
+std::string CollectionJobYaml(const std::string& name, const std::string& policy_ref, const std::vector<Pick>& picks,
+                              bool sample) {
   std::ostringstream y;
-  y << "name: train-iter-" << it << "\n"
+  y << "name: " << name << "\n"
     << "methods: [enavi]\n"
     << "collect: rollouts\n"
-    << "sample: true\n"
+    << "sample: " << (sample ? "true" : "false") << "\n"
     << "policy: \"" << policy_ref << "\"\n"
     << "episodes:\n";
   for (const Pick& p : picks) {
@@ -87,8 +95,8 @@ struct Collected {
 };
 
 Collected Collect(api::FarmClient& client, server::LocalFarm* local, const std::string& yaml,
-                  std::int64_t it) {
-  const auto submitted = client.Submit(yaml, "train iteration " + std::to_string(it));
+                  const std::string& what) {
+  const auto submitted = client.Submit(yaml, what);
   while (true) {
     const api::JobProgress p = client.Status(submitted.job_id);
     if (p.terminal()) {
@@ -103,7 +111,55 @@ Collected Collect(api::FarmClient& client, server::LocalFarm* local, const std::
   }
 }
 
-void SaveCurvePng(const std::vector<IterationLog>& log, const fs::path& path) {
+// The evaluation worlds: every scenario once per evaluation seed, boards in turn; the same set at
+// every evaluation of a run.
+std::vector<Pick> EvaluationPicks(const TrainOptions& o) {
+  std::vector<Pick> picks;
+  for (std::size_t s = 0; s < o.scenarios.size(); ++s)
+    for (std::size_t k = 0; k < o.eval_seeds.size(); ++k) {
+      const std::size_t i = s * o.eval_seeds.size() + k;
+      picks.push_back({o.boards[i % o.boards.size()], o.scenarios[s], o.eval_seeds[k]});
+    }
+  return picks;
+}
+
+// Sums of the collected rollouts of exactly `hash` into `row`'s means; the others are refused and
+// counted as failed. Returns the accepted rollouts.
+template <typename Row>
+std::vector<rl::Rollout> AcceptRollouts(const Collected& data, const std::string& hash, std::int64_t policy_iteration,
+                                        Row* row) {
+  std::vector<rl::Rollout> rollouts;
+  for (const api::StoredRollout& s : data.rollouts) {
+    if (s.policy_hash != hash) {
+      std::fprintf(stderr, "\ntrain: rollout of %s refused: policy %s is not this iteration's\n",
+                   s.episode_id.c_str(), s.policy_hash.c_str());
+      ++row->failed_episodes;
+      continue;
+    }
+    rl::Rollout r = rl::DecodeRollout(s.rollout, "rollout of " + s.episode_id);
+    r.id = s.episode_id;
+    r.policy_iteration = policy_iteration;
+    r.info = {{"success", s.success ? 1.0 : 0.0}, {"collided", s.collided ? 1.0 : 0.0},
+              {"flight_time_s", s.flight_time_s}, {"nav_cpu_util_pct", s.nav_cpu_util_pct}};
+    row->success_rate += s.success ? 1.0 : 0.0;
+    row->collision_rate += s.collided ? 1.0 : 0.0;
+    row->mean_nav_cpu += s.nav_cpu_util_pct;
+    row->mean_flight_time += s.flight_time_s;
+    rollouts.push_back(std::move(r));
+  }
+  const double n = static_cast<double>(rollouts.size());
+  row->episodes = static_cast<int>(rollouts.size());
+  if (n > 0) {
+    row->success_rate /= n;
+    row->collision_rate /= n;
+    row->mean_nav_cpu /= n;
+    row->mean_flight_time /= n;
+  }
+  return rollouts;
+}
+
+void SaveCurvePng(const std::vector<IterationLog>& log, const std::vector<EvaluationLog>& evals,
+                  const fs::path& path) {
   std::vector<double> x, ret, success, cpu, time;
   for (const auto& r : log) {
     x.push_back(static_cast<double>(r.iteration));
@@ -112,11 +168,21 @@ void SaveCurvePng(const std::vector<IterationLog>& log, const fs::path& path) {
     cpu.push_back(r.mean_nav_cpu);
     time.push_back(r.mean_flight_time);
   }
-  report::ChartStack stack("E-Navi frequency adapter: PPO learning curve", "iteration");
-  stack.AddPanel("mean episode return", "return").AddSeries("return", x, ret);
-  stack.AddPanel("success rate", "%").AddSeries("success", x, success);
-  stack.AddPanel("navigation CPU (% of one core)", "%").AddSeries("nav cpu", x, cpu);
-  stack.AddPanel("flight time", "s").AddSeries("flight time", x, time);
+  std::vector<double> ex, eret, esuccess, ecpu, etime;
+  for (const auto& e : evals) {
+    ex.push_back(static_cast<double>(e.policy_iteration));
+    eret.push_back(e.mean_return);
+    esuccess.push_back(100.0 * e.success_rate);
+    ecpu.push_back(e.mean_nav_cpu);
+    etime.push_back(e.mean_flight_time);
+  }
+  report::ChartStack stack("E-Navi frequency adapter: PPO learning curve", "iteration (policy updates)");
+  stack.AddPanel("mean episode return", "return")
+      .AddSeries("training (sampled, new worlds each iteration)", x, ret)
+      .AddSeries("evaluation (greedy, fixed worlds)", ex, eret);
+  stack.AddPanel("success rate", "%").AddSeries("training", x, success).AddSeries("evaluation", ex, esuccess);
+  stack.AddPanel("navigation CPU (% of one core)", "%").AddSeries("training", x, cpu).AddSeries("evaluation", ex, ecpu);
+  stack.AddPanel("flight time", "s").AddSeries("training", x, time).AddSeries("evaluation", ex, etime);
   stack.SavePng(path.string());
 }
 
@@ -137,15 +203,38 @@ std::string LearningCurveCsv(const std::vector<IterationLog>& log) {
   return out;
 }
 
-std::vector<IterationLog> Train(const TrainOptions& options) {
+std::string EvaluationCurveCsv(const std::vector<EvaluationLog>& log) {
+  std::string out =
+      "policy_iteration,episodes,failed_episodes,mean_return,success_rate,collision_rate,mean_nav_cpu,"
+      "mean_flight_time\n";
+  char line[256];
+  for (const auto& e : log) {
+    std::snprintf(line, sizeof line, "%lld,%d,%d,%.6f,%.4f,%.4f,%.3f,%.3f\n",
+                  static_cast<long long>(e.policy_iteration), e.episodes, e.failed_episodes, e.mean_return,
+                  e.success_rate, e.collision_rate, e.mean_nav_cpu, e.mean_flight_time);
+    out += line;
+  }
+  return out;
+}
+
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(IterationLog, iteration, episodes, failed_episodes, mean_return, success_rate,
+                                   collision_rate, mean_nav_cpu, mean_flight_time, policy_loss, value_loss, entropy,
+                                   approx_kl, episodes_per_s)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(EvaluationLog, policy_iteration, episodes, failed_episodes, mean_return,
+                                   success_rate, collision_rate, mean_nav_cpu, mean_flight_time)
+
+TrainResult Train(const TrainOptions& options) {
   Validate(options);
   const fs::path work = options.work_dir.empty() ? fs::path(options.out.string() + ".train") : options.work_dir;
   fs::create_directories(work);
   const fs::path checkpoint = work / "checkpoint.json";
   const fs::path curve_json = work / "learning_curve.json";
+  const fs::path evaluation_json = work / "evaluation_curve.json";
 
   // The trainer: resumed from its checkpoint, or a fresh (or given) policy.
-  std::vector<IterationLog> log;
+  TrainResult result;
+  std::vector<IterationLog>& log = result.iterations;
+  std::vector<EvaluationLog>& evals = result.evaluations;
   auto trainer = [&]() -> rl::PpoTrainer {
     if (options.resume) {
       if (!fs::exists(checkpoint)) throw std::invalid_argument("--resume: no checkpoint at " + checkpoint.string());
@@ -155,26 +244,23 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
                                                       : rl::LoadFrequencyPolicy(options.init_policy);
     return rl::PpoTrainer(std::move(init), options.ppo, options.seed);
   }();
-  if (options.resume && fs::exists(curve_json)) {
-    for (const auto& r : nlohmann::json::parse(ReadFile(curve_json))) {
-      IterationLog l;
-      l.iteration = r.at("iteration");
-      if (l.iteration >= trainer.iteration()) break;
-      l.episodes = r.at("episodes");
-      l.failed_episodes = r.at("failed_episodes");
-      l.mean_return = r.at("mean_return");
-      l.success_rate = r.at("success_rate");
-      l.collision_rate = r.at("collision_rate");
-      l.mean_nav_cpu = r.at("mean_nav_cpu");
-      l.mean_flight_time = r.at("mean_flight_time");
-      l.policy_loss = r.at("policy_loss");
-      l.value_loss = r.at("value_loss");
-      l.entropy = r.at("entropy");
-      l.approx_kl = r.at("approx_kl");
-      l.episodes_per_s = r.at("episodes_per_s");
-      log.push_back(l);
-    }
+  if (options.resume) {
+    // The curves up to the checkpoint (a run killed after writing them but before the checkpoint
+    // repeats that iteration).
+    if (fs::exists(curve_json))
+      for (const IterationLog& l : nlohmann::json::parse(ReadFile(curve_json)).get<std::vector<IterationLog>>())
+        if (l.iteration < trainer.iteration()) log.push_back(l);
+    if (fs::exists(evaluation_json))
+      for (const EvaluationLog& e : nlohmann::json::parse(ReadFile(evaluation_json)).get<std::vector<EvaluationLog>>())
+        if (e.policy_iteration <= trainer.iteration()) evals.push_back(e);
   }
+  const auto save_curves = [&] {
+    api::WriteFileAtomic(curve_json, nlohmann::json(log).dump(1));
+    api::WriteFileAtomic(evaluation_json, nlohmann::json(evals).dump(1));
+    api::WriteFileAtomic(work / "learning_curve.csv", LearningCurveCsv(log));
+    api::WriteFileAtomic(work / "evaluation_curve.csv", EvaluationCurveCsv(evals));
+    SaveCurvePng(log, evals, work / "learning_curve.png");
+  };
 
   // The farm: a running one, or a private one for this run.
   std::unique_ptr<server::LocalFarm> local;
@@ -190,17 +276,48 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
   }
   api::FarmClient client(url, options.token);
 
+  // The policy goes to the farm by content hash; only rollouts of exactly it are used.
+  const auto upload = [&](std::string* hash) {
+    const std::string policy_text = rl::CanonicalPolicyText(trainer.policy());
+    *hash = api::Sha256Hex(policy_text);
+    const std::string policy_ref = client.UploadPolicy(policy_text);
+    if (policy_ref != api::kPolicyHashPrefix + *hash) {
+      throw std::runtime_error("train: the farm stored the policy as " + policy_ref + ", expected sha256:" + *hash);
+    }
+    return policy_ref;
+  };
+  // The greedy policy as it is now on the evaluation worlds, unless that point is already there.
+  const std::vector<Pick> eval_picks = EvaluationPicks(options);
+  const auto evaluate = [&] {
+    const std::int64_t at = trainer.iteration();
+    if (options.eval_every == 0 || (!evals.empty() && evals.back().policy_iteration >= at)) return;
+    std::string hash;
+    const std::string policy_ref = upload(&hash);
+    const Collected data = Collect(client, local.get(),
+                                   CollectionJobYaml("train-eval-" + std::to_string(at), policy_ref, eval_picks, false),
+                                   "train evaluation after " + std::to_string(at) + " updates");
+    EvaluationLog e;
+    e.policy_iteration = at;
+    e.failed_episodes = data.failed;
+    double total = 0;
+    for (const rl::Rollout& r : AcceptRollouts(data, hash, at, &e)) total += r.Return();
+    if (e.episodes == 0) throw std::runtime_error("train: every evaluation flight after " + std::to_string(at) + " updates failed");
+    e.mean_return = total / e.episodes;
+    evals.push_back(e);
+    save_curves();
+    if (options.progress)
+      std::fprintf(stderr, "eval after %lld updates  %d flights  return %.2f  success %.0f%%  nav cpu %.1f%%  flight %.1f s\n",
+                   static_cast<long long>(at), e.episodes, e.mean_return, 100 * e.success_rate, e.mean_nav_cpu,
+                   e.mean_flight_time);
+  };
+
   const auto t_start = std::chrono::steady_clock::now();
   const std::int64_t first = trainer.iteration();
   for (std::int64_t it = first; it < options.iterations; ++it) {
+    if (options.eval_every > 0 && it % options.eval_every == 0) evaluate();
     const auto t0 = std::chrono::steady_clock::now();
-    // The policy goes to the farm by content hash; only rollouts of exactly it are trained on.
-    const std::string policy_text = rl::CanonicalPolicyText(trainer.policy());
-    const std::string hash = api::Sha256Hex(policy_text);
-    const std::string policy_ref = client.UploadPolicy(policy_text);
-    if (policy_ref != api::kPolicyHashPrefix + hash) {
-      throw std::runtime_error("train: the farm stored the policy as " + policy_ref + ", expected sha256:" + hash);
-    }
+    std::string hash;
+    const std::string policy_ref = upload(&hash);
 
     // This iteration's episodes: every scenario in turn (so each iteration sees the same mix and
     // its statistics compare across iterations), boards in turn, training-only world seeds.
@@ -212,7 +329,9 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
                        options.scenarios[k % options.scenarios.size()],
                        options.world_seed_base + (options.seed * 7919 + k) % options.world_seed_count});
     }
-    const Collected data = Collect(client, local.get(), IterationJobYaml(it, policy_ref, picks), it);
+    const Collected data = Collect(client, local.get(),
+                                   CollectionJobYaml("train-iter-" + std::to_string(it), policy_ref, picks, true),
+                                   "train iteration " + std::to_string(it));
 
     IterationLog row;
     row.iteration = it;
@@ -225,32 +344,8 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
         episodes << line.dump() << "\n";
       }
     }
-    std::vector<rl::Rollout> rollouts;
-    for (const api::StoredRollout& s : data.rollouts) {
-      if (s.policy_hash != hash) {
-        std::fprintf(stderr, "\ntrain: rollout of %s refused: policy %s is not this iteration's\n",
-                     s.episode_id.c_str(), s.policy_hash.c_str());
-        ++row.failed_episodes;
-        continue;
-      }
-      rl::Rollout r = rl::DecodeRollout(s.rollout, "rollout of " + s.episode_id);
-      r.id = s.episode_id;
-      r.policy_iteration = trainer.iteration();
-      r.info = {{"success", s.success ? 1.0 : 0.0}, {"collided", s.collided ? 1.0 : 0.0},
-                {"flight_time_s", s.flight_time_s}, {"nav_cpu_util_pct", s.nav_cpu_util_pct}};
-      row.success_rate += s.success ? 1.0 : 0.0;
-      row.collision_rate += s.collided ? 1.0 : 0.0;
-      row.mean_nav_cpu += s.nav_cpu_util_pct;
-      row.mean_flight_time += s.flight_time_s;
-      rollouts.push_back(std::move(r));
-    }
+    const std::vector<rl::Rollout> rollouts = AcceptRollouts(data, hash, trainer.iteration(), &row);
     if (rollouts.empty()) throw std::runtime_error("train: every episode of iteration " + std::to_string(it) + " failed");
-    const double n = static_cast<double>(rollouts.size());
-    row.episodes = static_cast<int>(rollouts.size());
-    row.success_rate /= n;
-    row.collision_rate /= n;
-    row.mean_nav_cpu /= n;
-    row.mean_flight_time /= n;
     const rl::PpoUpdateStats stats = trainer.Update(rollouts);
     row.mean_return = stats.mean_rollout_return;
     row.policy_loss = stats.loss.policy;
@@ -263,17 +358,7 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
 
     // Checkpoint after every iteration: a killed run resumes here.
     trainer.SaveCheckpoint(checkpoint.string());
-    nlohmann::json curve = nlohmann::json::array();
-    for (const auto& r : log)
-      curve.push_back({{"iteration", r.iteration}, {"episodes", r.episodes}, {"failed_episodes", r.failed_episodes},
-                       {"mean_return", r.mean_return}, {"success_rate", r.success_rate},
-                       {"collision_rate", r.collision_rate}, {"mean_nav_cpu", r.mean_nav_cpu},
-                       {"mean_flight_time", r.mean_flight_time}, {"policy_loss", r.policy_loss},
-                       {"value_loss", r.value_loss}, {"entropy", r.entropy}, {"approx_kl", r.approx_kl},
-                       {"episodes_per_s", r.episodes_per_s}});
-    api::WriteFileAtomic(curve_json, curve.dump(1));
-    api::WriteFileAtomic(work / "learning_curve.csv", LearningCurveCsv(log));
-    SaveCurvePng(log, work / "learning_curve.png");
+    save_curves();
 
     if (options.progress) {
       const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
@@ -284,8 +369,9 @@ std::vector<IterationLog> Train(const TrainOptions& options) {
                    100 * row.success_rate, row.mean_nav_cpu, per_iter * (options.iterations - it - 1));
     }
   }
+  evaluate();  // the final policy
   rl::SavePolicyFile(options.out.string(), trainer.policy());
-  return log;
+  return result;
 }
 
 }  // namespace enavi::train

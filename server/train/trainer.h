@@ -5,6 +5,12 @@
 // checkpoints; a run resumes from its checkpoint. The farm is a running one (--server) or a
 // private one started for the run (server/eval/local_farm.h), so a worker that dies only delays
 // an iteration: its episode runs again elsewhere.
+//
+// Two curves come out. The training curve is the mean return of each iteration's sampled flights;
+// its worlds change every iteration, so it carries their spread. The evaluation curve flies the
+// greedy policy every few iterations on one fixed set of worlds training never draws (common
+// random numbers: the same worlds, seeds and boards each time, on the deterministic virtual
+// clock), so what moves it is the policy alone.
 
 #include <cstdint>
 #include <filesystem>
@@ -36,6 +42,11 @@ struct TrainOptions {
   bool resume = false;             ///< continue from <work_dir>/checkpoint.json
   navstack::rl::PpoOptions ppo;
   bool progress = true;            ///< progress line on stderr
+  /// Evaluate the greedy policy before every eval_every-th update and after the last (0: never).
+  int eval_every = 5;
+  /// Evaluation worlds: every scenario once per seed, boards in turn. Seeds must lie outside the
+  /// training range [world_seed_base, world_seed_base + world_seed_count).
+  std::vector<std::uint64_t> eval_seeds = {1, 2};
 };
 
 /// One row of the learning curve.
@@ -52,10 +63,29 @@ struct IterationLog {
   double episodes_per_s = 0;
 };
 
-/// Runs the training; returns the learning curve (all iterations, resumed ones included).
-/// Throws std::invalid_argument for bad options (unknown board or scenario, counts out of range).
-std::vector<IterationLog> Train(const TrainOptions& options);
+/// One point of the evaluation curve: the greedy policy after `policy_iteration` updates on the
+/// fixed evaluation worlds.
+struct EvaluationLog {
+  std::int64_t policy_iteration = 0;
+  int episodes = 0;
+  int failed_episodes = 0;
+  double mean_return = 0;
+  double success_rate = 0;
+  double collision_rate = 0;
+  double mean_nav_cpu = 0;
+  double mean_flight_time = 0;
+};
+
+struct TrainResult {
+  std::vector<IterationLog> iterations;    ///< the training curve, resumed iterations included
+  std::vector<EvaluationLog> evaluations;  ///< the evaluation curve, resumed points included
+};
+
+/// Runs the training. Throws std::invalid_argument for bad options (unknown board or scenario,
+/// counts out of range, evaluation seeds inside the training range).
+TrainResult Train(const TrainOptions& options);
 
 std::string LearningCurveCsv(const std::vector<IterationLog>& log);
+std::string EvaluationCurveCsv(const std::vector<EvaluationLog>& log);
 
 }  // namespace enavi::train

@@ -101,21 +101,39 @@ TEST(EnaviLoopTest, MissingOrCorruptPolicyIsAClearError) {
 TEST(EnaviTrainTest, TrainsCheckpointsAndResumes) {
   const TempDir dir;
   const std::string out = (dir.path() / "policy.json").string();
-  const std::string common = "train --boards tx2 --scenarios s3 --episodes-per-iter 2 --workers 2 --seed 3 --out " + out;
+  const std::string common = "train --boards tx2 --scenarios s3 --episodes-per-iter 2 --workers 2 --seed 3 "
+                             "--eval-every 1 --eval-seeds 1 --out " + out;
   const CliRun first = Enavi(dir, common + " --iterations 1");
   ASSERT_EQ(first.code, 0) << first.err;
   const auto work = dir.path() / "policy.json.train";
   EXPECT_TRUE(std::filesystem::exists(work / "checkpoint.json"));
   EXPECT_TRUE(std::filesystem::exists(work / "learning_curve.png"));
+  EXPECT_NE(first.err.find("eval after 0 updates  1 flights"), std::string::npos) << first.err;
+  EXPECT_NE(first.out.find("evaluation (greedy, 1 fixed worlds)"), std::string::npos) << first.out;
   const CliRun resumed = Enavi(dir, common + " --iterations 2 --resume");
   ASSERT_EQ(resumed.code, 0) << resumed.err;
   EXPECT_NE(resumed.err.find("iter 2/2"), std::string::npos) << "resumes at the second iteration: " << resumed.err;
   EXPECT_EQ(resumed.err.find("iter 1/2"), std::string::npos) << resumed.err;
   const std::string csv = ReadFile(work / "learning_curve.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << "header + 2 iterations:\n" << csv;
+  // The evaluation curve: the untrained policy, after 1 update (not flown again on resume), after 2.
+  EXPECT_EQ(resumed.err.find("eval after 1 updates"), std::string::npos) << resumed.err;
+  EXPECT_NE(resumed.err.find("eval after 2 updates"), std::string::npos) << resumed.err;
+  const std::string evals = ReadFile(work / "evaluation_curve.csv");
+  ASSERT_EQ(std::count(evals.begin(), evals.end(), '\n'), 4) << "header + 3 evaluations:\n" << evals;
+  for (const char* row : {"\n0,1,0,", "\n1,1,0,", "\n2,1,0,"}) EXPECT_NE(evals.find(row), std::string::npos) << evals;
   // The trained policy flies.
   const CliRun fly = Enavi(dir, "fly --world s3 --board tx2 --method enavi --timeout 3 --json --policy " + out);
   EXPECT_EQ(fly.code, 0) << fly.err;
+}
+
+TEST(EnaviTrainTest, RefusesEvaluationSeedsTrainingDraws) {
+  const TempDir dir;
+  const CliRun run = Enavi(dir, "train --boards tx2 --scenarios s3 --eval-seeds 1,150 --out " +
+                                    (dir.path() / "policy.json").string());
+  EXPECT_EQ(run.code, 2) << run.err;
+  EXPECT_NE(run.err.find("--eval-seeds: seed 150 is a training seed"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "policy.json.train")) << "refused before anything is written";
 }
 
 }  // namespace
