@@ -9,7 +9,7 @@
 
 #include "workers/emulation/shm_channel.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 namespace {
 
 using std::chrono::seconds;
@@ -75,6 +75,6 @@ BENCHMARK(BM_OdometryToCommandRoundTrip)->UseRealTime()->Unit(benchmark::kMicros
 BENCHMARK(BM_DepthFrameToCommandRoundTrip)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
 }  // namespace
-}  // namespace enavi::board
+}  // namespace enavi::emulation
 
 BENCHMARK_MAIN();

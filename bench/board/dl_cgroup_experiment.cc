@@ -24,11 +24,11 @@
 
 namespace {
 
-using enavi::board::BoardCpu;
-using enavi::board::CgroupManager;
-using enavi::board::ComputeBoardQuota;
-using enavi::board::EpisodeCgroup;
-using enavi::board::EpisodeLimits;
+using enavi::emulation::BoardCpu;
+using enavi::emulation::CgroupManager;
+using enavi::emulation::ComputeBoardQuota;
+using enavi::emulation::EpisodeCgroup;
+using enavi::emulation::EpisodeLimits;
 using enavi::navstack::DeadlineParams;
 
 double Now(clockid_t c) {
@@ -129,7 +129,7 @@ std::string Err(int e) { return e == 0 ? "granted" : std::string(strerrorname_np
 
 int main(int argc, char** argv) {
   bool json = false;
-  enavi::board::CgroupOptions options;
+  enavi::emulation::CgroupOptions options;
   std::string only;  // --only E5: run one experiment
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];

@@ -51,7 +51,7 @@ struct RunOutcome {
 // Forks a child with `threads` workload threads, optionally places it in `group` (each thread
 // in its own per-core group) or gives each thread a SCHED_DEADLINE speed server, then starts all
 // threads at once and collects per-thread wall and CPU times.
-RunOutcome RunWorkload(int threads, std::int64_t units, EpisodeCgroup* group,
+RunOutcome RunWorkload(int threads, std::int64_t units, emulation::EpisodeCgroup* group,
                        const navstack::DeadlineParams* server) {
   RunOutcome out;
   void* mem = mmap(nullptr, sizeof(RunBlock), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
@@ -103,9 +103,9 @@ RunOutcome RunWorkload(int threads, std::int64_t units, EpisodeCgroup* group,
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   if (group != nullptr) {
-    if (CgroupStatus s = group->AddProcess(child); !s.ok) return abandon(s.message);
+    if (emulation::CgroupStatus s = group->AddProcess(child); !s.ok) return abandon(s.message);
     for (int i = 0; i < threads; ++i) {
-      if (CgroupStatus s = group->AddThread(block->tid[i]); !s.ok) return abandon(s.message);
+      if (emulation::CgroupStatus s = group->AddThread(block->tid[i]); !s.ok) return abandon(s.message);
     }
   }
   const std::int64_t throttled0 = group != nullptr ? group->ReadCpuStat().nr_throttled : 0;
@@ -167,7 +167,7 @@ std::uint64_t ThrottleWorkload(std::int64_t units) {
   return x ^ static_cast<std::uint64_t>(acc * 1e6);
 }
 
-ThrottleBenchResult RunThrottleBench(const std::string& board_id, const BoardCpu& board,
+ThrottleBenchResult RunThrottleBench(const std::string& board_id, const emulation::BoardCpu& board,
                                      const ThrottleBenchOptions& options) {
   ThrottleBenchResult result;
   result.board = board_id;
@@ -185,20 +185,20 @@ ThrottleBenchResult RunThrottleBench(const std::string& board_id, const BoardCpu
                                 " board cores, got " + std::to_string(board.cores));
   }
 
-  auto open = CgroupManager::Open(options.cgroup);
+  auto open = emulation::CgroupManager::Open(options.cgroup);
   if (!open.ok()) {
     result.message = open.error;
     return result;
   }
-  CgroupManager& manager = *open.manager;
+  emulation::CgroupManager& manager = *open.manager;
   result.host_cpus = manager.HostCpus();
 
-  QuotaOptions q;
+  emulation::QuotaOptions q;
   q.period_us = options.period_us;
   q.dilation = options.dilation > 0.0
                    ? options.dilation
-                   : MinimumDilation(board, result.host_cpus - options.cgroup.host_reserve_cpus);
-  result.quota = ComputeBoardQuota(board, q);
+                   : emulation::MinimumDilation(board, result.host_cpus - options.cgroup.host_reserve_cpus);
+  result.quota = emulation::ComputeBoardQuota(board, q);
 
   // Size the work: units per CPU-second of one unthrottled thread (this process).
   std::int64_t units = 16;
@@ -260,7 +260,7 @@ ThrottleBenchResult RunThrottleBench(const std::string& board_id, const BoardCpu
     ThrottlePhase p;
     p.name = spec.name;
     p.threads = spec.threads;
-    p.expected_slowdown = ExpectedSlowdown(result.quota, spec.threads, result.host_cpus);
+    p.expected_slowdown = emulation::ExpectedSlowdown(result.quota, spec.threads, result.host_cpus);
     p.mean_wall_s = Mean(run.wall);
     p.makespan_s = run.makespan;
     p.mean_cpu_s = Mean(run.cpu);

@@ -38,7 +38,7 @@ struct ThrottleBenchOptions {
   /// Hold each thread to one board core with a SCHED_DEADLINE speed server (runtime =
   /// speed / k x period) instead of a per-thread cgroup quota; see workers/board/EMULATION.md.
   bool deadline_servers = false;
-  CgroupOptions cgroup;
+  emulation::CgroupOptions cgroup;
 };
 
 struct ThrottlePhase {
@@ -60,7 +60,7 @@ struct ThrottleBenchResult {
   bool ok = false;
   std::string message;  ///< why it could not run (no cgroups, admission refused, ...)
   std::string board;
-  BoardQuota quota;
+  emulation::BoardQuota quota;
   double host_cpus = 0.0;
   std::int64_t work_units = 0;
   double reference_cpu_s = 0.0;
@@ -77,7 +77,7 @@ struct ThrottleBenchResult {
 /// host). Throws std::invalid_argument for out-of-range numbers (see ComputeBoardQuota);
 /// returns ok = false with a message when the host cannot emulate (no writable cgroup
 /// hierarchy, admission refused).
-ThrottleBenchResult RunThrottleBench(const std::string& board_id, const BoardCpu& board,
+ThrottleBenchResult RunThrottleBench(const std::string& board_id, const emulation::BoardCpu& board,
                                      const ThrottleBenchOptions& options = {});
 
 nlohmann::json ToJson(const ThrottleBenchResult& result);

@@ -34,13 +34,13 @@ double EmulationCpusFree() {
   cpu_set_t set;
   CPU_ZERO(&set);
   const double cpus = sched_getaffinity(0, sizeof(set), &set) == 0 ? CPU_COUNT(&set) : 1.0;
-  return cpus - board::CgroupOptions{}.host_reserve_cpus;
+  return cpus - emulation::CgroupOptions{}.host_reserve_cpus;
 }
 
 nlohmann::json BoardTableJson(const board::HostCalibration& cal) {
   nlohmann::json rows = nlohmann::json::array();
   for (const std::string& id : board::KnownBoards()) {
-    const board::BoardEmulation e = board::DescribeBoardEmulation(board::LoadBoard(id), cal, EmulationCpusFree());
+    const emulation::BoardEmulation e = emulation::DescribeBoardEmulation(board::LoadBoard(id), cal, EmulationCpusFree());
     nlohmann::json wcet, p99;
     for (const auto& [task, s] : e.wcet_s) wcet[task] = s;
     for (const auto& [task, s] : e.p99_s) p99[task] = s;
@@ -64,7 +64,7 @@ void PrintBoardTable(const board::HostCalibration& cal) {
   for (const char* t : tasks) std::printf(" %13s", t);
   std::printf("\n");
   for (const std::string& id : board::KnownBoards()) {
-    const board::BoardEmulation e = board::DescribeBoardEmulation(board::LoadBoard(id), cal, EmulationCpusFree());
+    const emulation::BoardEmulation e = emulation::DescribeBoardEmulation(board::LoadBoard(id), cal, EmulationCpusFree());
     std::printf("  %-6s %5d %8.3f %10.2f %6s                     ", e.board.c_str(), e.cores, e.speed_vs_host,
                 e.quota_cpus_k1, e.emulable ? std::to_string(e.min_dilation).substr(0, 4).c_str() : "n/a");
     for (const char* t : tasks) {

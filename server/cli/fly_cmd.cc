@@ -32,7 +32,7 @@ struct FlyArgs {
   bool json = false;
   double dilation = 0.0;  // emulated clock; 0 (absent): the smallest that fits the host
   std::string calibration;
-  sim::EmulationOptions emulation;  // experiments: hidden flags
+  emulation::EmulationOptions emulation;  // experiments: hidden flags
 };
 
 void Run(FlyArgs args) {

@@ -81,8 +81,8 @@ class EmulatedClockTest : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("enavi-emulated-test-" + std::to_string(getpid()));
     fs::create_directories(dir_);
     if (geteuid() != 0) GTEST_SKIP() << "the emulated clock needs root (cgroups, SCHED_DEADLINE)";
-    const board::CgroupLayout layout = board::DetectCgroups();
-    if (layout.version == board::CgroupVersion::kNone) GTEST_SKIP() << "no writable cgroup hierarchy: " << layout.problem;
+    const emulation::CgroupLayout layout = emulation::DetectCgroups();
+    if (layout.version == emulation::CgroupVersion::kNone) GTEST_SKIP() << "no writable cgroup hierarchy: " << layout.problem;
     ASSERT_TRUE(EnaviCgroups().empty()) << "enavi cgroups exist before the test: " << Join(EnaviCgroups());
     options_.emulation.calibration_file = WriteHostCalibration(dir_, board::HostCpuModel());
   }
@@ -254,7 +254,7 @@ constexpr double kCalibrationSeconds = 5.0;
 class ClockAgreementTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    if (geteuid() != 0 || board::DetectCgroups().version == board::CgroupVersion::kNone) return;
+    if (geteuid() != 0 || emulation::DetectCgroups().version == emulation::CgroupVersion::kNone) return;
     const board::CalibrationCheck stored = board::CheckHostCalibration(board::CalibrationPath());
     if (stored.ok()) {
       calibration_file_ = stored.path;
@@ -278,8 +278,8 @@ class ClockAgreementTest : public ::testing::Test {
 
   void SetUp() override {
     if (geteuid() != 0) GTEST_SKIP() << "the emulated clock needs root (cgroups, SCHED_DEADLINE)";
-    const board::CgroupLayout layout = board::DetectCgroups();
-    if (layout.version == board::CgroupVersion::kNone) GTEST_SKIP() << "no writable cgroup hierarchy: " << layout.problem;
+    const emulation::CgroupLayout layout = emulation::DetectCgroups();
+    if (layout.version == emulation::CgroupVersion::kNone) GTEST_SKIP() << "no writable cgroup hierarchy: " << layout.problem;
     ASSERT_FALSE(calibration_file_.empty());
     options_.emulation.calibration_file = calibration_file_;
   }

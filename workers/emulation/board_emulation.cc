@@ -4,15 +4,15 @@
 
 #include "workers/emulation/board_quota.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 
-BoardEmulation DescribeBoardEmulation(const BoardProfile& board, const HostCalibration& host,
+BoardEmulation DescribeBoardEmulation(const board::BoardProfile& board, const board::HostCalibration& host,
                                       double host_cpus_free) {
   BoardEmulation e;
   e.board = board.id;
   e.cores = board.cores;
-  e.speed_vs_host = SpeedVsHost(board, host);
-  e.emulable = e.speed_vs_host <= 1.0 + kFasterBoardTolerance;
+  e.speed_vs_host = board::SpeedVsHost(board, host);
+  e.emulable = e.speed_vs_host <= 1.0 + board::kFasterBoardTolerance;
   e.quota_cpus_k1 = board.cores * e.speed_vs_host;
   e.min_dilation = e.emulable && host_cpus_free > 0
                        ? MinimumDilation({board.cores, std::min(1.0, e.speed_vs_host)}, host_cpus_free)
@@ -26,4 +26,4 @@ BoardEmulation DescribeBoardEmulation(const BoardProfile& board, const HostCalib
   return e;
 }
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

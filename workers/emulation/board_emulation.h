@@ -9,7 +9,7 @@
 #include "workers/board/board_profile.h"
 #include "workers/board/host_calibration.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 struct BoardEmulation {
   std::string board;
@@ -24,7 +24,7 @@ struct BoardEmulation {
   std::map<std::string, double> p99_s;
 };
 /// `host_cpus_free`: host CPUs an emulation may use (e.g. HostCpus - 0.25 for the simulator).
-BoardEmulation DescribeBoardEmulation(const BoardProfile& board, const HostCalibration& host,
+BoardEmulation DescribeBoardEmulation(const board::BoardProfile& board, const board::HostCalibration& host,
                                       double host_cpus_free);
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace enavi::board {
+namespace enavi::emulation {
 namespace {
 
 std::string Num(double v) {
@@ -72,4 +72,4 @@ double HostToBoardPercent(double host_percent, const BoardQuota& quota) {
   return host_percent / quota.CoreCpus();
 }
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

@@ -12,7 +12,7 @@
 
 #include <cstdint>
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 /// The CPU of a board as the emulation needs it.
 struct BoardCpu {
@@ -69,4 +69,4 @@ double ExpectedSlowdown(const BoardQuota& quota, int threads, double host_cpus);
 /// host core, i.e. 100 % of a board core.
 double HostToBoardPercent(double host_percent, const BoardQuota& quota);
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

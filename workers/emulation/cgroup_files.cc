@@ -10,7 +10,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace enavi::board::cgroupfs {
+namespace enavi::emulation::cgroupfs {
 
 std::string Join(const std::string& dir, const std::string& name) {
   if (dir.empty()) return name;
@@ -99,4 +99,4 @@ std::set<std::string> Words(const std::string& s) {
   return words;
 }
 
-}  // namespace enavi::board::cgroupfs
+}  // namespace enavi::emulation::cgroupfs

@@ -10,7 +10,7 @@
 
 #include "workers/emulation/cgroup_layout.h"
 
-namespace enavi::board::cgroupfs {
+namespace enavi::emulation::cgroupfs {
 
 std::string Join(const std::string& dir, const std::string& name);
 /// Joins a mount point and a cgroup path from /proc/self/cgroup ("/" is the mount itself).
@@ -32,4 +32,4 @@ std::set<std::string> Words(const std::string& s);
 /// missing file (a tree on an ordinary filesystem, as the unit tests use, holds plain files).
 CgroupStatus WriteValue(const std::string& path, const std::string& value, bool create);
 
-}  // namespace enavi::board::cgroupfs
+}  // namespace enavi::emulation::cgroupfs

@@ -15,7 +15,7 @@
 
 #include "workers/emulation/cgroup_files.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 namespace {
 
 using cgroupfs::Exists;
@@ -184,4 +184,4 @@ CgroupLayout DetectCgroups(const CgroupOptions& options) {
   return layout;
 }
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

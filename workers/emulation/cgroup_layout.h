@@ -5,7 +5,7 @@
 
 #include <string>
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 enum class CgroupVersion { kNone, kV1, kV2 };
 
@@ -56,4 +56,4 @@ struct CgroupStatus {
 /// Parses a cpuset list ("0-3,6,8-9") into the number of CPUs; -1 if malformed.
 int CountCpuList(const std::string& list);
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

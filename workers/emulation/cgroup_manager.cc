@@ -19,7 +19,7 @@
 #include "workers/emulation/cgroup_tree.h"
 #include "workers/emulation/host_lock.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 using cgroupfs::Join;
 using cgroupfs::ReadTrimmed;
@@ -244,4 +244,4 @@ CgroupManager::CreateResult CgroupManager::CreateEpisode(const BoardQuota& quota
   return result;
 }
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

@@ -27,7 +27,7 @@
 #include "workers/emulation/cgroup_layout.h"
 #include "workers/emulation/episode_cgroup.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 /// Owns the `enavi` parent of this worker. Open() detects the hierarchy, creates the parent
 /// and reaps stale episode groups; CreateEpisode() admits and creates one episode's groups.
@@ -72,4 +72,4 @@ class CgroupManager {
   std::shared_ptr<const CgroupContext> context_;
 };
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

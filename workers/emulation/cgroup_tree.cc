@@ -15,7 +15,7 @@
 #include "navstack/runtime/proc_stat.h"
 #include "workers/emulation/cgroup_files.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 using cgroupfs::IsDir;
 using cgroupfs::Join;
@@ -191,4 +191,4 @@ void RemoveParentsIfUnused(const CgroupContext& ctx) {
   }
 }
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

@@ -16,7 +16,7 @@
 
 #include "workers/emulation/cgroup_layout.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 // Everything a manager and its episode groups share: options, detection result, whether the
 // tree is a real cgroup filesystem. A directory tree on an ordinary filesystem (how the unit
@@ -68,4 +68,4 @@ CgroupStatus EnsureParents(const CgroupContext& ctx);
 /// Removes the parents unless some worker still has episodes in them (it must stay for them).
 void RemoveParentsIfUnused(const CgroupContext& ctx);
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

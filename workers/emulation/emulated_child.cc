@@ -24,7 +24,7 @@
 #include "navstack/runtime/sched_deadline.h"
 #include "workers/emulation/shm_channel.h"
 
-namespace enavi::sim::emulated {
+namespace enavi::emulation {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -139,7 +139,7 @@ int RunNavstackChild(const ChildArgs& a) {
     if (n == 0 || errno != EINTR) return 3;  // the simulator gave up before placing us
   }
   close(a.go_fd);
-  board::ShmChannel channel = board::ShmChannel::Attach(a.channel_fd, board::ShmChannel::Role::kNavstack);
+  emulation::ShmChannel channel = emulation::ShmChannel::Attach(a.channel_fd, emulation::ShmChannel::Role::kNavstack);
 
   const double rate = a.speed / a.dilation;
   const navstack::DeadlineParams server = navstack::SpeedServerParams(std::min(1.0, rate), a.server_period_ns);
@@ -193,7 +193,7 @@ int RunNavstackChild(const ChildArgs& a) {
   // Sim time 0 is set by the simulator when it starts flying.
   std::int64_t epoch_ns = 0;
   while ((epoch_ns = shared->epoch_ns.load(std::memory_order_acquire)) == 0) {
-    if (shared->stop.load() || channel.Peer() == board::PeerState::kDead) return 0;
+    if (shared->stop.load() || channel.Peer() == emulation::PeerState::kDead) return 0;
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   exec.Start(Clock::time_point(std::chrono::nanoseconds(epoch_ns)));
@@ -218,22 +218,22 @@ int RunNavstackChild(const ChildArgs& a) {
     ++stats->publications;
     shared->stats.Write(*stats);
   };
-  board::OdometryMsg odom;
+  emulation::OdometryMsg odom;
   std::uint32_t odom_seq = 0;
   bool odom_pending = false;
   while (!shared->stop.load(std::memory_order_relaxed)) {
     if (const std::string err = exec.error(); !err.empty()) throw std::runtime_error(err);
-    const board::WaitStatus w = channel.WaitFrame(std::chrono::milliseconds(5));
-    if (w == board::WaitStatus::kPeerDead) return 0;
+    const emulation::WaitStatus w = channel.WaitFrame(std::chrono::milliseconds(5));
+    if (w == emulation::WaitStatus::kPeerDead) return 0;
     if (channel.ReadOdometry(&odom, &odom_seq)) odom_pending = true;
-    if (w == board::WaitStatus::kNew) {
+    if (w == emulation::WaitStatus::kNew) {
       std::int64_t dropped = 0;
-      const board::FrameSlot slot = channel.AcquireFrame(&dropped);
+      const emulation::FrameSlot slot = channel.AcquireFrame(&dropped);
       if (slot.header != nullptr) {
-        auto frame = std::make_shared<navstack::DepthFrame>(board::ShmChannel::ToDepthFrame(slot));
+        auto frame = std::make_shared<navstack::DepthFrame>(emulation::ShmChannel::ToDepthFrame(slot));
         std::unique_lock lock(exec.job_lock());
         if (odom_pending) {
-          stack.OnState(board::ShmChannel::FromMsg(odom));
+          stack.OnState(emulation::ShmChannel::FromMsg(odom));
           odom_pending = false;
           ++stats->odometry_applied;
         }
@@ -244,7 +244,7 @@ int RunNavstackChild(const ChildArgs& a) {
       }
     } else if (odom_pending && exec.job_lock().try_lock()) {
       // Odometry does not wait for running jobs (they read the state at their start).
-      stack.OnState(board::ShmChannel::FromMsg(odom));
+      stack.OnState(emulation::ShmChannel::FromMsg(odom));
       exec.job_lock().unlock();
       odom_pending = false;
       ++stats->odometry_applied;
@@ -285,4 +285,4 @@ void CopyText(char* dst, std::size_t size, const std::string& text) {
   dst[n] = '\0';
 }
 
-}  // namespace enavi::sim::emulated
+}  // namespace enavi::emulation

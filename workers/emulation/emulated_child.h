@@ -14,7 +14,7 @@
 #include "navstack/runtime/virtual_executor.h"
 #include "workers/emulation/emulated_wire.h"
 
-namespace enavi::sim::emulated {
+namespace enavi::emulation {
 
 inline constexpr int kEventRing = 1024;
 
@@ -66,4 +66,4 @@ void PrepareChildProcess(pid_t parent, int* channel_fd, int* go_fd);
 /// records the message in LinkShared::error).
 int RunNavstackChild(const ChildArgs& args);
 
-}  // namespace enavi::sim::emulated
+}  // namespace enavi::emulation

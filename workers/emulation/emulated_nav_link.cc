@@ -40,20 +40,11 @@
 #include "workers/emulation/emulated_wire.h"
 #include "workers/emulation/shm_channel.h"
 
-namespace enavi::sim {
+namespace enavi::emulation {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 using navstack::TaskId;
-using emulated::ChildArgs;
-using emulated::ChildState;
-using emulated::CopyText;
-using emulated::kEventRing;
-using emulated::kFailed;
-using emulated::kStarting;
-using emulated::LinkShared;
-using emulated::PrepareChildProcess;
-using emulated::RunNavstackChild;
 
 
 using api::Fixed;
@@ -123,7 +114,7 @@ struct EmulatedNavLink::Impl {
   board::BoardProfile board;
   EmulationOptions emulation;
   double speed = 1.0, dilation = 1.0;
-  board::BoardQuota quota;
+  emulation::BoardQuota quota;
   std::map<std::string, std::string> notes;
 
   // Resources, released in reverse order by Shutdown().
@@ -132,9 +123,9 @@ struct EmulatedNavLink::Impl {
   bool sim_fifo = false;
   int sim_old_policy = SCHED_OTHER;
   sched_param sim_old_param{};
-  std::unique_ptr<board::CgroupManager> manager;
-  std::unique_ptr<board::EpisodeCgroup> group;
-  std::optional<board::ShmChannel> channel;
+  std::unique_ptr<emulation::CgroupManager> manager;
+  std::unique_ptr<emulation::EpisodeCgroup> group;
+  std::optional<emulation::ShmChannel> channel;
   LinkShared* shared = nullptr;
   pid_t child = -1;
   std::string child_exit;  // how the child ended, once reaped
@@ -152,7 +143,7 @@ struct EmulatedNavLink::Impl {
   bool pub_stop = false;
   bool frame_staged = false;  // the channel's back slot holds a frame waiting for its due time
   Clock::time_point frame_due{};
-  std::deque<std::pair<Clock::time_point, board::OdometryMsg>> odometry_queue;
+  std::deque<std::pair<Clock::time_point, emulation::OdometryMsg>> odometry_queue;
   std::int64_t frames_published = 0, frames_late = 0;
   double frame_late_sum_s = 0, frame_late_max_s = 0;
   double last_t = 0;
@@ -219,8 +210,8 @@ void EmulatedNavLink::Impl::Start() {
   // 2. cgroups: detect, reap stale groups, admit.
   InstallSignalHandlers();
   signals_installed = true;
-  board::CgroupOptions cg;
-  auto open = board::CgroupManager::Open(cg);
+  emulation::CgroupOptions cg;
+  auto open = emulation::CgroupManager::Open(cg);
   if (!open.ok()) {
     throw std::invalid_argument("--clock emulated needs a writable cgroup hierarchy (run as root, cgroup v2 with "
                                 "cpu/cpuset/memory delegated or v1 cpu/cpuset/memory mounted read-write): " +
@@ -232,7 +223,7 @@ void EmulatedNavLink::Impl::Start() {
     for (const auto& r : open.reaped) list += (list.empty() ? "" : ", ") + r;
     notes["emulation.reaped"] = list;
   }
-  const board::BoardCpu cpu{board.cores, speed};
+  const emulation::BoardCpu cpu{board.cores, speed};
   const double host_cpus = manager->HostCpus();
   const double reserved = manager->ReservedCpus();
   const double free_cpus = host_cpus - cg.host_reserve_cpus - reserved;
@@ -243,7 +234,7 @@ void EmulatedNavLink::Impl::Start() {
                                   " held by running emulations, " + Fixed(cg.host_reserve_cpus, 2) +
                                   " kept for the simulator)");
     }
-    dilation = board::MinimumDilation(cpu, free_cpus);
+    dilation = emulation::MinimumDilation(cpu, free_cpus);
     notes["emulation.dilation"] = Fixed(dilation, 2) + " (auto: smallest multiple of 0.25 at which " +
                                   std::to_string(board.cores) + " x " + Fixed(speed, 3) + " = " +
                                   Fixed(board.cores * speed, 3) + " host CPUs fit the " + Fixed(free_cpus, 2) +
@@ -251,23 +242,23 @@ void EmulatedNavLink::Impl::Start() {
   } else {
     notes["emulation.dilation"] = Fixed(dilation, 2) + " (requested)";
   }
-  board::QuotaOptions qo;
+  emulation::QuotaOptions qo;
   qo.dilation = dilation;
   qo.period_us = emulation.cfs_period_us;
-  quota = board::ComputeBoardQuota(cpu, qo);
-  board::EpisodeLimits limits;
+  quota = emulation::ComputeBoardQuota(cpu, qo);
+  emulation::EpisodeLimits limits;
   limits.cpus = emulation.cpus;
   auto created = manager->CreateEpisode(quota, limits);
   if (!created.ok()) throw std::invalid_argument("--clock emulated: " + created.refusal);
   group = std::move(created.group);
   notes["emulation.cgroup"] =
-      std::string(manager->layout().version == board::CgroupVersion::kV2 ? "v2 " : "v1 ") + group->name() +
+      std::string(manager->layout().version == emulation::CgroupVersion::kV2 ? "v2 " : "v1 ") + group->name() +
       ": board quota " + std::to_string(quota.board_quota_us) + " us / " + std::to_string(quota.period_us) + " us (" +
       Fixed(quota.BoardCpus(), 3) + " host CPUs), per thread " + std::to_string(quota.core_quota_us) + " us (" +
       Fixed(quota.CoreCpus(), 3) + ")" + (emulation.cpus.empty() ? "" : ", cpuset " + emulation.cpus);
 
   // 3. Shared memory.
-  channel.emplace(board::ShmChannel::Create({options.camera.width, options.camera.height}));
+  channel.emplace(emulation::ShmChannel::Create({options.camera.width, options.camera.height}));
   void* mem = mmap(nullptr, sizeof(LinkShared), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
   if (mem == MAP_FAILED) throw std::runtime_error(std::string("emulated clock: mmap: ") + std::strerror(errno));
   shared = new (mem) LinkShared();
@@ -310,7 +301,7 @@ void EmulatedNavLink::Impl::Start() {
   }
   child = pid;
   close(go[0]);
-  if (board::CgroupStatus s = group->AddProcess(child); !s.ok) {
+  if (emulation::CgroupStatus s = group->AddProcess(child); !s.ok) {
     close(go[1]);
     throw std::runtime_error("emulated clock: cannot move the navstack process into " + group->name() + ": " +
                              s.message);
@@ -332,7 +323,7 @@ void EmulatedNavLink::Impl::Start() {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   CheckChild();
-  board::CgroupStatus sweep;
+  emulation::CgroupStatus sweep;
   const int placed = group->SweepThreads(&sweep);
   if (!sweep.ok) throw std::runtime_error("emulated clock: per-thread cgroups: " + sweep.message);
   notes["emulation.threads"] = std::to_string(placed) + " navstack threads in per-thread groups (" +
@@ -400,7 +391,7 @@ void EmulatedNavLink::Impl::PublisherLoop() {
     }
     // Odometry first: a frame's consumer should see the state of its capture instant.
     bool have_odometry = false;
-    board::OdometryMsg odometry;
+    emulation::OdometryMsg odometry;
     while (!odometry_queue.empty() && odometry_queue.front().first <= now) {
       odometry = odometry_queue.front().second;
       odometry_queue.pop_front();
@@ -491,7 +482,7 @@ void EmulatedNavLink::Impl::Shutdown() {
   }
   std::string cleanup_error;
   if (group) {
-    if (board::CgroupStatus s = group->Remove(); !s.ok) cleanup_error = s.message;
+    if (emulation::CgroupStatus s = group->Remove(); !s.ok) cleanup_error = s.message;
     group.reset();
   }
   manager.reset();  // removes the `enavi` parent unless other episodes live in it
@@ -544,7 +535,7 @@ void EmulatedNavLink::OnState(const navstack::VehicleState& state) {
   m.SetEpoch();
   {
     std::lock_guard l(m.pub_mutex);
-    m.odometry_queue.emplace_back(m.Due(state.t), board::ShmChannel::ToMsg(state));
+    m.odometry_queue.emplace_back(m.Due(state.t), emulation::ShmChannel::ToMsg(state));
   }
   m.pub_cv.notify_all();
 }
@@ -562,8 +553,8 @@ void EmulatedNavLink::OnFrame(navstack::DepthFramePtr frame) {
                                 std::to_string(frame->image.height) + ", the channel " +
                                 std::to_string(m.channel->width()) + " x " + std::to_string(m.channel->height()));
   // Rendered ahead of time: copied into the channel's back slot now, published at its due time.
-  const board::FrameSlot slot = m.channel->BeginFrame();
-  board::FrameHeader& h = *slot.header;
+  const emulation::FrameSlot slot = m.channel->BeginFrame();
+  emulation::FrameHeader& h = *slot.header;
   h.t = frame->t;
   const Eigen::Vector3d p = frame->X_WC.translation();
   const Eigen::Quaterniond q(frame->X_WC.rotation());
@@ -645,7 +636,7 @@ double EmulatedNavLink::OffBoardSeconds(navstack::TaskId, const navstack::WorkCo
   return host_cpu_s / impl_->speed;
 }
 
-NavAccounting EmulatedNavLink::Accounting() const {
+sim::NavAccounting EmulatedNavLink::Accounting() const {
   const Impl& m = *impl_;
   if (m.shared != nullptr) {
     auto fresh = std::make_unique<StatsWire>();
@@ -660,7 +651,7 @@ NavAccounting EmulatedNavLink::Accounting() const {
     m.next_proc_sample = now + std::chrono::milliseconds(500);
     m.SampleProc();
   }
-  NavAccounting acc;
+  sim::NavAccounting acc;
   for (int i = 0; i < navstack::kTaskCount; ++i) acc.tasks[i] = m.stats->tasks[i];
   acc.plan_failures = m.plan_failures;
   acc.notes = m.notes;
@@ -733,4 +724,4 @@ NavAccounting EmulatedNavLink::Accounting() const {
   return acc;
 }
 
-}  // namespace enavi::sim
+}  // namespace enavi::emulation

@@ -12,7 +12,7 @@
 // board's groups, so no navstack instruction runs unthrottled; PR_SET_PDEATHSIG kills it if the
 // simulator dies.
 //
-// IPC: frames and odometry through board::ShmChannel (memfd, triple buffer, seqlocks, futexes);
+// IPC: frames and odometry through emulation::ShmChannel (memfd, triple buffer, seqlocks, futexes);
 // the stack's outputs (trajectories as B-spline control points, hold reference, task rates,
 // map resolution, events, per-task accounting) through seqlock slots in a shared anonymous
 // mapping (emulated_wire.h).
@@ -36,9 +36,9 @@
 #include "workers/emulation/emulation_options.h"
 #include "workers/sim/nav_link.h"
 
-namespace enavi::sim {
+namespace enavi::emulation {
 
-class EmulatedNavLink final : public NavLink {
+class EmulatedNavLink final : public sim::NavLink {
  public:
   /// Starts the navstack process and waits until its threads run in the board's groups.
   /// `dilation` <= 0 picks the smallest k (multiple of 0.25) at which the board fits the host's
@@ -61,7 +61,7 @@ class EmulatedNavLink final : public NavLink {
   std::vector<navstack::NavEvent> TakeEvents() override;
   navstack::TaskRates rates() const override;
   double map_resolution() const override;
-  NavAccounting Accounting() const override;
+  sim::NavAccounting Accounting() const override;
   /// Rollouts (E-Navi training) are recorded on the virtual clock only: nothing to close here.
   void FinishEpisode(bool, bool) override {}
   const navstack::rl::Rollout* rollout() const override { return nullptr; }
@@ -75,4 +75,4 @@ class EmulatedNavLink final : public NavLink {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace enavi::sim
+}  // namespace enavi::emulation

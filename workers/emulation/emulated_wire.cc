@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace enavi::sim {
+namespace enavi::emulation {
 
 SampleWire ToWire(const navstack::TrajectorySample& s) {
   SampleWire w;
@@ -98,4 +98,4 @@ navstack::TrajectorySample ReferenceMirror::Reference(double t) const {
   return current_->Sample(t);
 }
 
-}  // namespace enavi::sim
+}  // namespace enavi::emulation

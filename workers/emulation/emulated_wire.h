@@ -1,6 +1,6 @@
 #pragma once
 // What crosses the process boundary of an emulated episode besides frames and odometry (those
-// use board::ShmChannel): the navigation stack's outputs as plain data in shared memory.
+// use emulation::ShmChannel): the navigation stack's outputs as plain data in shared memory.
 //
 // The reference is sent as the stack's trajectories themselves (B-spline control points, knot
 // span, start time and initial yaw), not as samples, so the simulator rebuilds the very
@@ -19,7 +19,7 @@
 #include "navstack/runtime/executor.h"
 #include "navstack/runtime/realtime_executor.h"
 
-namespace enavi::sim {
+namespace enavi::emulation {
 
 struct SampleWire {
   double p[3] = {0, 0, 0}, v[3] = {0, 0, 0}, a[3] = {0, 0, 0}, j[3] = {0, 0, 0};
@@ -145,4 +145,4 @@ struct SeqSlot {
   }
 };
 
-}  // namespace enavi::sim
+}  // namespace enavi::emulation

@@ -8,7 +8,7 @@
 #include <functional>
 #include <string>
 
-namespace enavi::sim {
+namespace enavi::emulation {
 
 struct EmulationOptions {
   /// Host calibration file; empty: board::CalibrationPath() ($ENAVI_CALIBRATION, XDG state dir).
@@ -41,4 +41,4 @@ struct EmulationOptions {
   std::function<void(pid_t)> on_navstack_started;
 };
 
-}  // namespace enavi::sim
+}  // namespace enavi::emulation

@@ -13,7 +13,7 @@
 #include "workers/emulation/cgroup_tree.h"
 #include "workers/emulation/host_lock.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 using cgroupfs::Join;
 using cgroupfs::ReadPids;
@@ -114,4 +114,4 @@ CgroupStatus EpisodeCgroup::Remove() {
   return status;
 }
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

@@ -12,7 +12,7 @@
 #include "workers/emulation/board_quota.h"
 #include "workers/emulation/cgroup_layout.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 struct CgroupContext;  // detection result + options, shared by a manager and its groups
 
@@ -70,4 +70,4 @@ class EpisodeCgroup {
   bool removed_ = false;
 };
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

@@ -7,7 +7,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 HostLock::HostLock(const std::string& path) {
   fd_ = open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
@@ -27,4 +27,4 @@ HostLock::~HostLock() {
   if (fd_ >= 0) close(fd_);  // releases the lock
 }
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

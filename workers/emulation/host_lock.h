@@ -4,7 +4,7 @@
 
 #include <string>
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 /// Holds an exclusive flock on `path` for its lifetime; error() says why it could not.
 class HostLock {
@@ -20,4 +20,4 @@ class HostLock {
   std::string error_;
 };
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

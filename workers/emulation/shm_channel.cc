@@ -19,7 +19,7 @@
 #include <string>
 #include <utility>
 
-namespace enavi::board {
+namespace enavi::emulation {
 namespace {
 
 constexpr std::uint64_t kMagic = 0x454e4156'49534d48ULL;  // "ENAVISMH"
@@ -458,4 +458,4 @@ navstack::VehicleState ShmChannel::FromMsg(const OdometryMsg& m) {
   return s;
 }
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

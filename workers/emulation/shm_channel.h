@@ -29,7 +29,7 @@
 #include "navstack/common/camera.h"
 #include "navstack/common/state.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 
 /// Vehicle state as it crosses the process boundary (navstack::VehicleState without Eigen).
 struct OdometryMsg {
@@ -171,4 +171,4 @@ class ShmChannel {
   int peer_pidfd_ = -1;
 };
 
-}  // namespace enavi::board
+}  // namespace enavi::emulation

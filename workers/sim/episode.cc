@@ -93,7 +93,7 @@ const std::vector<ClockEntry>& ClockEntries() {
       {{"emulated", "the stack in its own process, throttled by cgroups to the board's speed, in dilated wall time"},
        [](const api::EpisodeSpec& spec, const EpisodeConfig& config, const board::BoardProfile& board, int threads,
           const navstack::VehicleState& initial, const EpisodeOptions& options) -> std::unique_ptr<NavLink> {
-         return std::make_unique<EmulatedNavLink>(*config.method, config.nav, threads, config.scheduler.policy, board,
+         return std::make_unique<emulation::EmulatedNavLink>(*config.method, config.nav, threads, config.scheduler.policy, board,
                                                   spec.dilation, initial, options.emulation);
        }},
   };

@@ -46,7 +46,7 @@ struct EpisodeOptions {
   /// E-Navi training: when set, the Strategy Controller records its decisions and rewards here.
   navstack::rl::Rollout* rollout = nullptr;
   /// The emulated clock (spec.clock == "emulated"): host calibration file and test knobs.
-  EmulationOptions emulation;
+  emulation::EmulationOptions emulation;
 };
 
 /// A clock the navigation stack can run on (docs/design.md, "Time: two clocks").

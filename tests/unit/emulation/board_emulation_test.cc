@@ -3,11 +3,11 @@
 
 #include <gtest/gtest.h>
 
-namespace enavi::board {
+namespace enavi::emulation {
 namespace {
 
-HostCalibration Host(double relative_speed) {
-  HostCalibration c;
+board::HostCalibration Host(double relative_speed) {
+  board::HostCalibration c;
   c.relative_speed = relative_speed;
   c.tasks["perception"] = {100, 0.010, 0.020, 0.025};
   c.tasks["planning"] = {50, 0.020, 0.040, 0.050};
@@ -15,7 +15,7 @@ HostCalibration Host(double relative_speed) {
 }
 
 TEST(BoardEmulationTest, BoardEmulationFigures) {
-  const BoardEmulation pi = DescribeBoardEmulation(LoadBoard("pi4b"), Host(1.0), 1.75);
+  const BoardEmulation pi = DescribeBoardEmulation(board::LoadBoard("pi4b"), Host(1.0), 1.75);
   EXPECT_EQ(pi.cores, 4);
   EXPECT_DOUBLE_EQ(pi.speed_vs_host, 0.56);
   EXPECT_DOUBLE_EQ(pi.quota_cpus_k1, 4 * 0.56);
@@ -24,12 +24,12 @@ TEST(BoardEmulationTest, BoardEmulationFigures) {
   EXPECT_NEAR(pi.wcet_s.at("planning"), 0.050 / 0.56, 1e-12) << "host WCET / board speed";
 
   // A host twice the reference: every board is slower still.
-  EXPECT_DOUBLE_EQ(DescribeBoardEmulation(LoadBoard("opi5"), Host(2.0), 1.75).speed_vs_host, 0.43);
+  EXPECT_DOUBLE_EQ(DescribeBoardEmulation(board::LoadBoard("opi5"), Host(2.0), 1.75).speed_vs_host, 0.43);
   // A slow host cannot emulate faster boards.
-  EXPECT_FALSE(DescribeBoardEmulation(LoadBoard("opi5"), Host(0.5), 1.75).emulable);
+  EXPECT_FALSE(DescribeBoardEmulation(board::LoadBoard("opi5"), Host(0.5), 1.75).emulable);
   // x86 at 0.95 is 2 % faster than a 0.93 host: within the calibration's noise.
-  EXPECT_TRUE(DescribeBoardEmulation(LoadBoard("x86"), Host(0.93), 1.75).emulable);
+  EXPECT_TRUE(DescribeBoardEmulation(board::LoadBoard("x86"), Host(0.93), 1.75).emulable);
 }
 
 }  // namespace
-}  // namespace enavi::board
+}  // namespace enavi::emulation

@@ -4,7 +4,7 @@
 
 #include <stdexcept>
 
-namespace enavi::board {
+namespace enavi::emulation {
 namespace {
 
 TEST(BoardQuotaTest, BoardCapIsCoresTimesSpeedOverDilation) {
@@ -99,4 +99,4 @@ TEST(BoardQuotaTest, MinimumDilationFitsTheBoardIntoFreeHostCpus) {
 }
 
 }  // namespace
-}  // namespace enavi::board
+}  // namespace enavi::emulation

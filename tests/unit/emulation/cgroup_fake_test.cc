@@ -11,7 +11,7 @@
 
 #include "workers/emulation/cgroup_manager.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 namespace {
 
 namespace fs = std::filesystem;
@@ -318,4 +318,4 @@ TEST_F(FakeCgroupTreeTest, ReaperRemovesOnlyGroupsOfWorkersThatAreGone) {
 }
 
 }  // namespace
-}  // namespace enavi::board
+}  // namespace enavi::emulation

@@ -16,7 +16,7 @@
 
 #include "workers/emulation/cgroup_manager.h"
 
-namespace enavi::board {
+namespace enavi::emulation {
 namespace {
 
 namespace fs = std::filesystem;
@@ -304,4 +304,4 @@ TEST_F(KernelCgroupTest, SecondBoardIsRefusedWhenTheHostIsFull) {
 }
 
 }  // namespace
-}  // namespace enavi::board
+}  // namespace enavi::emulation

@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-namespace enavi::sim {
+namespace enavi::emulation {
 namespace {
 
 using navstack::PlannerOptions;
@@ -122,4 +122,4 @@ TEST(EmulatedWireTest, SeqSlotDeliversEachValueOnce) {
 }
 
 }  // namespace
-}  // namespace enavi::sim
+}  // namespace enavi::emulation

@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <thread>
 
-namespace enavi::board {
+namespace enavi::emulation {
 namespace {
 
 using std::chrono::milliseconds;
@@ -249,4 +249,4 @@ TEST(ShmChannelTest, ForeignDescriptorIsRefused) {
 }
 
 }  // namespace
-}  // namespace enavi::board
+}  // namespace enavi::emulation
