@@ -38,6 +38,9 @@ void RegisterTrainCommand(CLI::App& app) {
   cmd->add_flag("--resume", o->resume, "continue from the work dir's checkpoint");
   cmd->add_option("--learning-rate", o->ppo.learning_rate, "Adam step size")->capture_default_str();
   cmd->add_option("--entropy-coef", o->ppo.entropy_coef, "entropy bonus weight")->capture_default_str();
+  cmd->add_option("--target-kl", o->ppo.target_kl,
+                  "stop an update's epochs once a minibatch's approximate KL exceeds 1.5 x this (0: off)")
+      ->capture_default_str();
   cmd->add_option("--eval-every", o->eval_every,
                   "fly the greedy policy on the fixed evaluation worlds before every N-th update and after the "
                   "last (0: never)")

@@ -296,6 +296,15 @@ TrainResult Train(const TrainOptions& options) {
     const Collected data = Collect(client, local.get(),
                                    CollectionJobYaml("train-eval-" + std::to_string(at), policy_ref, eval_picks, false),
                                    "train evaluation after " + std::to_string(at) + " updates");
+    // What was flown, and the policy that flew it, for looking back at a point of the curve.
+    rl::SavePolicyFile((work / ("policy_after_" + std::to_string(at) + ".json")).string(), trainer.policy());
+    {
+      std::ofstream flights(work / "evaluations.jsonl", std::ios::app);
+      for (nlohmann::json line : data.results) {
+        line["policy_iteration"] = at;
+        flights << line.dump() << "\n";
+      }
+    }
     EvaluationLog e;
     e.policy_iteration = at;
     e.failed_episodes = data.failed;

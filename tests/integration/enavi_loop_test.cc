@@ -122,6 +122,10 @@ TEST(EnaviTrainTest, TrainsCheckpointsAndResumes) {
   const std::string evals = ReadFile(work / "evaluation_curve.csv");
   ASSERT_EQ(std::count(evals.begin(), evals.end(), '\n'), 4) << "header + 3 evaluations:\n" << evals;
   for (const char* row : {"\n0,1,0,", "\n1,1,0,", "\n2,1,0,"}) EXPECT_NE(evals.find(row), std::string::npos) << evals;
+  for (const char* p : {"policy_after_0.json", "policy_after_1.json", "policy_after_2.json"})
+    EXPECT_TRUE(std::filesystem::exists(work / p)) << p;
+  const std::string flights = ReadFile(work / "evaluations.jsonl");
+  EXPECT_EQ(std::count(flights.begin(), flights.end(), '\n'), 3) << flights;
   // The trained policy flies.
   const CliRun fly = Enavi(dir, "fly --world s3 --board tx2 --method enavi --timeout 3 --json --policy " + out);
   EXPECT_EQ(fly.code, 0) << fly.err;
