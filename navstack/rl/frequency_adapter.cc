@@ -63,7 +63,10 @@ FrequencyDecision FrequencyAdapter::Decide(const ConstraintInputs& constraints,
   d.f = grid().At(out.action);
   d.log_prob = out.log_prob;
   d.value = out.value;
-  d.macs = policy_.net.MacsPerDecision(recording) + kMaskMacsPerAction * grid().size();
+  // The onboard work is the actor's: the critic runs only to fill a training record, off board,
+  // so recording a rollout does not change what the decision costs on the board's clock (it did:
+  // a collection flight then flew differently from the same spec flown without one).
+  d.macs = policy_.net.MacsPerDecision(/*with_value=*/false) + kMaskMacsPerAction * grid().size();
   if (work != nullptr) work->Add(WorkUnit::kPolicyFlop, d.macs);
   if (recording) {
     record->obs = obs_;

@@ -296,8 +296,9 @@ TrainResult Train(const TrainOptions& options) {
     const Collected data = Collect(client, local.get(),
                                    CollectionJobYaml("train-eval-" + std::to_string(at), policy_ref, eval_picks, false),
                                    "train evaluation after " + std::to_string(at) + " updates");
-    // What was flown, and the policy that flew it, for looking back at a point of the curve.
-    rl::SavePolicyFile((work / ("policy_after_" + std::to_string(at) + ".json")).string(), trainer.policy());
+    // What was flown, and the policy that flew it (its float64 canonical text, the bytes the farm
+    // flew: a float32 copy flies a slightly different flight), for looking back at a point.
+    api::WriteFileAtomic(work / ("policy_after_" + std::to_string(at) + ".json"), rl::CanonicalPolicyText(trainer.policy()));
     {
       std::ofstream flights(work / "evaluations.jsonl", std::ios::app);
       for (nlohmann::json line : data.results) {

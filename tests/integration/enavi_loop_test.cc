@@ -53,6 +53,22 @@ TEST(EnaviLoopTest, SameEpisodeTwiceIsIdentical) {
   EXPECT_EQ(a, b);
 }
 
+// A collection job's flight (rollout recorded: the critic also runs) is the flight the same spec
+// flies without one, so training and evaluation see the stack as it is deployed. It was not: the
+// critic's work was charged to the board's clock, and the canyon seed 2 tx2 evaluation flight of
+// one policy collided on the farm and reached the goal in `enavi fly`.
+TEST(EnaviLoopTest, RecordingARolloutDoesNotChangeTheFlight) {
+  const TempDir dir;
+  const api::EpisodeSpec spec = EnaviSpec(WritePolicy(dir));
+  navstack::rl::Rollout rollout;
+  sim::EpisodeOptions recording;
+  recording.rollout = &rollout;
+  const std::string recorded = nlohmann::json(sim::RunEpisode(spec, recording)).dump();
+  const std::string plain = nlohmann::json(sim::RunEpisode(spec)).dump();
+  EXPECT_FALSE(rollout.steps.empty());
+  EXPECT_EQ(recorded, plain);
+}
+
 TEST(EnaviLoopTest, ExploringEpisodeRecordsARolloutWithRewards) {
   const TempDir dir;
   api::EpisodeSpec spec = EnaviSpec(WritePolicy(dir));

@@ -32,11 +32,12 @@ static_assert(std::atomic<std::uint64_t>::is_always_lock_free);
 static_assert(std::atomic<std::int64_t>::is_always_lock_free);
 static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t), "futex word");
 
-// Latest-value slot: a seqlock whose sequence word is also the futex word waiters sleep on.
+// Latest-value slot a reader can sleep on: a seqlock (as emulated_wire.h's SeqSlot) whose
+// sequence word is also the futex word waiters sleep on.
 // Odd sequence = write in progress. The payload is copied as relaxed atomic words, so a torn
 // read is detected by the sequence check instead of being a data race.
 template <typename T>
-struct SeqSlot {
+struct WaitableSeqSlot {
   static constexpr std::size_t kWords = (sizeof(T) + 7) / 8;
   alignas(64) std::atomic<std::uint32_t> seq{0};
   std::atomic<std::uint32_t> waiters{0};
@@ -58,9 +59,9 @@ struct Shared {
   std::atomic<std::uint32_t> frame_seq{0};                 // futex word: publications (mod 2^32)
   std::atomic<std::uint32_t> frame_waiters{0};
   std::atomic<std::int64_t> frames_published{0};
-  SeqSlot<OdometryMsg> odometry;
-  SeqSlot<TrajectoryMsg> trajectory;
-  SeqSlot<RotorCommandMsg> rotor;
+  WaitableSeqSlot<OdometryMsg> odometry;
+  WaitableSeqSlot<TrajectoryMsg> trajectory;
+  WaitableSeqSlot<RotorCommandMsg> rotor;
 };
 
 std::size_t RoundUp(std::size_t v, std::size_t to) { return (v + to - 1) / to * to; }
@@ -96,13 +97,13 @@ void FutexWait(const std::atomic<std::uint32_t>& word, std::uint32_t expected,
 }
 
 template <typename T>
-void SeqWrite(SeqSlot<T>& slot, const T& value) {
-  std::uint64_t buf[SeqSlot<T>::kWords] = {};
+void SeqWrite(WaitableSeqSlot<T>& slot, const T& value) {
+  std::uint64_t buf[WaitableSeqSlot<T>::kWords] = {};
   std::memcpy(buf, &value, sizeof(T));
   const std::uint32_t q = slot.seq.load(std::memory_order_relaxed);
   slot.seq.store(q + 1, std::memory_order_relaxed);
   std::atomic_thread_fence(std::memory_order_release);
-  for (std::size_t i = 0; i < SeqSlot<T>::kWords; ++i) {
+  for (std::size_t i = 0; i < WaitableSeqSlot<T>::kWords; ++i) {
     slot.words[i].store(buf[i], std::memory_order_relaxed);
   }
   slot.seq.store(q + 2, std::memory_order_release);
@@ -112,14 +113,14 @@ void SeqWrite(SeqSlot<T>& slot, const T& value) {
 }
 
 template <typename T>
-bool SeqRead(const SeqSlot<T>& slot, T* out, std::uint32_t* seen) {
-  std::uint64_t buf[SeqSlot<T>::kWords];
+bool SeqRead(const WaitableSeqSlot<T>& slot, T* out, std::uint32_t* seen) {
+  std::uint64_t buf[WaitableSeqSlot<T>::kWords];
   // Bounded: a writer that died mid-write leaves an odd sequence forever.
   for (int attempt = 0; attempt < 100'000; ++attempt) {
     const std::uint32_t q1 = slot.seq.load(std::memory_order_acquire);
     if (q1 & 1u) continue;
     if (q1 == *seen) return false;
-    for (std::size_t i = 0; i < SeqSlot<T>::kWords; ++i) {
+    for (std::size_t i = 0; i < WaitableSeqSlot<T>::kWords; ++i) {
       buf[i] = slot.words[i].load(std::memory_order_relaxed);
     }
     std::atomic_thread_fence(std::memory_order_acquire);

@@ -64,8 +64,9 @@ TEST(FrequencyAdapterTest, RecordingFillsARolloutStep) {
   EXPECT_LT(step.log_prob, 0.0);
   EXPECT_EQ(step.log_prob, d.log_prob);
   EXPECT_EQ(step.value, d.value);
+  // The critic's work fills the record off board: the decision costs what a deployed one does.
   EXPECT_EQ(d.macs,
-            fa.policy().net.MacsPerDecision(true) + FrequencyAdapter::kMaskMacsPerAction * 98);
+            fa.policy().net.MacsPerDecision(false) + FrequencyAdapter::kMaskMacsPerAction * 98);
 }
 
 TEST(FrequencyAdapterTest, RefusesPoliciesWithoutGridOrWithOtherFeatures) {
