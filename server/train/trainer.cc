@@ -158,31 +158,34 @@ std::vector<rl::Rollout> AcceptRollouts(const Collected& data, const std::string
   return rollouts;
 }
 
+// One curve's plotted columns; `x` is the row's iteration field.
+struct CurveColumns {
+  std::vector<double> x, ret, success, cpu, time;
+};
+template <typename Row>
+CurveColumns Columns(const std::vector<Row>& rows, std::int64_t Row::*x) {
+  CurveColumns c;
+  for (const Row& r : rows) {
+    c.x.push_back(static_cast<double>(r.*x));
+    c.ret.push_back(r.mean_return);
+    c.success.push_back(100.0 * r.success_rate);
+    c.cpu.push_back(r.mean_nav_cpu);
+    c.time.push_back(r.mean_flight_time);
+  }
+  return c;
+}
+
 void SaveCurvePng(const std::vector<IterationLog>& log, const std::vector<EvaluationLog>& evals,
                   const fs::path& path) {
-  std::vector<double> x, ret, success, cpu, time;
-  for (const auto& r : log) {
-    x.push_back(static_cast<double>(r.iteration));
-    ret.push_back(r.mean_return);
-    success.push_back(100.0 * r.success_rate);
-    cpu.push_back(r.mean_nav_cpu);
-    time.push_back(r.mean_flight_time);
-  }
-  std::vector<double> ex, eret, esuccess, ecpu, etime;
-  for (const auto& e : evals) {
-    ex.push_back(static_cast<double>(e.policy_iteration));
-    eret.push_back(e.mean_return);
-    esuccess.push_back(100.0 * e.success_rate);
-    ecpu.push_back(e.mean_nav_cpu);
-    etime.push_back(e.mean_flight_time);
-  }
+  const CurveColumns t = Columns(log, &IterationLog::iteration);
+  const CurveColumns e = Columns(evals, &EvaluationLog::policy_iteration);
   report::ChartStack stack("E-Navi frequency adapter: PPO learning curve", "iteration (policy updates)");
   stack.AddPanel("mean episode return", "return")
-      .AddSeries("training (sampled, new worlds each iteration)", x, ret)
-      .AddSeries("evaluation (greedy, fixed worlds)", ex, eret);
-  stack.AddPanel("success rate", "%").AddSeries("training", x, success).AddSeries("evaluation", ex, esuccess);
-  stack.AddPanel("navigation CPU (% of one core)", "%").AddSeries("training", x, cpu).AddSeries("evaluation", ex, ecpu);
-  stack.AddPanel("flight time", "s").AddSeries("training", x, time).AddSeries("evaluation", ex, etime);
+      .AddSeries("training (sampled, new worlds each iteration)", t.x, t.ret)
+      .AddSeries("evaluation (greedy, fixed worlds)", e.x, e.ret);
+  stack.AddPanel("success rate", "%").AddSeries("training", t.x, t.success).AddSeries("evaluation", e.x, e.success);
+  stack.AddPanel("navigation CPU (% of one core)", "%").AddSeries("training", t.x, t.cpu).AddSeries("evaluation", e.x, e.cpu);
+  stack.AddPanel("flight time", "s").AddSeries("training", t.x, t.time).AddSeries("evaluation", e.x, e.time);
   stack.SavePng(path.string());
 }
 
