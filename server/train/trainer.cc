@@ -291,11 +291,9 @@ TrainResult Train(const TrainOptions& options) {
   };
   // The greedy policy as it is now on the evaluation worlds, unless that point is already there.
   const std::vector<Pick> eval_picks = EvaluationPicks(options);
-  const auto evaluate = [&] {
+  const auto evaluate = [&](const std::string& policy_ref, const std::string& hash) {
     const std::int64_t at = trainer.iteration();
     if (options.eval_every == 0 || (!evals.empty() && evals.back().policy_iteration >= at)) return;
-    std::string hash;
-    const std::string policy_ref = upload(&hash);
     const Collected data = Collect(client, local.get(),
                                    CollectionJobYaml("train-eval-" + std::to_string(at), policy_ref, eval_picks, false),
                                    "train evaluation after " + std::to_string(at) + " updates");
@@ -327,10 +325,10 @@ TrainResult Train(const TrainOptions& options) {
   const auto t_start = std::chrono::steady_clock::now();
   const std::int64_t first = trainer.iteration();
   for (std::int64_t it = first; it < options.iterations; ++it) {
-    if (options.eval_every > 0 && it % options.eval_every == 0) evaluate();
-    const auto t0 = std::chrono::steady_clock::now();
     std::string hash;
-    const std::string policy_ref = upload(&hash);
+    const std::string policy_ref = upload(&hash);  // evaluated and trained on: the same policy
+    if (options.eval_every > 0 && it % options.eval_every == 0) evaluate(policy_ref, hash);
+    const auto t0 = std::chrono::steady_clock::now();
 
     // This iteration's episodes: every scenario in turn (so each iteration sees the same mix and
     // its statistics compare across iterations), boards in turn, training-only world seeds.
@@ -382,7 +380,11 @@ TrainResult Train(const TrainOptions& options) {
                    100 * row.success_rate, row.mean_nav_cpu, per_iter * (options.iterations - it - 1));
     }
   }
-  evaluate();  // the final policy
+  if (options.eval_every > 0) {  // the final policy
+    std::string hash;
+    const std::string policy_ref = upload(&hash);
+    evaluate(policy_ref, hash);
+  }
   rl::SavePolicyFile(options.out.string(), trainer.policy());
   return result;
 }

@@ -1,4 +1,4 @@
-// cgroup control against fake directory trees: detection, the files written, admission and
+// cgroup control against directory trees of plain files: detection, the files written, admission and
 // reaping, without touching the kernel's cgroups.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -47,10 +47,10 @@ pid_t DeadPid() {
   return child;
 }
 
-class FakeCgroupTreeTest : public ::testing::Test {
+class PlainFilesCgroupTreeTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    char tmpl[] = "/tmp/enavi-fake-cgroup-XXXXXX";
+    char tmpl[] = "/tmp/enavi-plain-cgroup-XXXXXX";
     ASSERT_NE(mkdtemp(tmpl), nullptr);
     dir_ = tmpl;
     root_ = dir_ / "sys";
@@ -98,7 +98,7 @@ TEST(CpuListTest, CountsRangesAndSingles) {
   EXPECT_EQ(CountCpuList("a"), -1);
 }
 
-TEST_F(FakeCgroupTreeTest, HybridHostWithoutV2ControllersUsesV1) {
+TEST_F(PlainFilesCgroupTreeTest, HybridHostWithoutV2ControllersUsesV1) {
   MakeV1();
   const CgroupLayout l = DetectCgroups(options_);
   ASSERT_EQ(l.version, CgroupVersion::kV1) << l.problem;
@@ -107,7 +107,7 @@ TEST_F(FakeCgroupTreeTest, HybridHostWithoutV2ControllersUsesV1) {
   EXPECT_EQ(l.memory_base, (root_ / "memory").string());
 }
 
-TEST_F(FakeCgroupTreeTest, V2IsPreferredWhenItHasTheControllers) {
+TEST_F(PlainFilesCgroupTreeTest, V2IsPreferredWhenItHasTheControllers) {
   MakeV1();
   Write(root_ / "unified/cgroup.controllers", "cpuset cpu memory");
   Write(root_ / "unified/cgroup.subtree_control", "cpuset cpu memory");
@@ -116,7 +116,7 @@ TEST_F(FakeCgroupTreeTest, V2IsPreferredWhenItHasTheControllers) {
   EXPECT_EQ(l.cpu_base, (root_ / "unified").string());
 }
 
-TEST_F(FakeCgroupTreeTest, V2MissingMemoryFallsBackToV1) {
+TEST_F(PlainFilesCgroupTreeTest, V2MissingMemoryFallsBackToV1) {
   MakeV1();
   Write(root_ / "unified/cgroup.controllers", "cpuset cpu");
   Write(root_ / "unified/cgroup.subtree_control", "cpuset cpu");
@@ -126,14 +126,14 @@ TEST_F(FakeCgroupTreeTest, V2MissingMemoryFallsBackToV1) {
       << "without the memory requirement v2 qualifies";
 }
 
-TEST_F(FakeCgroupTreeTest, PureV2UsesTheWorkersOwnCgroup) {
+TEST_F(PlainFilesCgroupTreeTest, PureV2UsesTheWorkersOwnCgroup) {
   MakeV2();
   const CgroupLayout l = DetectCgroups(options_);
   ASSERT_EQ(l.version, CgroupVersion::kV2) << l.problem;
   EXPECT_EQ(l.cpu_base, (root_ / "worker").string());
 }
 
-TEST_F(FakeCgroupTreeTest, V1GroupsNestUnderTheWorkersOwnCgroups) {
+TEST_F(PlainFilesCgroupTreeTest, V1GroupsNestUnderTheWorkersOwnCgroups) {
   MakeV1();
   fs::create_directories(root_ / "memory/session/abc");
   Write(options_.self_cgroup_file, "4:memory:/session/abc\n3:cpuset:/\n1:cpu,cpuacct:/\n0::/\n");
@@ -143,7 +143,7 @@ TEST_F(FakeCgroupTreeTest, V1GroupsNestUnderTheWorkersOwnCgroups) {
   EXPECT_EQ(l.cpu_base, (root_ / "cpu").string()) << "combined 'cpu,cpuacct' line";
 }
 
-TEST_F(FakeCgroupTreeTest, NothingUsableNamesWhatIsMissing) {
+TEST_F(PlainFilesCgroupTreeTest, NothingUsableNamesWhatIsMissing) {
   Write(options_.self_cgroup_file, "0::/\n");
   const CgroupLayout l = DetectCgroups(options_);
   EXPECT_EQ(l.version, CgroupVersion::kNone);
@@ -156,7 +156,7 @@ TEST_F(FakeCgroupTreeTest, NothingUsableNamesWhatIsMissing) {
   EXPECT_NE(open.error.find("cgroup CPU emulation unavailable"), std::string::npos) << open.error;
 }
 
-TEST_F(FakeCgroupTreeTest, V2WithoutDelegatedControllersSaysWhichFile) {
+TEST_F(PlainFilesCgroupTreeTest, V2WithoutDelegatedControllersSaysWhichFile) {
   MakeV2("pids");
   const CgroupLayout l = DetectCgroups(options_);
   EXPECT_EQ(l.version, CgroupVersion::kNone);
@@ -165,7 +165,7 @@ TEST_F(FakeCgroupTreeTest, V2WithoutDelegatedControllersSaysWhichFile) {
   EXPECT_NE(l.problem.find("cpu cpuset memory"), std::string::npos) << l.problem;
 }
 
-TEST_F(FakeCgroupTreeTest, UnprivilegedWorkerIsToldWhichPathIsNotWritable) {
+TEST_F(PlainFilesCgroupTreeTest, UnprivilegedWorkerIsToldWhichPathIsNotWritable) {
   MakeV1();
   const auto read_only = fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
                          fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec;
@@ -191,7 +191,7 @@ TEST_F(FakeCgroupTreeTest, UnprivilegedWorkerIsToldWhichPathIsNotWritable) {
   EXPECT_EQ(WEXITSTATUS(status), 0) << "10 setresuid, 11 detected usable, 12 message";
 }
 
-TEST_F(FakeCgroupTreeTest, EpisodeGroupGetsQuotaCpusetAndMemoryAndIsRemoved) {
+TEST_F(PlainFilesCgroupTreeTest, EpisodeGroupGetsQuotaCpusetAndMemoryAndIsRemoved) {
   MakeV1();
   auto open = CgroupManager::Open(options_);
   ASSERT_TRUE(open.ok()) << open.error;
@@ -234,7 +234,7 @@ TEST_F(FakeCgroupTreeTest, EpisodeGroupGetsQuotaCpusetAndMemoryAndIsRemoved) {
   EXPECT_FALSE(fs::exists(root_ / "memory/enavi"));
 }
 
-TEST_F(FakeCgroupTreeTest, SweepGivesEveryThreadOfTheBoardGroupItsOwnGroup) {
+TEST_F(PlainFilesCgroupTreeTest, SweepGivesEveryThreadOfTheBoardGroupItsOwnGroup) {
   MakeV1();
   auto open = CgroupManager::Open(options_);
   ASSERT_TRUE(open.ok()) << open.error;
@@ -251,7 +251,7 @@ TEST_F(FakeCgroupTreeTest, SweepGivesEveryThreadOfTheBoardGroupItsOwnGroup) {
   }
 }
 
-TEST_F(FakeCgroupTreeTest, V2EpisodeUsesCpuMaxAndThreadedChildren) {
+TEST_F(PlainFilesCgroupTreeTest, V2EpisodeUsesCpuMaxAndThreadedChildren) {
   MakeV2();
   auto open = CgroupManager::Open(options_);
   ASSERT_TRUE(open.ok()) << open.error;
@@ -274,7 +274,7 @@ TEST_F(FakeCgroupTreeTest, V2EpisodeUsesCpuMaxAndThreadedChildren) {
   EXPECT_EQ(Read(ep / "t-77/cgroup.threads"), "77");
 }
 
-TEST_F(FakeCgroupTreeTest, AdmissionRefusesWhatTheHostCannotHold) {
+TEST_F(PlainFilesCgroupTreeTest, AdmissionRefusesWhatTheHostCannotHold) {
   MakeV1("0-1");  // 2 CPUs, 0.25 kept for the simulator
   auto open = CgroupManager::Open(options_);
   ASSERT_TRUE(open.ok()) << open.error;
@@ -292,7 +292,7 @@ TEST_F(FakeCgroupTreeTest, AdmissionRefusesWhatTheHostCannotHold) {
   EXPECT_TRUE(third.ok()) << "the reservation ends with the group: " << third.refusal;
 }
 
-TEST_F(FakeCgroupTreeTest, ReaperRemovesOnlyGroupsOfWorkersThatAreGone) {
+TEST_F(PlainFilesCgroupTreeTest, ReaperRemovesOnlyGroupsOfWorkersThatAreGone) {
   MakeV1();
   const std::string dead = "ep-" + std::to_string(DeadPid()) + "-5-0";
   const std::string reused = "ep-" + std::to_string(getpid()) + "-1-0";  // our pid, other start
