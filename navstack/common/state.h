@@ -1,6 +1,8 @@
 #pragma once
 // Vehicle state and trajectory references exchanged between planner, controller and simulator.
 
+#include <cmath>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -16,6 +18,14 @@ struct VehicleState {
   Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
   Eigen::Vector3d w_WB_B = Eigen::Vector3d::Zero();     ///< angular velocity in B
 };
+
+/// a in (-pi, pi].
+inline double WrapAngle(double a) {
+  constexpr double kPi = 3.14159265358979323846;
+  a = std::fmod(a + kPi, 2.0 * kPi);
+  if (a <= 0.0) a += 2.0 * kPi;
+  return a - kPi;
+}
 
 /// Reference for the tracking controller at one instant.
 struct TrajectorySample {

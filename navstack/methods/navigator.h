@@ -51,6 +51,10 @@ struct NavStackOptions {
   double replan_before_end_s = 2.0;
   /// Triggered planning retries this often while there is no trajectory to follow, s.
   double plan_retry_period_s = 0.2;
+  /// A hovering vehicle whose last this many plans all failed turns on the spot (scan) until one
+  /// lands: what boxes it in is often what it cannot see from where it looks (NavStack::Scan).
+  int scan_after_failures = 3;
+  double scan_yaw_rate = 1.0;  ///< rad/s: a full turn in 6.3 s, 200 frames at 30 Hz
   /// A predicted collision sooner than this is the vehicle already inside inflated space, s.
   double escape_window_s = 0.15;
   /// A collision predicted sooner than this triggers an emergency stop, not only a replan.

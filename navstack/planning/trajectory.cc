@@ -6,18 +6,11 @@
 namespace enavi::navstack {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Yaw profile resolution and the look-ahead used at low speed.
 constexpr double kYawStep = 0.02;
 constexpr double kLookAhead = 0.5;
 // Curve samples per knot span for the arc length.
 constexpr int kLengthSamplesPerSpan = 20;
-
-double WrapAngle(double a) {
-  a = std::fmod(a + kPi, 2.0 * kPi);
-  if (a <= 0.0) a += 2.0 * kPi;
-  return a - kPi;  // (-pi, pi]
-}
 
 }  // namespace
 

@@ -55,6 +55,16 @@ void NavStack::Stop(const char* why) {
   AddEvent(why);
 }
 
+void NavStack::Scan() {
+  scanning_ = true;
+  scan_t0_ = executor_->now();
+  ++stops_;
+  hold_ = HoldAt(state_.p_WB, YawOf(state_.q_WB));
+  AddEvent("scan");
+}
+
+bool NavStack::Hovering(double t) const { return stopped_ || scanning_ || !trajectory_ || t >= trajectory_->end_time(); }
+
 void NavStack::SetRates(const TaskRates& rates) {
   rates_ = rates;
   executor_->SetRate(TaskId::kPerception, rates.f_per);
@@ -71,20 +81,26 @@ void NavStack::OnFrame(DepthFramePtr frame) {
   latest_frame_ = std::move(frame);
   // Triggered planning also replans ahead of the end of the current trajectory, so the vehicle
   // does not stop at every local goal.
-  if (rates_.f_plan == 0 && trajectory_ && !stopped_) {
+  if (rates_.f_plan == 0 && trajectory_ && !stopped_ && !scanning_) {
     const double left = trajectory_->end_time() - latest_frame_->t;
     const bool ends_at_goal = (trajectory_->end_point() - options_.goal).norm() < 0.1;
     if (left < options_.replan_before_end_s && !ends_at_goal) RequestReplan("trajectory_end");
   }
   // Without a trajectory to follow (stopped, or the last plan failed) triggered planning retries
   // at a bounded rate; a failsafe hover waits for the overload to clear instead.
-  if (rates_.f_plan == 0 && !failsafe_ && (stopped_ || !trajectory_) && latest_frame_->t >= next_retry_t_) {
+  if (rates_.f_plan == 0 && !failsafe_ && (stopped_ || scanning_ || !trajectory_) && latest_frame_->t >= next_retry_t_) {
     next_retry_t_ = latest_frame_->t + options_.plan_retry_period_s;
     RequestReplan("retry");
   }
 }
 
 TrajectorySample NavStack::Reference(double t) const {
+  if (scanning_) {
+    TrajectorySample s = hold_;
+    s.yaw_rate = options_.scan_yaw_rate;
+    s.yaw = WrapAngle(hold_.yaw + s.yaw_rate * (t - scan_t0_));
+    return s;
+  }
   if (stopped_ || !trajectory_) return hold_;
   // A plan that landed before its own start time hands over at that time.
   if (t < trajectory_->start_time() && previous_trajectory_) return previous_trajectory_->Sample(t);
@@ -140,7 +156,7 @@ JobOutput NavStack::CollisionJob() {
   JobOutput out;
   const std::shared_ptr<const Trajectory> traj = trajectory_;
   const double t = executor_->now();
-  if (!traj || stopped_ || t >= traj->end_time()) return out;
+  if (!traj || stopped_ || scanning_ || t >= traj->end_time()) return out;
   const double radius = options_.planner.robot_radius;
   const VoxelGrid grid = map_->ExtractGrid(SweptBox(*traj, t, traj->end_time(), radius + map_->resolution()), &out.work);
   const ObservedSpaceRule observed = ObservedRule(state_.p_WB);
@@ -188,7 +204,7 @@ JobOutput NavStack::PlanningJob() {
   // from the measured state when there is no reference to continue or it has drifted away.
   const double t_start = t + plan_latency_estimate_;
   TrajectorySample start = Reference(t_start);
-  const bool from_state = !trajectory_ || stopped_ || (Reference(t).p - state_.p_WB).norm() > options_.max_tracking_error;
+  const bool from_state = !trajectory_ || stopped_ || scanning_ || (Reference(t).p - state_.p_WB).norm() > options_.max_tracking_error;
   if (from_state) {
     start = TrajectorySample{};
     start.p = state_.p_WB;
@@ -233,12 +249,17 @@ JobOutput NavStack::PlanningJob() {
     if (!result->ok()) {
       ++plan_failures_;
       AddEvent("plan_failed", std::string(ToString(result->status)) + ": " + result->message);
+      if (++failed_plans_in_row_ >= options_.scan_after_failures && !scanning_ && !failsafe_ &&
+          Hovering(executor_->now()))
+        Scan();
       return;
     }
+    failed_plans_in_row_ = 0;
     if (failsafe_) return;  // hovering until the overload clears
-    previous_trajectory_ = stopped_ ? nullptr : trajectory_;
+    previous_trajectory_ = stopped_ || scanning_ ? nullptr : trajectory_;
     trajectory_ = result->trajectory;
     stopped_ = false;
+    scanning_ = false;
     last_search_path_ = result->search_path;
     ++replans_;
     AddEvent("replan", trigger);

@@ -67,6 +67,10 @@ class NavStack final : public Navigator {
   ObservedSpaceRule ObservedRule(const Eigen::Vector3d& start) const;
   TaskWcets RecentWcets() const;  ///< each task's recent job time, board seconds
   void Stop(const char* why);
+  /// Starts turning on the spot at the current position (NavStackOptions::scan_after_failures).
+  void Scan();
+  /// No trajectory to follow: stopped, none yet, or the last one has ended.
+  bool Hovering(double t) const;
   void AddEvent(std::string kind, std::string detail = {});
   void RequestReplan(const char* why);
 
@@ -83,10 +87,13 @@ class NavStack final : public Navigator {
   std::shared_ptr<const Trajectory> previous_trajectory_;
   TrajectorySample hold_;              ///< reference while no trajectory exists or after a stop
   bool stopped_ = false;               ///< emergency stop active until the next plan lands
+  bool scanning_ = false;              ///< turning on the spot at hold_ until the next plan lands
+  double scan_t0_ = 0;                 ///< when the scan began (hold_.yaw is the yaw then)
   int stops_ = 0;                      ///< emergency stops and fail-safe hovers so far
   std::vector<Eigen::Vector3d> last_search_path_;
   std::int64_t replans_ = 0;
   std::int64_t plan_failures_ = 0;
+  int failed_plans_in_row_ = 0;
   std::int64_t plan_calls_ = 0;
   double plan_latency_estimate_ = 0.05;
   std::string pending_trigger_;  ///< what asked for the released triggered plan

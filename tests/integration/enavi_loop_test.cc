@@ -15,9 +15,9 @@ namespace enavi::integration {
 namespace {
 
 // A policy of this build (freshly initialised: what these tests check does not depend on training).
-std::string WritePolicy(const TempDir& dir) {
+std::string WritePolicy(const TempDir& dir, std::uint64_t seed = 7) {
   const std::string path = (dir.path() / "policy.json").string();
-  navstack::rl::SavePolicyFile(path, navstack::rl::MakeFrequencyPolicy(navstack::ActionGrid(), 7));
+  navstack::rl::SavePolicyFile(path, navstack::rl::MakeFrequencyPolicy(navstack::ActionGrid(), seed));
   return path;
 }
 
@@ -67,6 +67,23 @@ TEST(EnaviLoopTest, RecordingARolloutDoesNotChangeTheFlight) {
   const std::string plain = nlohmann::json(sim::RunEpisode(spec)).dump();
   EXPECT_FALSE(rollout.steps.empty());
   EXPECT_EQ(recorded, plain);
+}
+
+// The untrained network of `enavi train --seed 1` flew into a pocket between a partition and the
+// refined map's leftovers of a coarse one, stopped 0.7 m from the wall, and failed every plan for
+// 66 s (no path: what blocked the way out was out of view). Turning on the spot shows it.
+TEST(EnaviLoopTest, AVehicleBoxedInByWhatItCannotSeeTurnsAndGoesOn) {
+  const TempDir dir;
+  api::EpisodeSpec spec = EnaviSpec(WritePolicy(dir, 1));
+  spec.seed = 2;
+  spec.board = "pi4b";
+  spec.timeout_s = 30.0;
+  const api::EpisodeResult r = sim::RunEpisode(spec);
+  EXPECT_TRUE(r.success) << Describe(r);
+  EXPECT_FALSE(r.collided);
+  bool scanned = false;
+  for (const api::EpisodeEvent& e : r.events) scanned |= e.kind == "scan";
+  EXPECT_TRUE(scanned) << "the way on came from turning";
 }
 
 TEST(EnaviLoopTest, ExploringEpisodeRecordsARolloutWithRewards) {

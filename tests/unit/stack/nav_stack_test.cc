@@ -158,6 +158,35 @@ TEST(NavStackTest, ItDoesNotPlanIntoSpaceItHasNotSeen) {
   EXPECT_NE(stack.trajectory(), nullptr);
 }
 
+TEST(NavStackTest, AHoveringStackWhosePlansKeepFailingTurnsOnTheSpotUntilOneLands) {
+  // Nothing seen: every plan fails (as above). After scan_after_failures of them in a row the
+  // vehicle turns where it is, so the camera sees what boxes it in, and retries at the bounded
+  // rate; the first plan that lands ends the turn.
+  ScriptedExecutor ex;
+  NavStackOptions o = OpenVolume();
+  o.rates.f_plan = 0;
+  NavStack stack(o, &ex, Hovering());
+  for (int i = 1; i < o.scan_after_failures; ++i) ex.Run(TaskId::kPlanning);
+  EXPECT_FALSE(HasEvent(stack.TakeEvents(), "scan"));
+  EXPECT_EQ(stack.Reference(1.0).yaw, 0.0) << "holds its heading";
+  ex.AdvanceTo(1.0);
+  ex.Run(TaskId::kPlanning);
+  EXPECT_TRUE(HasEvent(stack.TakeEvents(), "scan"));
+  const TrajectorySample turning = stack.Reference(1.5);
+  EXPECT_NEAR(turning.yaw, 0.5 * o.scan_yaw_rate, 1e-12);
+  EXPECT_EQ(turning.yaw_rate, o.scan_yaw_rate);
+  EXPECT_TRUE(turning.p.isApprox(Hovering().p_WB)) << "on the spot";
+  EXPECT_NEAR(stack.Reference(1.0 + 4.0 / o.scan_yaw_rate).yaw, 4.0 - 2.0 * 3.14159265358979323846, 1e-9)
+      << "wrapped to (-pi, pi]";
+  ex.triggers.clear();
+  stack.OnFrame(OpenViewAhead(o, 1.5));
+  EXPECT_EQ(ex.Triggered(TaskId::kPlanning), 1) << "retries while it turns";
+  ex.Run(TaskId::kPerception);
+  ex.Run(TaskId::kPlanning);
+  ASSERT_NE(stack.trajectory(), nullptr);
+  EXPECT_EQ(stack.Reference(1.5).yaw_rate, stack.trajectory()->Sample(1.5).yaw_rate) << "the plan ends the turn";
+}
+
 TEST(NavStackTest, AMapUpdateChecksTheTrajectoryAgainstTheNewMap) {
   ScriptedExecutor ex;
   NavStackOptions o = OpenVolume();
