@@ -25,7 +25,10 @@ function(enavi_add_test name)
   endforeach()
   set(props LABELS "${ARG_LABELS}")
   if(ENAVI_SANITIZE)
-    list(APPEND props ENVIRONMENT "${ENAVI_SANITIZER_ENV}")
+    # The sanitizer environment comes in through `env` on the test's command line: handed to
+    # gtest_discover_tests as PROPERTIES ENVIRONMENT, a list keeps only its first variable (CMake
+    # issue 23120), and LSAN_OPTIONS, the suppressions, never reached a test or its children.
+    set_target_properties(${name} PROPERTIES CROSSCOMPILING_EMULATOR "env;${ENAVI_SANITIZER_ENV}")
   endif()
   if(ARG_LOCK)
     list(APPEND props RESOURCE_LOCK ${ARG_LOCK})
