@@ -41,6 +41,13 @@ class Rng {
   /// Integer in [lo, hi].
   int Int(int lo, int hi) { return std::min(hi, lo + static_cast<int>(Uniform() * (hi - lo + 1))); }
   bool Chance(double p) { return Uniform() < p; }
+  /// A point uniform in [x0, x1] x [y0, y1]. y is drawn first: the generators once drew both as
+  /// one call's arguments, whose evaluation order C++ leaves to the compiler, and GCC, which made
+  /// the golden worlds, evaluates them right to left (clang left to right: other worlds).
+  std::pair<double, double> PointIn(double x0, double x1, double y0, double y1) {
+    const double y = Uniform(y0, y1);
+    return {Uniform(x0, x1), y};
+  }
 
  private:
   std::mt19937_64 engine_;
@@ -228,11 +235,13 @@ void BuildS1(Rng& rng, const Params& p, World* w) {
   }
   const int target = static_cast<int>(std::round((area.x1 - area.x0) * (area.y1 - area.y0) * 0.012));
   for (int attempt = 0, placed = 0; attempt < 1000 && placed < target; ++attempt) {
-    placed += try_building(rng.Uniform(area.x0, area.x1), rng.Uniform(area.y0, area.y1)) ? 1 : 0;
+    const auto [x, y] = rng.PointIn(area.x0, area.x1, area.y0, area.y1);
+    placed += try_building(x, y) ? 1 : 0;
   }
   // Street lamps: thin poles at flight altitude.
   for (int attempt = 0, placed = 0; attempt < 300 && placed < 16; ++attempt) {
-    const Footprint f = Circle(rng.Uniform(area.x0, area.x1), rng.Uniform(area.y0, area.y1), 0.12);
+    const auto [x, y] = rng.PointIn(area.x0, area.x1, area.y0, area.y1);
+    const Footprint f = Circle(x, y, 0.12);
     if (!area.Contains(f, 0.5) || !layout.Fits(f, 2.0)) continue;
     layout.Add(f);
     b.AddCylinder(f.cx, f.cy, 0.0, 0.12, 4.5);
@@ -274,7 +283,8 @@ void BuildS2(Rng& rng, const Params& p, World* w) {
   // Trees until the park is saturated, at least 1.2 m between crown footprints.
   const TreeStyle style{0.12, 0.3, 0.5, 2.8, 1.0, 2.4, 1.0, 2.0, 0.4};
   for (int attempt = 0, placed = 0; attempt < 3000 && placed < 200; ++attempt) {
-    const Tree t = DrawTree(rng, rng.Uniform(area.x0, area.x1), rng.Uniform(area.y0, area.y1), style);
+    const auto [x, y] = rng.PointIn(area.x0, area.x1, area.y0, area.y1);
+    const Tree t = DrawTree(rng, x, y, style);
     const Footprint f = t.footprint();
     if (!area.Contains(Circle(t.x, t.y, t.trunk_r)) || !layout.Fits(f, 1.2)) continue;
     layout.Add(f);
@@ -284,7 +294,8 @@ void BuildS2(Rng& rng, const Params& p, World* w) {
   // Young trees with low crowns in the gaps: the park's irregular undergrowth.
   const TreeStyle young{0.06, 0.12, 0.4, 1.2, 0.5, 1.0, 0.6, 1.0, 0.2};
   for (int attempt = 0, placed = 0; attempt < 2000 && placed < 60; ++attempt) {
-    const Tree t = DrawTree(rng, rng.Uniform(area.x0, area.x1), rng.Uniform(area.y0, area.y1), young);
+    const auto [x, y] = rng.PointIn(area.x0, area.x1, area.y0, area.y1);
+    const Tree t = DrawTree(rng, x, y, young);
     if (!area.Contains(t.footprint()) || !layout.Fits(t.footprint(), 1.1)) continue;
     layout.Add(t.footprint());
     t.Commit(b, 0.0);
@@ -293,7 +304,8 @@ void BuildS2(Rng& rng, const Params& p, World* w) {
   // Bushes in what is left.
   for (int attempt = 0, placed = 0; attempt < 600 && placed < 20; ++attempt) {
     const double rx = rng.Uniform(0.6, 1.3), ry = rng.Uniform(0.6, 1.3), rz = rng.Uniform(0.5, 0.9);
-    const Footprint f = Circle(rng.Uniform(area.x0, area.x1), rng.Uniform(area.y0, area.y1), std::max(rx, ry));
+    const auto [x, y] = rng.PointIn(area.x0, area.x1, area.y0, area.y1);
+    const Footprint f = Circle(x, y, std::max(rx, ry));
     if (!area.Contains(f) || !layout.Fits(f, 1.5)) continue;
     layout.Add(f);
     b.AddEllipsoid(f.cx, f.cy, 0.6 * rz, rx, ry, rz);
@@ -517,7 +529,9 @@ void BuildS5(Rng& rng, const Params& p, World* w) {
   // Houses: walls, eaves and a ridge, all on one vertical axis. `gap` to everything placed.
   auto try_house = [&](double x, double y, double gap) {
     const double sx = rng.Uniform(4.5, 8.0), sy = rng.Uniform(3.5, 6.0), h = rng.Uniform(2.6, 4.0);
-    const double yaw = (rng.Chance(0.5) ? 0.0 : 0.5 * detmath::kPi) + rng.Uniform(-0.25, 0.25);
+    // Quarter turn drawn before the jitter (once one expression, its order the compiler's).
+    const double quarter = rng.Chance(0.5) ? 0.0 : 0.5 * detmath::kPi;
+    const double yaw = quarter + rng.Uniform(-0.25, 0.25);
     const Footprint f = RotatedRect(x, y, sx + 0.6, sy + 0.6, yaw);
     if (!area.Contains(f) || !layout.Fits(f, gap)) return false;
     layout.Add(f);
@@ -541,10 +555,12 @@ void BuildS5(Rng& rng, const Params& p, World* w) {
     }
   }
   for (int attempt = 0, placed = 0; attempt < 600 && placed < 10; ++attempt) {
-    placed += try_house(rng.Uniform(area.x0, bank_l), rng.Uniform(area.y0, area.y1), 2.8) ? 1 : 0;
+    const auto [x, y] = rng.PointIn(area.x0, bank_l, area.y0, area.y1);
+    placed += try_house(x, y, 2.8) ? 1 : 0;
   }
   for (int attempt = 0, placed = 0; attempt < 400 && placed < 3; ++attempt) {
-    placed += try_house(rng.Uniform(bank_r, area.x1), rng.Uniform(area.y0, area.y1), 3.0) ? 1 : 0;
+    const auto [x, y] = rng.PointIn(bank_r, area.x1, area.y0, area.y1);
+    placed += try_house(x, y, 3.0) ? 1 : 0;
   }
   // Round village trees and garden fences, mostly on the open goal side; first a row of trees on
   // each bank, either side of the bridge, as rivers are lined.
@@ -615,8 +631,10 @@ void BuildCanyon(Rng& rng, const Params& p, World* w) {
   const double ox = 0.5 * D, oy = -0.5 * D;
   const Area area{-D - kMargin + ox, kMargin + ox, -kMargin + oy, D + kMargin + oy};
   SetBounds(w, area.x0, area.y0, 0.0, area.x1, area.y1, 10.0);
-  w->start = Eigen::Vector3d(-0.5 * D + rng.Uniform(-2.0, 2.0), oy + rng.Uniform(-1.0, 1.0), kCanyonAltitude);
-  w->goal = Eigen::Vector3d(ox + rng.Uniform(-1.0, 1.0), 0.5 * D + rng.Uniform(-2.0, 2.0), kCanyonAltitude);
+  const auto [start_dx, start_dy] = rng.PointIn(-2.0, 2.0, -1.0, 1.0);
+  w->start = Eigen::Vector3d(-0.5 * D + start_dx, oy + start_dy, kCanyonAltitude);
+  const auto [goal_dx, goal_dy] = rng.PointIn(-1.0, 1.0, -2.0, 2.0);
+  w->goal = Eigen::Vector3d(ox + goal_dx, 0.5 * D + goal_dy, kCanyonAltitude);
   Builder b{w};
   // Does the straight start-goal line cross the rectangle? (Liang-Barsky clipping in xy.)
   auto on_line = [&](double x0, double x1, double y0, double y1) {
@@ -695,7 +713,8 @@ void BuildForest(Rng& rng, const Params& p, World* w) {
   const TreeStyle style{0.12, 0.3, 0.6, 2.5, 0.9, 2.0, 1.0, 2.0, 0.3};
   Layout trunks;
   for (int attempt = 0, placed = 0; attempt < 60 * target && placed < target; ++attempt) {
-    const Tree t = DrawTree(rng, rng.Uniform(area.x0, area.x1), rng.Uniform(area.y0, area.y1), style);
+    const auto [x, y] = rng.PointIn(area.x0, area.x1, area.y0, area.y1);
+    const Tree t = DrawTree(rng, x, y, style);
     const Footprint trunk = Circle(t.x, t.y, t.trunk_r);
     if (!area.Contains(trunk) || !keep_out.Fits(t.footprint(), 0.0) || !trunks.Fits(trunk, min_trunk_gap)) continue;
     trunks.Add(trunk);
