@@ -13,7 +13,8 @@
 #include "worlds/validate.h"
 
 // Portability rules for this file: random numbers only through Rng (raw 64-bit draws mapped by
-// hand, never std::*_distribution), no libm transcendental functions (detmath instead), scalar
+// hand, never std::*_distribution), never two draws in one expression or one call's arguments
+// (their order is the compiler's), no libm transcendental functions (detmath instead), scalar
 // doubles for positions, and every value quantised to the file precision before validation.
 
 namespace enavi::worlds {
