@@ -17,7 +17,7 @@
 //        - w_collision * I_col                            collision (episode ends)
 //        + w_goal * I_goal                                goal reached (episode ends)
 //        - w_time * dt                                    flight time
-//        - w_stop * n_stop                                emergency stops and fail-safe hovers
+//        - w_stop * n_stop                                emergency stops, fail-safe hovers, scans
 //   d = distance to the goal, |Lbar| = straight-line start -> goal distance of the episode, and
 //   |L_e| = flown length + remaining planned length at epoch e (the expected total path), so a
 //   replan that lengthens the route is penalised and one that shortens it is rewarded. The paper's
@@ -69,7 +69,7 @@ struct RewardInputs {
   double straight_length = 1.0;  ///< m, |Lbar| of the episode, > 0
   double path_prev = 0.0;        ///< m, |L_{e-1}|; <= 0 when unknown (no path yet): term 0
   double path = 0.0;             ///< m, |L_e|; <= 0 when unknown: term 0
-  int stops = 0;                 ///< emergency stops and fail-safe hovers begun in the epoch, >= 0
+  int stops = 0;                 ///< emergency stops, fail-safe hovers and scans begun in the epoch, >= 0
   bool collided = false;
   bool reached_goal = false;
 };

@@ -89,7 +89,7 @@ class NavStack final : public Navigator {
   bool stopped_ = false;               ///< emergency stop active until the next plan lands
   bool scanning_ = false;              ///< turning on the spot at hold_ until the next plan lands
   double scan_t0_ = 0;                 ///< when the scan began (hold_.yaw is the yaw then)
-  int stops_ = 0;                      ///< emergency stops and fail-safe hovers so far
+  int stops_ = 0;                      ///< emergency stops, fail-safe hovers and scans so far
   std::vector<Eigen::Vector3d> last_search_path_;
   std::int64_t replans_ = 0;
   std::int64_t plan_failures_ = 0;
