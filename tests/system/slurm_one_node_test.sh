@@ -29,6 +29,10 @@ export PATH=$PATH:/usr/sbin
 dir=$(mktemp -d /tmp/enavi-slurm-XXXXXX)
 chmod 755 "$dir"
 export SLURM_CONF=$dir/slurm.conf
+# The farm script puts each worker's work directory under $TMPDIR (on a cluster, the job's
+# scratch); the jobs inherit this one, inside the directory cleanup removes.
+export TMPDIR=$dir/tmp
+mkdir -p "$TMPDIR"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 # Loops below poll until a deadline in wall seconds (each poll runs a Slurm or sqlite command of
 # its own, so counting iterations would not bound the time on a loaded machine).
