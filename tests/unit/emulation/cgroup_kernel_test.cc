@@ -1,6 +1,8 @@
 // cgroup control against the running kernel (root only; skipped otherwise). Every test leaves
 // no cgroup with "enavi" in its name behind, checked in TearDown, also when it fails.
 #include <gtest/gtest.h>
+
+#include "tests/unit/emulation/cgroup_test_util.h"
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -22,14 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using std::chrono::milliseconds;
 
-std::string Read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string s = ss.str();
-  while (!s.empty() && s.back() == '\n') s.pop_back();
-  return s;
-}
+using testing::ReadControlFile;
 
 // Every directory with "enavi" in its name under /sys/fs/cgroup.
 std::vector<std::string> EnaviCgroups() {
@@ -133,13 +128,13 @@ TEST_F(KernelCgroupTest, EpisodeGroupIsCreatedWithItsQuotaAndRemoved) {
   const fs::path cpu = created.group->cpu_dir();
   ASSERT_TRUE(fs::is_directory(cpu));
   if (open.manager->layout().version == CgroupVersion::kV1) {
-    EXPECT_EQ(Read(cpu / "cpu.cfs_quota_us"), "24000");
-    EXPECT_EQ(Read(cpu / "cpu.cfs_period_us"), "20000");
-    EXPECT_EQ(Read(fs::path(open.manager->layout().memory_base) / "enavi" / created.group->name() /
+    EXPECT_EQ(ReadControlFile(cpu / "cpu.cfs_quota_us"), "24000");
+    EXPECT_EQ(ReadControlFile(cpu / "cpu.cfs_period_us"), "20000");
+    EXPECT_EQ(ReadControlFile(fs::path(open.manager->layout().memory_base) / "enavi" / created.group->name() /
                    "memory.limit_in_bytes"),
               "268435456");
   } else {
-    EXPECT_EQ(Read(cpu / "cpu.max"), "24000 20000");
+    EXPECT_EQ(ReadControlFile(cpu / "cpu.max"), "24000 20000");
   }
   EXPECT_NEAR(open.manager->ReservedCpus(), 1.2, 1e-9);
   const CgroupStatus removed = created.group->Remove();
@@ -279,11 +274,11 @@ TEST_F(KernelCgroupTest, OwnThreadGoesHomeInsteadOfBeingKilled) {
   });
   while (tid == 0) std::this_thread::yield();
   ASSERT_TRUE(created.group->AddThread(tid).ok);
-  const std::string in_group = Read("/proc/self/task/" + std::to_string(tid) + "/cgroup");
+  const std::string in_group = ReadControlFile("/proc/self/task/" + std::to_string(tid) + "/cgroup");
   EXPECT_NE(in_group.find(created.group->name()), std::string::npos) << in_group;
   const CgroupStatus removed = created.group->Remove();
   EXPECT_TRUE(removed.ok) << removed.message;
-  const std::string after = Read("/proc/self/task/" + std::to_string(tid) + "/cgroup");
+  const std::string after = ReadControlFile("/proc/self/task/" + std::to_string(tid) + "/cgroup");
   EXPECT_EQ(after.find("enavi"), std::string::npos) << after;
   stop = true;
   helper.join();

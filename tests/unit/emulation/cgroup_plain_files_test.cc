@@ -1,6 +1,8 @@
 // cgroup control against directory trees of plain files: detection, the files written, admission and
 // reaping, without touching the kernel's cgroups.
 #include <gtest/gtest.h>
+
+#include "tests/unit/emulation/cgroup_test_util.h"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -16,14 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string s = ss.str();
-  while (!s.empty() && s.back() == '\n') s.pop_back();
-  return s;
-}
+using testing::ReadControlFile;
 
 void Write(const fs::path& p, const std::string& value) {
   fs::create_directories(p.parent_path());
@@ -31,7 +26,7 @@ void Write(const fs::path& p, const std::string& value) {
 }
 
 std::string OwnStartTime() {
-  const std::string stat = Read("/proc/self/stat");
+  const std::string stat = ReadControlFile("/proc/self/stat");
   std::istringstream rest(stat.substr(stat.rfind(')') + 1));
   std::string field;
   for (int i = 3; i <= 22; ++i) rest >> field;
@@ -195,9 +190,9 @@ TEST_F(PlainFilesCgroupTreeTest, EpisodeGroupGetsQuotaCpusetAndMemoryAndIsRemove
   MakeV1();
   auto open = CgroupManager::Open(options_);
   ASSERT_TRUE(open.ok()) << open.error;
-  EXPECT_EQ(Read(root_ / "cpu/enavi/cpu.shares"), "102400") << "parent weight 10000 -> shares";
-  EXPECT_EQ(Read(root_ / "cpuset/enavi/cpuset.cpus"), "0-3") << "copied from the worker's cpuset";
-  EXPECT_EQ(Read(root_ / "cpuset/enavi/cpuset.mems"), "0");
+  EXPECT_EQ(ReadControlFile(root_ / "cpu/enavi/cpu.shares"), "102400") << "parent weight 10000 -> shares";
+  EXPECT_EQ(ReadControlFile(root_ / "cpuset/enavi/cpuset.cpus"), "0-3") << "copied from the worker's cpuset";
+  EXPECT_EQ(ReadControlFile(root_ / "cpuset/enavi/cpuset.mems"), "0");
 
   QuotaOptions q;
   q.dilation = 2.0;
@@ -210,18 +205,18 @@ TEST_F(PlainFilesCgroupTreeTest, EpisodeGroupGetsQuotaCpusetAndMemoryAndIsRemove
   EXPECT_EQ(name.rfind("ep-" + std::to_string(getpid()) + "-" + OwnStartTime() + "-", 0), 0u) << name;
   const fs::path cpu = root_ / "cpu/enavi" / name;
   EXPECT_EQ(created.group->cpu_dir(), cpu.string());
-  EXPECT_EQ(Read(cpu / "cpu.cfs_period_us"), "20000");
-  EXPECT_EQ(Read(cpu / "cpu.cfs_quota_us"), "20000") << "4 x 0.5 / 2 = 1.0 CPU";
-  EXPECT_EQ(Read(root_ / "cpuset/enavi" / name / "cpuset.cpus"), "0-3");
-  EXPECT_EQ(Read(root_ / "cpuset/enavi" / name / "cpuset.mems"), "0");
-  EXPECT_EQ(Read(root_ / "memory/enavi" / name / "memory.limit_in_bytes"), "1073741824");
+  EXPECT_EQ(ReadControlFile(cpu / "cpu.cfs_period_us"), "20000");
+  EXPECT_EQ(ReadControlFile(cpu / "cpu.cfs_quota_us"), "20000") << "4 x 0.5 / 2 = 1.0 CPU";
+  EXPECT_EQ(ReadControlFile(root_ / "cpuset/enavi" / name / "cpuset.cpus"), "0-3");
+  EXPECT_EQ(ReadControlFile(root_ / "cpuset/enavi" / name / "cpuset.mems"), "0");
+  EXPECT_EQ(ReadControlFile(root_ / "memory/enavi" / name / "memory.limit_in_bytes"), "1073741824");
 
   ASSERT_TRUE(created.group->AddProcess(4242).ok);
-  EXPECT_EQ(Read(cpu / "cgroup.procs"), "4242");
-  EXPECT_EQ(Read(root_ / "memory/enavi" / name / "cgroup.procs"), "4242");
+  EXPECT_EQ(ReadControlFile(cpu / "cgroup.procs"), "4242");
+  EXPECT_EQ(ReadControlFile(root_ / "memory/enavi" / name / "cgroup.procs"), "4242");
   ASSERT_TRUE(created.group->AddThread(4243).ok);
-  EXPECT_EQ(Read(cpu / "t-4243/cpu.cfs_quota_us"), "5000") << "one core: 0.5 / 2 of 20 ms";
-  EXPECT_EQ(Read(cpu / "t-4243/tasks"), "4243");
+  EXPECT_EQ(ReadControlFile(cpu / "t-4243/cpu.cfs_quota_us"), "5000") << "one core: 0.5 / 2 of 20 ms";
+  EXPECT_EQ(ReadControlFile(cpu / "t-4243/tasks"), "4243");
 
   const CgroupStatus removed = created.group->Remove();
   EXPECT_TRUE(removed.ok) << removed.message;
@@ -246,8 +241,8 @@ TEST_F(PlainFilesCgroupTreeTest, SweepGivesEveryThreadOfTheBoardGroupItsOwnGroup
   EXPECT_EQ(created.group->SweepThreads(&status), 2);
   EXPECT_TRUE(status.ok) << status.message;
   for (const char* t : {"t-101", "t-102"}) {
-    EXPECT_EQ(Read(cpu / t / "cpu.cfs_quota_us"), "6000") << t;
-    EXPECT_EQ(Read(cpu / t / "cpu.cfs_period_us"), "20000") << t;
+    EXPECT_EQ(ReadControlFile(cpu / t / "cpu.cfs_quota_us"), "6000") << t;
+    EXPECT_EQ(ReadControlFile(cpu / t / "cpu.cfs_period_us"), "20000") << t;
   }
 }
 
@@ -255,8 +250,8 @@ TEST_F(PlainFilesCgroupTreeTest, V2EpisodeUsesCpuMaxAndThreadedChildren) {
   MakeV2();
   auto open = CgroupManager::Open(options_);
   ASSERT_TRUE(open.ok()) << open.error;
-  EXPECT_EQ(Read(root_ / "worker/enavi/cgroup.subtree_control"), "+cpu +cpuset +memory");
-  EXPECT_EQ(Read(root_ / "worker/enavi/cpu.weight"), "10000");
+  EXPECT_EQ(ReadControlFile(root_ / "worker/enavi/cgroup.subtree_control"), "+cpu +cpuset +memory");
+  EXPECT_EQ(ReadControlFile(root_ / "worker/enavi/cpu.weight"), "10000");
   EpisodeLimits limits;
   limits.cpus = "1";
   limits.memory_bytes = 512LL << 20;
@@ -264,14 +259,14 @@ TEST_F(PlainFilesCgroupTreeTest, V2EpisodeUsesCpuMaxAndThreadedChildren) {
   ASSERT_TRUE(created.ok()) << created.refusal;
   const fs::path ep = created.group->cpu_dir();
   EXPECT_EQ(ep.parent_path(), root_ / "worker/enavi");
-  EXPECT_EQ(Read(ep / "cpu.max"), "24000 20000");
-  EXPECT_EQ(Read(ep / "cpuset.cpus"), "1");
-  EXPECT_EQ(Read(ep / "memory.max"), "536870912");
+  EXPECT_EQ(ReadControlFile(ep / "cpu.max"), "24000 20000");
+  EXPECT_EQ(ReadControlFile(ep / "cpuset.cpus"), "1");
+  EXPECT_EQ(ReadControlFile(ep / "memory.max"), "536870912");
   ASSERT_TRUE(created.group->AddThread(77).ok);
-  EXPECT_EQ(Read(ep / "t-77/cgroup.type"), "threaded");
-  EXPECT_EQ(Read(ep / "cgroup.subtree_control"), "+cpu");
-  EXPECT_EQ(Read(ep / "t-77/cpu.max"), "8000 20000");
-  EXPECT_EQ(Read(ep / "t-77/cgroup.threads"), "77");
+  EXPECT_EQ(ReadControlFile(ep / "t-77/cgroup.type"), "threaded");
+  EXPECT_EQ(ReadControlFile(ep / "cgroup.subtree_control"), "+cpu");
+  EXPECT_EQ(ReadControlFile(ep / "t-77/cpu.max"), "8000 20000");
+  EXPECT_EQ(ReadControlFile(ep / "t-77/cgroup.threads"), "77");
 }
 
 TEST_F(PlainFilesCgroupTreeTest, AdmissionRefusesWhatTheHostCannotHold) {
