@@ -13,8 +13,10 @@ enum class WorkUnit : int {
   kPixel = 0,          ///< depth pixel binned by the eci (read, range, zone and layer)
   kBackProjection,     ///< depth pixel back-projected into a world point (perception)
   kWarpPixel,          ///< depth pixel warped into another frame and compared (difference)
+  kRay,                ///< one ray cast during map insertion: its end point's key, clipping, set-up
   kRayStep,            ///< one voxel traversed by a ray during map insertion
   kVoxelUpdate,        ///< one octree leaf updated (log-odds, with tree descent)
+  kRebuildVoxel,       ///< one voxel written into a map rebuilt at another resolution (a fresh tree: allocations)
   kGridCell,           ///< one cell of a dense grid extracted from the map
   kDistanceCell,       ///< one cell of the planner's Euclidean distance transform
   kStateCheck,         ///< one planner state validity / motion check
@@ -29,7 +31,7 @@ enum class WorkUnit : int {
 };
 
 constexpr std::array<std::string_view, static_cast<int>(WorkUnit::kCount)> kWorkUnitNames = {
-    "pixel",          "back_projection", "warp_pixel", "ray_step",           "voxel_update", "grid_cell", "distance_cell", "state_check",
+    "pixel",          "back_projection", "warp_pixel", "ray", "ray_step",           "voxel_update", "rebuild_voxel", "grid_cell", "distance_cell", "state_check",
     "planner_iteration", "optimizer_eval", "trajectory_sample", "cell_probe", "policy_flop",
     "astar_expansion", "inflate_cell"};
 

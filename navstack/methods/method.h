@@ -50,6 +50,9 @@ struct MethodInfo {
   std::string summary;  ///< one line for --help and tables
   MethodScheduler scheduler;
   std::vector<MethodTunable> tunables;
+  /// The code base its work counts come from, which prices them (reference_costs.yaml has one set
+  /// of prices per family): the same work unit is different code in two code bases.
+  std::string cost_family = "navstack";
   bool uses_policy = false;      ///< reads a frequency-adapter policy (--policy)
   bool records_rollouts = false;  ///< can record a training rollout
   /// What each task's CPU is for this method (results' per-task utilisation), by TaskId.

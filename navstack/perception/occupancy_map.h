@@ -104,8 +104,8 @@ class OccupancyMap {
   OccupancyMap& operator=(const OccupancyMap&) = delete;
 
   /// Phase 1: back-projects `frame` and casts its rays at the current resolution. Does not
-  /// modify the map. Counts kBackProjection (sampled pixels) and kRayStep (voxels traversed, with
-  /// repeats: the cost of casting, before deduplication).
+  /// modify the map. Counts kBackProjection (sampled pixels), kRay (rays cast) and kRayStep (voxels
+  /// traversed, with repeats: the cost of casting, before deduplication).
   MapUpdate ComputeUpdate(const DepthFrame& frame, const CameraIntrinsics& intrinsics,
                           const PerceptionOptions& perception, WorkCounts* work = nullptr) const;
   /// Phase 1 from points already back-projected.
@@ -123,7 +123,7 @@ class OccupancyMap {
   /// Rebuilds the map at `resolution`: occupied leaves within the local update box of the newest
   /// kept frame carry over (as one hit on every new cell they overlap), then the last
   /// MapOptions::rebuild_frames frames are replayed; older free space is dropped. No-op if
-  /// unchanged. Counts the rebuild's kRayStep and kVoxelUpdate. Throws std::invalid_argument if out of range.
+  /// unchanged. Counts the replay's kRay and kRayStep, and every cell written as kRebuildVoxel. Throws std::invalid_argument if out of range.
   void SetResolution(double resolution, WorkCounts* work = nullptr);
   /// The same rebuild into a new map, leaving this one untouched: the perception job builds it
   /// when it starts and swaps it in when it finishes.

@@ -2,6 +2,8 @@
 #include <sched.h>
 
 #include <cstdio>
+#include <fstream>
+#include <stdexcept>
 #include <memory>
 #include <string>
 
@@ -25,7 +27,23 @@ struct CalibrateArgs {
   std::string calibration;
   bool no_store = false;
   bool status = false;
+  std::string samples;  // CSV of every job sample, for analysis outside
 };
+
+// One row per job: task, method, host CPU ns, then every work unit's count.
+void WriteSamplesCsv(const std::string& path, const std::vector<board::JobSample>& samples) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("calibrate: cannot write --samples " + path);
+  out << "task,method,host_ns";
+  for (std::string_view u : navstack::kWorkUnitNames) out << ',' << u;
+  out << '\n';
+  for (const board::JobSample& s : samples) {
+    out << navstack::TaskName(s.task) << ',' << s.method << ',' << static_cast<std::int64_t>(s.host_cpu_s * 1e9);
+    for (std::int64_t n : s.work.n) out << ',' << n;
+    out << '\n';
+  }
+  if (!out.flush()) throw std::runtime_error("calibrate: cannot write --samples " + path);
+}
 
 // --- Host calibration file and board emulation table (emulated clock, docs/design.md, "Time: two clocks") ---
 
@@ -132,12 +150,20 @@ void Run(const CalibrateArgs& args) {
                    args.episode_seconds);
     };
   const board::CalibrationRun run = board::RunCalibration(options);
-  const board::CostFit& fit = run.fit;
+  const board::FamilyFits& fit = run.fit;
   if (!args.write_reference.empty()) board::WriteReferenceCosts(args.write_reference, run);
+  if (!args.samples.empty()) WriteSamplesCsv(args.samples, run.samples);
   auto coefficient_json = [](const board::CoefficientFit& c) {
     nlohmann::json j = {{"ns", c.ns}, {"jobs", c.jobs}, {"share", c.share}};
     if (!c.zero_reason.empty()) j["zero_reason"] = c.zero_reason;
     return j;
+  };
+  auto quality_json = [](const board::TaskFitQuality& q) {
+    return nlohmann::json{{"jobs", q.jobs},
+                          {"r2", q.r2},
+                          {"measured_s", q.measured_s},
+                          {"predicted_s", q.predicted_s},
+                          {"relative_residual", q.relative_residual()}};
   };
   nlohmann::json j;
   j["cpu"] = fit.costs.reference_cpu;
@@ -146,20 +172,27 @@ void Run(const CalibrateArgs& args) {
   j["load_average"] = {{"before", run.load_before}, {"after", run.load_after}};
   j["relative_speed_vs_reference"] = run.relative_speed;
   j["reference_calibration_id"] = run.reference.calibration_id;
-  for (const board::CoefficientFit& c : fit.overheads) {
-    j["ns_per_job"][c.name] = c.ns;
-    j["overheads"][c.name] = coefficient_json(c);
+  for (const auto& [family, f] : fit.fits) {
+    nlohmann::json& fj = j["families"][family];
+    fj["samples"] = f.samples;
+    fj["r2"] = f.r2;
+    for (const board::CoefficientFit& c : f.overheads) {
+      fj["ns_per_job"][c.name] = c.ns;
+      fj["overheads"][c.name] = coefficient_json(c);
+    }
+    for (const board::CoefficientFit& c : f.units) {
+      fj["ns_per_unit"][c.name] = c.ns;
+      fj["units"][c.name] = coefficient_json(c);
+    }
+    for (const board::TaskFitQuality& q : f.per_task) fj["tasks"][q.task] = quality_json(q);
+    for (const board::TaskFitQuality& q : f.per_method_task) j["methods"][q.method][q.task] = quality_json(q);
   }
-  for (const board::CoefficientFit& c : fit.units) {
-    j["ns_per_unit"][c.name] = c.ns;
-    j["units"][c.name] = coefficient_json(c);
+  for (const board::TaskFitQuality& q : run.reference_agreement) {
+    nlohmann::json a = quality_json(q);
+    a["reference_s"] = a["predicted_s"];
+    a.erase("predicted_s");
+    j["reference_agreement"][q.method][q.task] = a;
   }
-  for (const board::TaskFitQuality& q : fit.per_task)
-    j["tasks"][q.task] = {{"jobs", q.jobs},
-                          {"r2", q.r2},
-                          {"measured_s", q.measured_s},
-                          {"predicted_s", q.predicted_s},
-                          {"relative_residual", q.relative_residual()}};
   const board::HostCalibration& host = run.host;
   const std::string stored = StoreHostCalibration(args, host);
   j["host_calibration_file"] = stored;
@@ -171,17 +204,32 @@ void Run(const CalibrateArgs& args) {
   std::printf("calibration of %s: %d jobs, R^2 %.3f, speed %.3f x the reference core (load %.2f -> %.2f)\n",
               fit.costs.reference_cpu.c_str(), fit.samples, fit.r2, run.relative_speed, run.load_before,
               run.load_after);
-  std::printf("  %-22s %12s %7s %7s\n", "coefficient", "ns", "jobs", "time %");
   auto print_coefficient = [](const std::string& label, const board::CoefficientFit& c) {
     std::printf("  %-22s %12.4f %7d %7.1f%s%s\n", label.c_str(), c.ns, c.jobs, 100 * c.share,
                 c.zero_reason.empty() ? "" : "  0: ", c.zero_reason.c_str());
   };
-  for (const board::CoefficientFit& c : fit.overheads) print_coefficient("per job of " + c.name, c);
-  for (const board::CoefficientFit& c : fit.units) print_coefficient(c.name, c);
-  std::printf("  %-12s %7s %7s %12s %12s %9s\n", "task", "jobs", "R^2", "measured s", "model s", "residual");
-  for (const board::TaskFitQuality& q : fit.per_task)
-    std::printf("  %-12s %7d %7.3f %12.3f %12.3f %+8.1f%%\n", q.task.c_str(), q.jobs, q.r2, q.measured_s,
-                q.predicted_s, 100 * q.relative_residual());
+  auto print_quality = [](const board::TaskFitQuality& q) {
+    std::printf("  %-12s %-9s %7d %7.3f %12.3f %12.3f %+8.1f%%\n", q.task.c_str(),
+                q.method.empty() ? "all" : q.method.c_str(), q.jobs, q.r2, q.measured_s, q.predicted_s,
+                100 * q.relative_residual());
+  };
+  auto print_quality_header = [] {
+    std::printf("  %-12s %-9s %7s %7s %12s %12s %9s\n", "task", "method", "jobs", "R^2", "measured s", "model s",
+                "residual");
+  };
+  for (const auto& [family, f] : fit.fits) {
+    std::printf("cost family %s: %d jobs, R^2 %.3f\n", family.c_str(), f.samples, f.r2);
+    std::printf("  %-22s %12s %7s %7s\n", "coefficient", "ns", "jobs", "time %");
+    for (const board::CoefficientFit& c : f.overheads) print_coefficient("per job of " + c.name, c);
+    for (const board::CoefficientFit& c : f.units) print_coefficient(c.name, c);
+    print_quality_header();
+    for (const board::TaskFitQuality& q : f.per_task) print_quality(q);
+    for (const board::TaskFitQuality& q : f.per_method_task) print_quality(q);
+  }
+  std::printf("the reference costs (%s) against this host at speed %.3f (residual > 0: the virtual clock over-prices):\n",
+              run.reference.calibration_id.c_str(), run.relative_speed);
+  print_quality_header();
+  for (const board::TaskFitQuality& q : run.reference_agreement) print_quality(q);
   PrintBoardTable(host);
   if (!stored.empty()) std::printf("host calibration written to %s\n", stored.c_str());
 }
@@ -197,6 +245,7 @@ void RegisterCalibrateCommand(CLI::App& app) {
   cmd->add_option("--write-reference", args->write_reference,
                   "write the fit as the reference costs file (workers/board/profiles/reference_costs.yaml)");
   cmd->add_flag("--json", args->json, "print the fit as JSON");
+  cmd->add_option("--samples", args->samples, "also write every job's task, method, host CPU ns and work counts as CSV");
   cmd->add_option("--calibration", args->calibration,
                   "host calibration file to write or check (default: $ENAVI_CALIBRATION, else "
                   "$XDG_STATE_HOME/enavi/calibration.json or ~/.local/state/enavi/calibration.json)");

@@ -76,20 +76,28 @@ BoardProfile LoadBoard(const std::string& id) {
   return b;
 }
 
-ReferenceCosts ParseReferenceCosts(const std::string& yaml_text, const std::string& source) {
-  const YamlReader r(source);
-  const YamlReader::Map top(r, r.Load(yaml_text), "", {"reference_cpu", "calibration_id", "ns_per_job", "ns_per_unit"});
-  ReferenceCosts costs;
-  costs.reference_cpu = r.String(top.Get("reference_cpu"), "reference_cpu");
-  costs.calibration_id = r.String(top.Get("calibration_id"), "calibration_id");
+const ReferenceCosts::Coefficients& ReferenceCosts::For(const std::string& family) const {
+  const auto it = families.find(family);
+  if (it != families.end()) return it->second;
+  std::string known;
+  for (const auto& [name, c] : families) known += (known.empty() ? "" : ", ") + name;
+  throw std::invalid_argument("reference costs " + calibration_id + ": no prices for cost family '" + family +
+                              "' (known: " + known + "): refit with `enavi calibrate --write-reference`");
+}
+
+namespace {
+
+// One family's ns_per_job (every task) and ns_per_unit (known units; absent ones cost 0).
+ReferenceCosts::Coefficients ParseFamily(const YamlReader& r, const YAML::Node& node, const std::string& field) {
   constexpr double kMaxNs = 1e12;
-  // One overhead per task; the format before them had one number for all.
+  const YamlReader::Map top(r, node, field, {"ns_per_job", "ns_per_unit"});
+  ReferenceCosts::Coefficients c;
   const YAML::Node& jobs = top.Get("ns_per_job");
   if (!jobs.IsMap())
-    r.Fail(jobs, "ns_per_job",
+    r.Fail(jobs, top.Field("ns_per_job"),
            "must map each task (perception, planning, collision, difference, eci, adapter) to its ns per job; a "
            "single number is the format before per-task overheads: refit with `enavi calibrate --write-reference`");
-  const YamlReader::Map per_task(r, jobs, "ns_per_job", {});
+  const YamlReader::Map per_task(r, jobs, top.Field("ns_per_job"), {});
   for (const auto& kv : jobs) {
     const std::string key = kv.first.Scalar();
     if (std::find(navstack::kTaskNames.begin(), navstack::kTaskNames.end(), key) == navstack::kTaskNames.end())
@@ -97,15 +105,37 @@ ReferenceCosts ParseReferenceCosts(const std::string& yaml_text, const std::stri
   }
   for (std::size_t t = 0; t < navstack::kTaskNames.size(); ++t) {
     const std::string key(navstack::kTaskNames[t]);
-    costs.ns.ns_per_job[t] = r.Range(per_task.Get(key), per_task.Field(key), 0.0, kMaxNs);
+    c.ns_per_job[t] = r.Range(per_task.Get(key), per_task.Field(key), 0.0, kMaxNs);
   }
-  const YamlReader::Map per_unit(r, top.Get("ns_per_unit"), "ns_per_unit", {});
+  const YamlReader::Map per_unit(r, top.Get("ns_per_unit"), top.Field("ns_per_unit"), {});
   for (const auto& kv : per_unit.node()) {
     const std::string key = kv.first.Scalar();
     const auto name_it = std::find(navstack::kWorkUnitNames.begin(), navstack::kWorkUnitNames.end(), key);
     if (name_it == navstack::kWorkUnitNames.end()) r.Fail(kv.first, per_unit.Field(YamlReader::Shown(key)), "unknown work unit");
-    costs.ns.ns_per_unit[name_it - navstack::kWorkUnitNames.begin()] = r.Range(kv.second, per_unit.Field(key), 0.0, kMaxNs);
+    c.ns_per_unit[name_it - navstack::kWorkUnitNames.begin()] = r.Range(kv.second, per_unit.Field(key), 0.0, kMaxNs);
   }
+  return c;
+}
+
+}  // namespace
+
+ReferenceCosts ParseReferenceCosts(const std::string& yaml_text, const std::string& source) {
+  const YamlReader r(source);
+  const YAML::Node root = r.Load(yaml_text);
+  if (root.IsMap() && root["ns_per_job"])
+    r.Fail(root["ns_per_job"], "ns_per_job",
+           "one set of prices for every method is the format before cost families: refit with `enavi calibrate "
+           "--write-reference`");
+  const YamlReader::Map top(r, root, "", {"reference_cpu", "calibration_id", "families"});
+  ReferenceCosts costs;
+  costs.reference_cpu = r.String(top.Get("reference_cpu"), "reference_cpu");
+  costs.calibration_id = r.String(top.Get("calibration_id"), "calibration_id");
+  const YamlReader::Map families(r, top.Get("families"), "families", {});
+  for (const auto& kv : families.node()) {
+    const std::string name = kv.first.Scalar();
+    costs.families[name] = ParseFamily(r, kv.second, families.Field(YamlReader::Shown(name)));
+  }
+  if (costs.families.empty()) r.Fail(top.Get("families"), "families", "must name at least one cost family");
   return costs;
 }
 
@@ -116,9 +146,9 @@ ReferenceCosts LoadReferenceCosts() {
   return ParseReferenceCosts(it->second, std::string("workers/board/profiles/") + kReferenceFile);
 }
 
-navstack::WorkCountCostModel::Coefficients BoardCoefficients(const BoardProfile& board,
-                                                             const ReferenceCosts& reference) {
-  navstack::WorkCountCostModel::Coefficients c = reference.ns;
+navstack::WorkCountCostModel::Coefficients BoardCoefficients(const BoardProfile& board, const ReferenceCosts& reference,
+                                                             const std::string& family) {
+  navstack::WorkCountCostModel::Coefficients c = reference.For(family);
   const double slowdown = 1.0 / board.per_core_speed;
   for (double& v : c.ns_per_job) v *= slowdown;
   for (double& v : c.ns_per_unit) v *= slowdown;

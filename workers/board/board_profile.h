@@ -26,11 +26,16 @@ struct BoardProfile {
   bool is_host = false;  ///< the machine itself, unthrottled
 };
 
-/// Nanoseconds per work unit on the reference core, fitted by `enavi calibrate`.
+/// Nanoseconds per job and per work unit on the reference core, fitted by `enavi calibrate`, one
+/// set per cost family (navstack::MethodInfo::cost_family): one price for a unit that is different
+/// code in two code bases over-prices one and under-prices the other.
 struct ReferenceCosts {
+  using Coefficients = navstack::WorkCountCostModel::Coefficients;
   std::string reference_cpu;
   std::string calibration_id;
-  navstack::WorkCountCostModel::Coefficients ns;
+  std::map<std::string, Coefficients> families;
+  /// The family's prices. Throws std::invalid_argument naming the family and the known ones.
+  const Coefficients& For(const std::string& family) const;
 };
 
 /// Ids of all known boards, sorted: one per embedded profile, the farm's one list of boards (the
@@ -45,8 +50,8 @@ BoardProfile ParseBoardProfile(const std::string& yaml_text, const std::string& 
 ReferenceCosts LoadReferenceCosts();
 ReferenceCosts ParseReferenceCosts(const std::string& yaml_text, const std::string& source);
 
-/// The board's cost-model coefficients: reference ns per unit / per-core speed.
-navstack::WorkCountCostModel::Coefficients BoardCoefficients(const BoardProfile& board,
-                                                             const ReferenceCosts& reference);
+/// The board's cost-model coefficients for a cost family: reference ns per unit / per-core speed.
+navstack::WorkCountCostModel::Coefficients BoardCoefficients(const BoardProfile& board, const ReferenceCosts& reference,
+                                                             const std::string& family);
 
 }  // namespace enavi::board

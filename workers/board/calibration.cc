@@ -92,6 +92,49 @@ std::string ZeroReason(const Eigen::MatrixXd& As, const Eigen::VectorXd& b, cons
   return "too small to see (" + free_fit + ", not above 0)";
 }
 
+// The fit's quality over the jobs `mine` selects (b, predicted: measured and modelled ns).
+template <typename Select>
+TaskFitQuality FitQuality(const std::vector<JobSample>& samples, const Eigen::VectorXd& b,
+                          const Eigen::VectorXd& predicted, std::string task, std::string method, Select mine) {
+  TaskFitQuality q;
+  q.task = std::move(task);
+  q.method = std::move(method);
+  double sum = 0, ss_res = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (!mine(samples[i])) continue;
+    ++q.jobs;
+    q.measured_s += b[i] * 1e-9;
+    q.predicted_s += predicted[i] * 1e-9;
+    sum += b[i];
+    ss_res += (b[i] - predicted[i]) * (b[i] - predicted[i]);
+  }
+  if (q.jobs == 0) return q;
+  double ss = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    if (mine(samples[i])) ss += (b[i] - sum / q.jobs) * (b[i] - sum / q.jobs);
+  q.r2 = ss > 0 ? 1.0 - ss_res / ss : 0.0;
+  return q;
+}
+
+// FitQuality for each method and task with jobs (methods in first-seen order).
+std::vector<TaskFitQuality> PerMethodTask(const std::vector<JobSample>& samples, const Eigen::VectorXd& b,
+                                          const Eigen::VectorXd& predicted) {
+  std::vector<std::string> methods;
+  for (const JobSample& s : samples)
+    if (!s.method.empty() && std::find(methods.begin(), methods.end(), s.method) == methods.end())
+      methods.push_back(s.method);
+  std::vector<TaskFitQuality> out;
+  for (const std::string& m : methods) {
+    for (int t = 0; t < kTasks; ++t) {
+      TaskFitQuality q = FitQuality(samples, b, predicted, ColumnName(kUnits + t), m, [t, &m](const JobSample& s) {
+        return static_cast<int>(s.task) == t && s.method == m;
+      });
+      if (q.jobs > 0) out.push_back(q);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 CostFit FitCosts(const std::vector<JobSample>& samples) {
@@ -152,44 +195,88 @@ CostFit FitCosts(const std::vector<JobSample>& samples) {
     c.share = total > 0 ? coef[j] * A.col(j).sum() / total : 0.0;
     if (coef[j] <= 0) c.zero_reason = reason[j];
     if (j < kUnits) {
-      fit.costs.ns.ns_per_unit[j] = coef[j];
+      fit.ns.ns_per_unit[j] = coef[j];
       fit.units.push_back(c);
     } else {
-      fit.costs.ns.ns_per_job[j - kUnits] = coef[j];
+      fit.ns.ns_per_job[j - kUnits] = coef[j];
       fit.overheads.push_back(c);
     }
   }
   for (int t = 0; t < kTasks; ++t) {
-    TaskFitQuality q;
-    q.task = ColumnName(kUnits + t);
-    double sum = 0, ss_res = 0;
-    for (int i = 0; i < n; ++i) {
-      if (static_cast<int>(samples[i].task) != t) continue;
-      ++q.jobs;
-      q.measured_s += b[i] * 1e-9;
-      q.predicted_s += predicted[i] * 1e-9;
-      sum += b[i];
-      ss_res += (b[i] - predicted[i]) * (b[i] - predicted[i]);
-    }
-    if (q.jobs == 0) continue;
-    double ss = 0;
-    for (int i = 0; i < n; ++i)
-      if (static_cast<int>(samples[i].task) == t) ss += (b[i] - sum / q.jobs) * (b[i] - sum / q.jobs);
-    q.r2 = ss > 0 ? 1.0 - ss_res / ss : 0.0;
-    fit.per_task.push_back(q);
+    TaskFitQuality q = FitQuality(samples, b, predicted, ColumnName(kUnits + t), "",
+                                  [t](const JobSample& s) { return static_cast<int>(s.task) == t; });
+    if (q.jobs > 0) fit.per_task.push_back(q);
   }
+  fit.per_method_task = PerMethodTask(samples, b, predicted);
   return fit;
 }
 
-double RelativeSpeed(const std::vector<JobSample>& samples, const ReferenceCosts& reference) {
-  const navstack::WorkCountCostModel model(reference.ns);
-  double reference_s = 0, host_s = 0;
+FamilyFits FitCostFamilies(const std::vector<JobSample>& samples) {
+  std::map<std::string, std::vector<JobSample>> by_family;
+  for (const JobSample& s : samples) by_family[s.family].push_back(s);
+  FamilyFits out;
+  for (const auto& [family, own] : by_family) {
+    try {
+      out.fits[family] = FitCosts(own);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("cost family '" + family + "': " + e.what());
+    }
+    out.costs.families[family] = out.fits[family].ns;
+  }
+  out.samples = static_cast<int>(samples.size());
+  double sum = 0, sum2 = 0, ss_res = 0;
   for (const JobSample& s : samples) {
-    reference_s += model.JobSeconds(s.task, s.work, 0.0);
-    host_s += s.host_cpu_s;
+    const double b = s.host_cpu_s * 1e9;
+    const double p = navstack::WorkCountCostModel(out.costs.For(s.family)).JobSeconds(s.task, s.work, 0.0) * 1e9;
+    sum += b;
+    sum2 += b * b;
+    ss_res += (b - p) * (b - p);
+  }
+  const double n = static_cast<double>(samples.size());
+  const double ss_tot = n > 0 ? sum2 - sum * sum / n : 0.0;
+  out.r2 = ss_tot > 0 ? 1.0 - ss_res / ss_tot : 0.0;
+  return out;
+}
+
+namespace {
+
+// Each sample's time under `reference` (its family's prices), seconds.
+std::vector<double> ReferenceSeconds(const std::vector<JobSample>& samples, const ReferenceCosts& reference) {
+  std::map<std::string, navstack::WorkCountCostModel> models;
+  std::vector<double> out;
+  out.reserve(samples.size());
+  for (const JobSample& s : samples) {
+    auto it = models.find(s.family);
+    if (it == models.end()) it = models.emplace(s.family, navstack::WorkCountCostModel(reference.For(s.family))).first;
+    out.push_back(it->second.JobSeconds(s.task, s.work, 0.0));
+  }
+  return out;
+}
+
+}  // namespace
+
+double RelativeSpeed(const std::vector<JobSample>& samples, const ReferenceCosts& reference) {
+  const std::vector<double> modelled = ReferenceSeconds(samples, reference);
+  double reference_s = 0, host_s = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    reference_s += modelled[i];
+    host_s += samples[i].host_cpu_s;
   }
   if (host_s <= 0) throw std::invalid_argument("calibration: no measured job time");
   return reference_s / host_s;
+}
+
+std::vector<TaskFitQuality> ReferenceAgreement(const std::vector<JobSample>& samples, const ReferenceCosts& reference,
+                                               double relative_speed) {
+  if (!(relative_speed > 0)) throw std::invalid_argument("calibration: relative speed must be > 0");
+  const std::vector<double> modelled = ReferenceSeconds(samples, reference);
+  const Eigen::Index n = static_cast<Eigen::Index>(samples.size());
+  Eigen::VectorXd b(n), predicted(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    b[i] = samples[i].host_cpu_s * 1e9;
+    predicted[i] = modelled[i] / relative_speed * 1e9;
+  }
+  return PerMethodTask(samples, b, predicted);
 }
 
 std::string ReferenceCostsYaml(const ReferenceCosts& costs, const std::string& comment) {
@@ -198,17 +285,20 @@ std::string ReferenceCostsYaml(const ReferenceCosts& costs, const std::string& c
   for (std::string line; std::getline(lines, line);) out += "# " + line + "\n";
   out += "reference_cpu: \"" + costs.reference_cpu + "\"\n";
   out += "calibration_id: \"" + costs.calibration_id + "\"\n";
+  out += "families:\n";
   char line[160];
-  out += "ns_per_job:\n";
-  for (int t = 0; t < kTasks; ++t) {
-    std::snprintf(line, sizeof line, "  %s: %.1f\n", std::string(navstack::kTaskNames[t]).c_str(), costs.ns.ns_per_job[t]);
-    out += line;
-  }
-  out += "ns_per_unit:\n";
-  for (int u = 0; u < kUnits; ++u) {
-    std::snprintf(line, sizeof line, "  %s: %.4f\n", std::string(navstack::kWorkUnitNames[u]).c_str(),
-                  costs.ns.ns_per_unit[u]);
-    out += line;
+  for (const auto& [family, c] : costs.families) {
+    out += "  " + family + ":\n    ns_per_job:\n";
+    for (int t = 0; t < kTasks; ++t) {
+      std::snprintf(line, sizeof line, "      %s: %.1f\n", std::string(navstack::kTaskNames[t]).c_str(), c.ns_per_job[t]);
+      out += line;
+    }
+    out += "    ns_per_unit:\n";
+    for (int u = 0; u < kUnits; ++u) {
+      std::snprintf(line, sizeof line, "      %s: %.4f\n", std::string(navstack::kWorkUnitNames[u]).c_str(),
+                    c.ns_per_unit[u]);
+      out += line;
+    }
   }
   return out;
 }

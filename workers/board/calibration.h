@@ -3,6 +3,7 @@
 // CPU time of many real navstack jobs against their work counts, fitted to nanoseconds per work
 // unit and per job of each task by non-negative least squares.
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,8 @@ namespace enavi::board {
 
 struct JobSample {
   navstack::TaskId task = navstack::TaskId::kPerception;
+  std::string method;  ///< the navigation method that ran the job (empty: not recorded)
+  std::string family = "navstack";  ///< its cost family (navstack::MethodInfo::cost_family)
   navstack::WorkCounts work;
   double host_cpu_s = 0;
 };
@@ -31,6 +34,7 @@ struct CoefficientFit {
 
 struct TaskFitQuality {
   std::string task;
+  std::string method;      ///< empty: the jobs of every method
   int jobs = 0;
   double measured_s = 0;   ///< total host CPU time of the task's jobs
   double predicted_s = 0;  ///< what the fitted model says for the same jobs
@@ -40,21 +44,40 @@ struct TaskFitQuality {
 };
 
 struct CostFit {
-  ReferenceCosts costs;  ///< the fitted coefficients (ns per job of each task, ns per unit)
+  ReferenceCosts::Coefficients ns;  ///< the fitted coefficients (ns per job of each task, ns per unit)
   int samples = 0;
   double r2 = 0;         ///< coefficient of determination over all jobs
   std::vector<CoefficientFit> units;     ///< one per work unit, in WorkUnit order
   std::vector<CoefficientFit> overheads; ///< one per task (ns per job), in TaskId order
   std::vector<TaskFitQuality> per_task;  ///< tasks with jobs, in TaskId order
+  /// The same per method and task (methods in first-seen order): one price for work that costs
+  /// differently in two methods shows as opposite residuals here and cancels in per_task.
+  std::vector<TaskFitQuality> per_method_task;
 };
 
 /// Fits each task's ns per job and each unit's ns per unit to the samples. Throws
 /// std::invalid_argument when there are fewer samples than twice the coefficients.
 CostFit FitCosts(const std::vector<JobSample>& samples);
 
+/// One fit per cost family, over that family's samples.
+struct FamilyFits {
+  ReferenceCosts costs;                   ///< every family's prices (reference_cpu, id left empty)
+  std::map<std::string, CostFit> fits;    ///< by family
+  int samples = 0;
+  double r2 = 0;  ///< over all jobs, each priced by its family's fit
+};
+FamilyFits FitCostFamilies(const std::vector<JobSample>& samples);
+
 /// This host's single-core speed relative to the reference core: the reference model's time for
-/// the samples' work divided by the time this host took (> 1: faster than the reference).
+/// the samples' work (each priced by its family) divided by the time this host took (> 1: faster).
 double RelativeSpeed(const std::vector<JobSample>& samples, const ReferenceCosts& reference);
+
+/// How the reference model prices the samples' jobs against what they took here, per method and
+/// task (predicted: the reference model's time over `relative_speed`): what the virtual clock
+/// charges a method for what the emulated clock would measure. A residual of +30 % on one method
+/// and 0 on the others means the reference over-prices that method's work by 30 %.
+std::vector<TaskFitQuality> ReferenceAgreement(const std::vector<JobSample>& samples, const ReferenceCosts& reference,
+                                               double relative_speed);
 
 /// reference_costs.yaml text for `costs` (the format LoadReferenceCosts reads); `comment` goes
 /// into the header, one "# " line per line.

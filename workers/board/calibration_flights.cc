@@ -3,6 +3,7 @@
 #include <sys/utsname.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -12,6 +13,7 @@
 
 #include "navstack/adapt/action_grid.h"
 #include "navstack/adapt/resolution_adapter.h"
+#include "navstack/methods/registry.h"
 #include "navstack/rl/policy_io.h"
 #include "workers/sim/episode.h"
 
@@ -28,11 +30,11 @@ std::string UtcNow() {
 }
 
 // The host calibration from this run's fit and job samples.
-HostCalibration MakeHostCalibration(const CostFit& fit, double speed, const ReferenceCosts& reference,
+HostCalibration MakeHostCalibration(const FamilyFits& fit, double speed, const ReferenceCosts& reference,
                                     const std::vector<JobSample>& samples) {
   HostCalibration cal;
   cal.relative_speed = speed;
-  cal.fitted = fit.costs.ns;
+  cal.fitted = fit.costs.families;
   cal.samples = fit.samples;
   cal.r2 = fit.r2;
   cal.cpu_model = HostCpuModel();
@@ -76,23 +78,27 @@ double LoadAverage() {
 std::vector<CalibrationFlight> CalibrationPlan() {
   // Each method flies each level of E-Navi's ladder once, on scenarios rotated so that no level
   // is tied to one scene; fixed also runs difference detection on some flights (the baseline has
-  // none). E-Navi picks its own resolution (its adapter walks the ladder) and rates.
+  // none). E-Navi picks its own resolution (its adapter walks the ladder) and rates. The methods
+  // take turns, so that a host getting busier or quieter during the run (a shared VM drifts by
+  // 10-30 % within a minute) shifts every method's jobs alike instead of one method's.
   const std::vector<double> ladder = navstack::ResolutionAdapterOptions{}.ladder;
   const std::vector<std::string> worlds = {"s1", "s2", "s3", "s4", "s5"};
   const double f_dif[] = {0, 15, 0, 30};
   std::vector<CalibrationFlight> plan;
-  for (std::size_t i = 0; i < ladder.size(); ++i) plan.push_back({"baseline", worlds[i % 5], ladder[i], 0});
-  for (std::size_t i = 0; i < ladder.size(); ++i)
-    plan.push_back({"fixed", worlds[(i + 2) % 5], ladder[i], f_dif[i % 4]});
-  for (const std::string& w : worlds) plan.push_back({"enavi", w, 0, 0});
+  for (std::size_t i = 0; i < std::max(ladder.size(), worlds.size()); ++i) {
+    if (i < ladder.size()) plan.push_back({"baseline", worlds[i % 5], ladder[i], 0});
+    if (i < ladder.size()) plan.push_back({"fixed", worlds[(i + 2) % 5], ladder[i], f_dif[i % 4]});
+    if (i < worlds.size()) plan.push_back({"enavi", worlds[i], 0, 0});
+  }
   return plan;
 }
 
 CalibrationRun RunCalibration(const CalibrationOptions& options) {
   CalibrationRun run;
   sim::EpisodeOptions episode;
+  std::string method, family;  // of the flight in progress
   episode.job_observer = [&](navstack::TaskId task, const navstack::WorkCounts& work, double cpu) {
-    run.samples.push_back({task, work, cpu});
+    run.samples.push_back({task, method, family, work, cpu});
   };
   const ScratchPolicy policy;
   run.load_before = LoadAverage();
@@ -103,7 +109,10 @@ CalibrationRun RunCalibration(const CalibrationOptions& options) {
     spec.board = "host";
     spec.cost = "measured";
     spec.timeout_s = options.episode_seconds;
-    spec.method = flight.method;
+    spec.method = method = flight.method;
+    const navstack::MethodInfo* info = navstack::FindMethod(flight.method);
+    if (info == nullptr) throw std::logic_error("calibration plan names an unknown method " + flight.method);
+    family = info->cost_family;
     if (flight.method == "enavi") {
       spec.policy = policy.path();
       spec.overrides["strategy.explore"] = 1;  // sampled actions: rates across the policy's grid
@@ -114,9 +123,10 @@ CalibrationRun RunCalibration(const CalibrationOptions& options) {
     sim::RunEpisode(spec, episode);
   }
   run.load_after = LoadAverage();
-  run.fit = FitCosts(run.samples);
+  run.fit = FitCostFamilies(run.samples);
   run.reference = LoadReferenceCosts();
   run.relative_speed = RelativeSpeed(run.samples, run.reference);
+  run.reference_agreement = ReferenceAgreement(run.samples, run.reference, run.relative_speed);
   run.fit.costs.reference_cpu = HostCpuModel();
   char id[64];
   std::snprintf(id, sizeof id, "%ld-%d", static_cast<long>(std::time(nullptr)), run.fit.samples);
@@ -126,7 +136,7 @@ CalibrationRun RunCalibration(const CalibrationOptions& options) {
 }
 
 void WriteReferenceCosts(const std::string& path, const CalibrationRun& run) {
-  const CostFit& fit = run.fit;
+  const FamilyFits& fit = run.fit;
   utsname uts{};
   uname(&uts);
   char load[160];
@@ -136,12 +146,24 @@ void WriteReferenceCosts(const std::string& path, const CalibrationRun& run) {
                         "`enavi calibrate --write-reference` on " + fit.costs.reference_cpu + " (" + uts.release +
                         "), R^2 " + std::to_string(fit.r2) + " over " + std::to_string(fit.samples) + " jobs of " +
                         std::to_string(CalibrationPlan().size()) + " flights.\n" + load + "\n";
-  for (const std::vector<CoefficientFit>* group : {&fit.overheads, &fit.units})
-    for (const CoefficientFit& c : *group)
-      if (!c.zero_reason.empty())
-        comment += (group == &fit.units ? "" : "per job of ") + c.name + " = 0: " + c.zero_reason + "\n";
+  for (const auto& [family, f] : fit.fits) {
+    comment += family + ": R^2 " + std::to_string(f.r2) + " over " + std::to_string(f.samples) + " jobs.\n";
+    for (const std::vector<CoefficientFit>* group : {&f.overheads, &f.units})
+      for (const CoefficientFit& c : *group)
+        if (!c.zero_reason.empty())
+          comment += family + ": " + (group == &f.units ? "" : "per job of ") + c.name + " = 0: " + c.zero_reason + "\n";
+  }
+  comment += "Prices are this host's fit times its speed against the reference it replaces (" +
+             std::to_string(run.relative_speed) + ", id " + run.reference.calibration_id +
+             "): a new fit moves prices between units,\ntasks and families, not the reference core the board "
+             "profiles' per_core_speed is relative to.\n";
+  ReferenceCosts costs = fit.costs;
+  for (auto& [family, c] : costs.families) {
+    for (double& v : c.ns_per_job) v *= run.relative_speed;
+    for (double& v : c.ns_per_unit) v *= run.relative_speed;
+  }
   std::ofstream out(path);
-  out << ReferenceCostsYaml(fit.costs, comment);
+  out << ReferenceCostsYaml(costs, comment);
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 

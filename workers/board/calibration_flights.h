@@ -33,9 +33,11 @@ struct CalibrationOptions {
 
 struct CalibrationRun {
   std::vector<JobSample> samples;
-  CostFit fit;                ///< reference_cpu and calibration_id filled in for this host
+  FamilyFits fit;             ///< reference_cpu and calibration_id filled in for this host
   ReferenceCosts reference;   ///< the embedded reference the speed was measured against
   double relative_speed = 0;  ///< this host's core vs the reference core
+  /// The reference model's price of each method's jobs against their time here (ReferenceAgreement).
+  std::vector<TaskFitQuality> reference_agreement;
   HostCalibration host;       ///< what the host calibration file stores
   /// The host's 1-minute load average before the first and after the last flight (/proc/loadavg):
   /// other work on the host inflates measured job times, so a fit says what it was made under.
@@ -47,7 +49,9 @@ CalibrationRun RunCalibration(const CalibrationOptions& options);
 
 /// Writes the run's fit as a reference costs file (workers/board/profiles/reference_costs.yaml)
 /// with a header comment saying where, how and under what load it was fitted, and why any
-/// coefficient is 0. Throws std::runtime_error if the file cannot be written.
+/// coefficient is 0. The prices are scaled by the run's relative speed, i.e. expressed on the
+/// core of the reference they replace: a shared host's speed drifts by tens of per cent between
+/// runs, and the board profiles' speeds must not drift with it. Throws std::runtime_error if the file cannot be written.
 void WriteReferenceCosts(const std::string& path, const CalibrationRun& run);
 
 }  // namespace enavi::board

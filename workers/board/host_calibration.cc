@@ -34,10 +34,11 @@ nlohmann::json PricesJson(const Names& names, const Values& values) {
 }
 
 template <typename Names, typename Values>
-void ReadPrices(const api::JsonReader& r, const nlohmann::json& fitted, const char* key, const Names& names,
-                Values& values) {
-  const std::string where = api::JsonReader::Join("fitted", key);
-  const nlohmann::json& prices = r.Object(r.Field(fitted, "fitted", key), where);
+void ReadPrices(const api::JsonReader& r, const nlohmann::json& fitted, const std::string& family, const char* key,
+                const Names& names, Values& values) {
+  const std::string parent = api::JsonReader::Join("fitted", family);
+  const std::string where = api::JsonReader::Join(parent, key);
+  const nlohmann::json& prices = r.Object(r.Field(fitted, parent, key), where);
   for (std::size_t i = 0; i < names.size(); ++i) {
     const std::string name(names[i]);
     const std::string field = api::JsonReader::Join(where, name);
@@ -70,8 +71,11 @@ void SaveHostCalibration(const HostCalibration& c, const std::string& path) {
   j["reference_calibration_id"] = c.reference_calibration_id;
   j["samples"] = c.samples;
   j["r2"] = c.r2;
-  j["fitted"]["ns_per_job"] = PricesJson(navstack::kTaskNames, c.fitted.ns_per_job);
-  j["fitted"]["ns_per_unit"] = PricesJson(navstack::kWorkUnitNames, c.fitted.ns_per_unit);
+  j["fitted"] = nlohmann::json::object();
+  for (const auto& [family, f] : c.fitted) {
+    j["fitted"][family]["ns_per_job"] = PricesJson(navstack::kTaskNames, f.ns_per_job);
+    j["fitted"][family]["ns_per_unit"] = PricesJson(navstack::kWorkUnitNames, f.ns_per_unit);
+  }
   for (const auto& [task, t] : c.tasks)
     j["tasks"][task] = {{"jobs", t.jobs}, {"mean_s", t.mean_s}, {"p99_s", t.p99_s}, {"max_s", t.max_s}};
   const std::filesystem::path p(path);
@@ -98,7 +102,8 @@ HostCalibration LoadHostCalibration(const std::string& path) {
   if (version != HostCalibration::kFormatVersion)
     r.Fail("version", "is " + std::to_string(version) + ", this build reads " +
                           std::to_string(HostCalibration::kFormatVersion) +
-                          " (since version 2 the fit has one ns per job for each task)");
+                          " (since version 2 the fit has one ns per job for each task, since 3 one fit per cost "
+                          "family): run `enavi calibrate` again");
   HostCalibration c;
   c.relative_speed = r.Number(r.Field(j, "", "relative_speed"), "relative_speed");
   if (!(c.relative_speed > 0.01 && c.relative_speed < 100))
@@ -110,8 +115,12 @@ HostCalibration LoadHostCalibration(const std::string& path) {
   c.samples = static_cast<int>(r.Integer(r.Field(j, "", "samples"), "samples"));
   c.r2 = r.Number(r.Field(j, "", "r2"), "r2");
   const nlohmann::json& fitted = r.Object(r.Field(j, "", "fitted"), "fitted");
-  ReadPrices(r, fitted, "ns_per_job", navstack::kTaskNames, c.fitted.ns_per_job);
-  ReadPrices(r, fitted, "ns_per_unit", navstack::kWorkUnitNames, c.fitted.ns_per_unit);
+  for (const auto& [family, prices] : fitted.items()) {
+    r.Object(prices, api::JsonReader::Join("fitted", family));
+    auto& f = c.fitted[family];
+    ReadPrices(r, prices, family, "ns_per_job", navstack::kTaskNames, f.ns_per_job);
+    ReadPrices(r, prices, family, "ns_per_unit", navstack::kWorkUnitNames, f.ns_per_unit);
+  }
   if (const nlohmann::json* tasks = r.Optional(j, "", "tasks")) {
     for (const auto& [task, t] : r.Object(*tasks, "tasks").items()) {
       const std::string where = api::JsonReader::Join("tasks", task);

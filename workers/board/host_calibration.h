@@ -26,12 +26,13 @@ struct TaskTiming {
 };
 
 struct HostCalibration {
-  /// 2: one ns per job per task (version 1 had one for all, and is refused: calibrate again).
-  static constexpr int kFormatVersion = 2;
+  /// 3: one fit per cost family; 2: one ns per job per task (older versions are refused:
+  /// calibrate again).
+  static constexpr int kFormatVersion = 3;
   /// This host's single-core speed relative to the reference core (> 1: faster).
   double relative_speed = 1.0;
-  /// The cost model fitted on this host (ns per unit on THIS host's cores).
-  navstack::WorkCountCostModel::Coefficients fitted;
+  /// The cost model fitted on this host, by cost family (ns per unit on THIS host's cores).
+  std::map<std::string, navstack::WorkCountCostModel::Coefficients> fitted;
   int samples = 0;
   double r2 = 0;
   std::string cpu_model;  ///< /proc/cpuinfo "model name"

@@ -276,7 +276,7 @@ void EmulatedNavLink::Impl::Start() {
   args.speed = speed;
   args.sched_deadline = emulation.sched_deadline;
   args.server_period_ns = emulation.server_period_us * 1000;
-  args.board_costs = board::BoardCoefficients(board, board::LoadReferenceCosts());
+  args.board_costs = board::BoardCoefficients(board, board::LoadReferenceCosts(), method->cost_family);
   args.shared = shared;
   args.channel_fd = channel->fd();
   args.go_fd = go[0];

@@ -28,9 +28,11 @@ using navstack::TaskId;
 
 api::Vec3 ToVec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
-std::unique_ptr<navstack::CostModel> MakeCostModel(const api::EpisodeSpec& spec, const board::BoardProfile& b) {
+std::unique_ptr<navstack::CostModel> MakeCostModel(const api::EpisodeSpec& spec, const board::BoardProfile& b,
+                                                   const std::string& cost_family) {
   if (spec.cost == "model")
-    return std::make_unique<navstack::WorkCountCostModel>(board::BoardCoefficients(b, board::LoadReferenceCosts()));
+    return std::make_unique<navstack::WorkCountCostModel>(
+        board::BoardCoefficients(b, board::LoadReferenceCosts(), cost_family));
   if (spec.cost == "measured") return std::make_unique<navstack::MeasuredCostModel>(1.0 / b.per_core_speed);
   throw std::invalid_argument("cost: unknown cost mode '" + spec.cost + "' (known: model, measured)");
 }
@@ -88,7 +90,7 @@ const std::vector<ClockEntry>& ClockEntries() {
        [](const api::EpisodeSpec& spec, const EpisodeConfig& config, const board::BoardProfile& board, int threads,
           const navstack::VehicleState& initial, const EpisodeOptions& options) -> std::unique_ptr<NavLink> {
          return std::make_unique<VirtualNavLink>(*config.method, config.nav, threads, config.scheduler.policy,
-                                                 MakeCostModel(spec, board), initial, options.job_observer);
+                                                 MakeCostModel(spec, board, config.method->cost_family), initial, options.job_observer);
        }},
       {{"emulated", "the stack in its own process, throttled by cgroups to the board's speed, in dilated wall time"},
        [](const api::EpisodeSpec& spec, const EpisodeConfig& config, const board::BoardProfile& board, int threads,
@@ -143,7 +145,7 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   result.notes["triangles"] = std::to_string(prepared.triangles);
   if (!world.metadata.import_note.empty()) result.notes["world_import"] = world.metadata.import_note;
   result.notes["depth_stream"] = std::to_string(config.nav.camera.width) + "x" + std::to_string(config.nav.camera.height);
-  result.notes.merge(EpisodeProvenance(spec, board, config.nav.strategy.has_value()));
+  result.notes.merge(EpisodeProvenance(spec, board, config.method->cost_family, config.nav.strategy.has_value()));
 
   // Vehicle: hovering at the start, facing the goal.
   const navstack::VehicleParams vehicle;

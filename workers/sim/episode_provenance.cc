@@ -11,7 +11,7 @@ const std::map<std::string, std::string>& EmbeddedPolicies();
 
 std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spec,
                                                      const board::BoardProfile& board,
-                                                     bool uses_policy) {
+                                                     const std::string& cost_family, bool uses_policy) {
   std::map<std::string, std::string> notes;
   notes["provenance.enavi_version"] = api::BuildVersion();
   notes["provenance.git_commit"] = api::BuildCommit();
@@ -26,10 +26,10 @@ std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spe
       notes["provenance.policy"] = spec.policy;
     }
   }
-  // The digest covers exactly what prices a job on this board: the reference ns per unit and
-  // per job divided by the board's per-core speed.
+  // The digest covers exactly what prices a job of this method on this board: its cost family's
+  // reference ns per unit and per job divided by the board's per-core speed.
   const board::ReferenceCosts reference = board::LoadReferenceCosts();
-  const auto coefficients = board::BoardCoefficients(board, reference);
+  const auto coefficients = board::BoardCoefficients(board, reference, cost_family);
   std::string bytes(reinterpret_cast<const char*>(coefficients.ns_per_unit.data()),
                     sizeof(double) * coefficients.ns_per_unit.size());
   bytes.append(reinterpret_cast<const char*>(coefficients.ns_per_job.data()),

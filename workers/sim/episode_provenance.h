@@ -14,6 +14,6 @@ namespace enavi::sim {
 
 std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spec,
                                                      const board::BoardProfile& board,
-                                                     bool uses_policy);
+                                                     const std::string& cost_family, bool uses_policy);
 
 }  // namespace enavi::sim

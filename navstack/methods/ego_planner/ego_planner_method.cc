@@ -12,6 +12,9 @@ MethodInfo EgoPlannerMethod() {
               "safety check with emergency stop) at 30 Hz / 20 Hz / 0.1 m";
   // ego_planner_node.cpp: ros::spin(), one thread, callbacks in arrival order.
   m.scheduler = {SchedulingPolicy::kFifoNonPreemptive, 1};
+  // Its map is dense arrays and its search a bit grid, not our octree and distance field: a voxel
+  // update or a state check is other code at another price.
+  m.cost_family = "ego_planner";
   m.task_labels = {"occupancy update", "FSM (replans)", "safety check (and its replans)", "unused", "eci", "unused"};
   m.tunables = {
       {"map.resolution", 0.05, 1.0, 0.1, false, "grid_map/resolution, m"},

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "navstack/methods/registry.h"
 #include "workers/board/nnls.h"
 
 namespace enavi::board {
@@ -68,14 +69,14 @@ TEST(CalibrationTest, FitRecoversPerUnitCostsAndPerTaskOverheadsFromNoisyJobs) {
     samples.push_back(s);
   }
   const CostFit fit = FitCosts(samples);
-  const auto& c = fit.costs.ns.ns_per_unit;
+  const auto& c = fit.ns.ns_per_unit;
   EXPECT_NEAR(c[static_cast<int>(WorkUnit::kRayStep)], 17.0, 1.0);
   EXPECT_NEAR(c[static_cast<int>(WorkUnit::kVoxelUpdate)], 48.0, 4.0);
   EXPECT_NEAR(c[static_cast<int>(WorkUnit::kDistanceCell)], 20.0, 1.0);
   EXPECT_NEAR(c[static_cast<int>(WorkUnit::kStateCheck)], 150.0, 15.0);
   // The empty perception jobs pin the overhead; the 3 % noise of the full ones (150-400 us a
   // job, ten times the overhead) leaves it known to a quarter.
-  EXPECT_NEAR(fit.costs.ns.ns_per_job[static_cast<int>(TaskId::kPerception)], 30e3, 8e3);
+  EXPECT_NEAR(fit.ns.ns_per_job[static_cast<int>(TaskId::kPerception)], 30e3, 8e3);
   EXPECT_GT(fit.r2, 0.99);
   EXPECT_EQ(c[static_cast<int>(WorkUnit::kPixel)], 0.0);
   EXPECT_EQ(Named(fit.units, "pixel").zero_reason, "no job counted it");
@@ -93,9 +94,10 @@ TEST(CalibrationTest, FitRecoversPerUnitCostsAndPerTaskOverheadsFromNoisyJobs) {
   EXPECT_GT(fit.per_task[0].r2, 0.99);
   EXPECT_NEAR(fit.per_task[1].relative_residual(), 0.0, 0.01);
   // A reference twice as slow per unit and per job: this host is 2x faster.
-  ReferenceCosts slow = fit.costs;
-  for (double& v : slow.ns.ns_per_unit) v *= 2.0;
-  for (double& v : slow.ns.ns_per_job) v *= 2.0;
+  ReferenceCosts slow;
+  slow.families["navstack"] = fit.ns;
+  for (double& v : slow.families["navstack"].ns_per_unit) v *= 2.0;
+  for (double& v : slow.families["navstack"].ns_per_job) v *= 2.0;
   EXPECT_NEAR(RelativeSpeed(samples, slow), 2.0, 0.05);
 }
 
@@ -115,12 +117,12 @@ TEST(CalibrationTest, ATaskWhoseJobsAllCountTheSameOfItsOwnUnitLeavesTheCostToTh
     samples.push_back(col);
   }
   const CostFit fit = FitCosts(samples);
-  EXPECT_EQ(fit.costs.ns.ns_per_job[static_cast<int>(TaskId::kEci)], 0.0);
-  EXPECT_NEAR(fit.costs.ns.ns_per_unit[static_cast<int>(WorkUnit::kPixel)], 0.6 + 2000.0 / 76800, 0.02);
+  EXPECT_EQ(fit.ns.ns_per_job[static_cast<int>(TaskId::kEci)], 0.0);
+  EXPECT_NEAR(fit.ns.ns_per_unit[static_cast<int>(WorkUnit::kPixel)], 0.6 + 2000.0 / 76800, 0.02);
   EXPECT_NE(Named(fit.overheads, "eci").zero_reason.find("not separable from pixel"), std::string::npos)
       << Named(fit.overheads, "eci").zero_reason;
-  EXPECT_NEAR(fit.costs.ns.ns_per_job[static_cast<int>(TaskId::kCollision)], 4000.0, 1.0);
-  EXPECT_NEAR(fit.costs.ns.ns_per_unit[static_cast<int>(WorkUnit::kCellProbe)], 9.0, 1e-3);
+  EXPECT_NEAR(fit.ns.ns_per_job[static_cast<int>(TaskId::kCollision)], 4000.0, 1.0);
+  EXPECT_NEAR(fit.ns.ns_per_unit[static_cast<int>(WorkUnit::kCellProbe)], 9.0, 1e-3);
 }
 
 TEST(CalibrationTest, AZeroCoefficientSaysWhy) {
@@ -160,6 +162,51 @@ TEST(CalibrationTest, AZeroCoefficientSaysWhy) {
   } else {
     EXPECT_LT(check.ns, 2000.0) << "1-100 checks hidden in 2 % noise of 2-20 ms jobs";
   }
+}
+
+// The same unit at two prices in two code bases: one fit per family recovers each, and the
+// reference that priced both alike shows up as opposite residuals of the two methods.
+TEST(CalibrationTest, EachCostFamilyGetsItsOwnPricesAndAOnePriceReferenceShowsItsBias) {
+  std::mt19937_64 rng(5);
+  auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * ((rng() >> 11) * 0x1.0p-53); };
+  std::vector<JobSample> samples;
+  for (int i = 0; i < 400; ++i) {
+    JobSample s;
+    s.task = TaskId::kPerception;
+    const bool dense = i % 2 == 0;
+    s.method = dense ? "baseline" : "fixed";
+    s.family = dense ? "ego_planner" : "navstack";
+    s.work.Add(WorkUnit::kRayStep, static_cast<std::int64_t>(uniform(1e4, 1e5)));
+    s.work.Add(WorkUnit::kVoxelUpdate, static_cast<std::int64_t>(uniform(1e3, 2e4)));
+    const double voxel_ns = dense ? 5.0 : 120.0;  // an array index against an octree descent
+    s.host_cpu_s = (20e3 + 15.0 * s.work.Get(WorkUnit::kRayStep) + voxel_ns * s.work.Get(WorkUnit::kVoxelUpdate)) *
+                   1e-9 * uniform(0.98, 1.02);
+    samples.push_back(s);
+  }
+  const FamilyFits fits = FitCostFamilies(samples);
+  ASSERT_EQ(fits.fits.size(), 2u);
+  const int voxel = static_cast<int>(WorkUnit::kVoxelUpdate);
+  EXPECT_NEAR(fits.costs.For("ego_planner").ns_per_unit[voxel], 5.0, 2.0);
+  EXPECT_NEAR(fits.costs.For("navstack").ns_per_unit[voxel], 120.0, 5.0);
+  EXPECT_GT(fits.r2, 0.99);
+  EXPECT_EQ(fits.samples, 400);
+  for (const auto& [family, fit] : fits.fits) {
+    ASSERT_EQ(fit.per_method_task.size(), 1u) << family;
+    EXPECT_NEAR(fit.per_method_task[0].relative_residual(), 0.0, 0.01) << family;
+  }
+
+  // One price for both (their mean), at this host's speed: the dense method is over-priced.
+  ReferenceCosts one;
+  one.families["ego_planner"] = fits.costs.For("navstack");
+  one.families["ego_planner"].ns_per_unit[voxel] = 62.5;
+  one.families["navstack"] = one.families["ego_planner"];
+  const std::vector<TaskFitQuality> agreement = ReferenceAgreement(samples, one, RelativeSpeed(samples, one));
+  ASSERT_EQ(agreement.size(), 2u);
+  const TaskFitQuality& baseline = agreement[0].method == "baseline" ? agreement[0] : agreement[1];
+  const TaskFitQuality& fixed = agreement[0].method == "baseline" ? agreement[1] : agreement[0];
+  EXPECT_GT(baseline.relative_residual(), 0.2);
+  EXPECT_LT(fixed.relative_residual(), -0.1);
+  EXPECT_THROW(ReferenceAgreement(samples, one, 0.0), std::invalid_argument);
 }
 
 TEST(CalibrationTest, TooFewSamplesIsAnError) {
@@ -208,21 +255,36 @@ TEST(BoardProfileTest, BadProfileNamesFileLineAndField) {
   }
 }
 
-TEST(BoardProfileTest, ReferenceCostsWithOneOverheadForAllTasksNameFileAndField) {
-  const std::string old_format = "reference_cpu: \"X\"\ncalibration_id: \"1\"\nns_per_job: 0.0\nns_per_unit:\n  pixel: 0.5\n";
+TEST(BoardProfileTest, ReferenceCostsInAnOldFormatOrWithAMissingTaskNameFileAndField) {
+  const std::string one_set = "reference_cpu: \"X\"\ncalibration_id: \"1\"\nns_per_job:\n  perception: 1.0\n";
   try {
-    ParseReferenceCosts(old_format, "ref.yaml");
+    ParseReferenceCosts(one_set, "ref.yaml");
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("ref.yaml:3: ns_per_job: must map each task"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("ref.yaml:4: ns_per_job: one set of prices for every method is the format "
+                                         "before cost families"),
+              std::string::npos)
+        << e.what();
+  }
+  const std::string one_overhead =
+      "reference_cpu: \"X\"\ncalibration_id: \"1\"\nfamilies:\n  navstack:\n    ns_per_job: 0.0\n    ns_per_unit: {}\n";
+  try {
+    ParseReferenceCosts(one_overhead, "ref.yaml");
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("ref.yaml:5: families.navstack.ns_per_job: must map each task"),
+              std::string::npos)
+        << e.what();
   }
   const std::string missing_task =
-      "reference_cpu: \"X\"\ncalibration_id: \"1\"\nns_per_job:\n  perception: 1.0\nns_per_unit:\n  pixel: 0.5\n";
+      "reference_cpu: \"X\"\ncalibration_id: \"1\"\nfamilies:\n  navstack:\n    ns_per_job:\n      perception: 1.0\n"
+      "    ns_per_unit:\n      pixel: 0.5\n";
   try {
     ParseReferenceCosts(missing_task, "ref.yaml");
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("ns_per_job.planning: missing"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("families.navstack.ns_per_job.planning: missing"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -230,22 +292,48 @@ TEST(BoardProfileTest, TheReferenceCostsFileReadsBackWhatTheFitWrites) {
   ReferenceCosts costs;
   costs.reference_cpu = "AMD EPYC";
   costs.calibration_id = "42-7";
-  costs.ns.ns_per_job[static_cast<int>(TaskId::kAdapter)] = 1234.5;
-  costs.ns.ns_per_unit[static_cast<int>(WorkUnit::kRayStep)] = 18.25;
+  costs.families["navstack"].ns_per_job[static_cast<int>(TaskId::kAdapter)] = 1234.5;
+  costs.families["navstack"].ns_per_unit[static_cast<int>(WorkUnit::kRayStep)] = 18.25;
+  costs.families["ego_planner"].ns_per_unit[static_cast<int>(WorkUnit::kRayStep)] = 9.5;
   const ReferenceCosts back = ParseReferenceCosts(ReferenceCostsYaml(costs, "two\nlines"), "written.yaml");
   EXPECT_EQ(back.calibration_id, "42-7");
-  EXPECT_EQ(back.ns.ns_per_job, costs.ns.ns_per_job);
-  EXPECT_EQ(back.ns.ns_per_unit, costs.ns.ns_per_unit);
+  ASSERT_EQ(back.families.size(), 2u);
+  for (const auto& [family, c] : costs.families) {
+    EXPECT_EQ(back.For(family).ns_per_job, c.ns_per_job) << family;
+    EXPECT_EQ(back.For(family).ns_per_unit, c.ns_per_unit) << family;
+  }
+}
+
+TEST(BoardProfileTest, AMethodOfAnUnpricedCostFamilyIsRefusedByName) {
+  ReferenceCosts ref;
+  ref.calibration_id = "42-7";
+  ref.families["navstack"] = {};
+  try {
+    ref.For("rust_planner");
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no prices for cost family 'rust_planner' (known: navstack)"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(BoardProfileTest, EveryRegisteredMethodsCostFamilyIsPricedByTheEmbeddedReference) {
+  const ReferenceCosts ref = LoadReferenceCosts();
+  for (const navstack::MethodInfo& m : navstack::Methods()) EXPECT_NO_THROW(ref.For(m.cost_family)) << m.name;
+  // Ego-Planner's node is other code than our stack: it has prices of its own.
+  EXPECT_EQ(navstack::FindMethod("baseline")->cost_family, "ego_planner");
+  EXPECT_EQ(navstack::FindMethod("enavi")->cost_family, navstack::FindMethod("fixed")->cost_family);
+  EXPECT_NE(ref.For("ego_planner").ns_per_unit, ref.For("navstack").ns_per_unit);
 }
 
 TEST(BoardProfileTest, CoefficientsScaleWithPerCoreSpeed) {
   ReferenceCosts ref;
-  ref.ns.ns_per_unit[static_cast<int>(WorkUnit::kRayStep)] = 10.0;
-  ref.ns.ns_per_job[static_cast<int>(TaskId::kPlanning)] = 3000.0;
+  ref.families["navstack"].ns_per_unit[static_cast<int>(WorkUnit::kRayStep)] = 10.0;
+  ref.families["navstack"].ns_per_job[static_cast<int>(TaskId::kPlanning)] = 3000.0;
   BoardProfile b;
   b.per_core_speed = 0.5;
-  EXPECT_DOUBLE_EQ(BoardCoefficients(b, ref).ns_per_unit[static_cast<int>(WorkUnit::kRayStep)], 20.0);
-  EXPECT_DOUBLE_EQ(BoardCoefficients(b, ref).ns_per_job[static_cast<int>(TaskId::kPlanning)], 6000.0);
+  EXPECT_DOUBLE_EQ(BoardCoefficients(b, ref, "navstack").ns_per_unit[static_cast<int>(WorkUnit::kRayStep)], 20.0);
+  EXPECT_DOUBLE_EQ(BoardCoefficients(b, ref, "navstack").ns_per_job[static_cast<int>(TaskId::kPlanning)], 6000.0);
 }
 
 }  // namespace

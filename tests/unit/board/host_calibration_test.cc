@@ -29,8 +29,9 @@ class HostCalibrationTest : public ::testing::Test {
   static HostCalibration Sample() {
     HostCalibration c;
     c.relative_speed = 1.25;
-    c.fitted.ns_per_unit[static_cast<int>(navstack::WorkUnit::kRayStep)] = 21.5;
-    c.fitted.ns_per_job[static_cast<int>(navstack::TaskId::kCollision)] = 3500.0;
+    c.fitted["navstack"].ns_per_unit[static_cast<int>(navstack::WorkUnit::kRayStep)] = 21.5;
+    c.fitted["navstack"].ns_per_job[static_cast<int>(navstack::TaskId::kCollision)] = 3500.0;
+    c.fitted["ego_planner"].ns_per_unit[static_cast<int>(navstack::WorkUnit::kRayStep)] = 7.0;
     c.samples = 1234;
     c.r2 = 0.93;
     c.cpu_model = "Test CPU 9000";
@@ -51,9 +52,11 @@ TEST_F(HostCalibrationTest, SaveLoadRoundTrip) {
   SaveHostCalibration(Sample(), path);
   const HostCalibration c = LoadHostCalibration(path);
   EXPECT_EQ(c.relative_speed, 1.25);
-  EXPECT_EQ(c.fitted.ns_per_unit[static_cast<int>(navstack::WorkUnit::kRayStep)], 21.5);
-  EXPECT_EQ(c.fitted.ns_per_job[static_cast<int>(navstack::TaskId::kCollision)], 3500.0);
-  EXPECT_EQ(c.fitted.ns_per_job[static_cast<int>(navstack::TaskId::kPlanning)], 0.0);
+  ASSERT_EQ(c.fitted.size(), 2u);
+  EXPECT_EQ(c.fitted.at("navstack").ns_per_unit[static_cast<int>(navstack::WorkUnit::kRayStep)], 21.5);
+  EXPECT_EQ(c.fitted.at("navstack").ns_per_job[static_cast<int>(navstack::TaskId::kCollision)], 3500.0);
+  EXPECT_EQ(c.fitted.at("navstack").ns_per_job[static_cast<int>(navstack::TaskId::kPlanning)], 0.0);
+  EXPECT_EQ(c.fitted.at("ego_planner").ns_per_unit[static_cast<int>(navstack::WorkUnit::kRayStep)], 7.0);
   EXPECT_EQ(c.samples, 1234);
   EXPECT_EQ(c.cpu_model, "Test CPU 9000");
   EXPECT_EQ(c.kernel, "6.1.0-test");
@@ -101,7 +104,7 @@ TEST_F(HostCalibrationTest, CorruptFileIsInvalidWithTheFieldNamed) {
   const std::string path = Path("c.json");
   {
     std::ofstream out(path);
-    out << R"({"format": "enavi-host-calibration", "version": 2, "relative_speed": -3})";
+    out << R"({"format": "enavi-host-calibration", "version": 3, "relative_speed": -3})";
   }
   const CalibrationCheck check = CheckHostCalibration(path, "Test CPU 9000", "ref-1");
   EXPECT_EQ(check.status, CalibrationCheck::Status::kInvalid);
@@ -141,7 +144,7 @@ TEST_F(HostCalibrationTest, FileWithOneOverheadForAllTasksIsRefusedNamingFileAnd
     LoadHostCalibration(path);
     FAIL() << "a single ns_per_job must be refused";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find(path + ": fitted.ns_per_job: expected an object"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find(path + ": fitted.ego_planner.ns_per_job: expected an object"), std::string::npos)
         << e.what();
   }
 }

@@ -135,7 +135,7 @@ TEST(OccupancyMapTest, SetResolutionRebuildKeepsTheWall) {
   map.SetResolution(0.2, &work);
   EXPECT_DOUBLE_EQ(map.resolution(), 0.2);
   EXPECT_GT(work.Get(WorkUnit::kRayStep), 0) << "a rebuild is not free";
-  EXPECT_GT(work.Get(WorkUnit::kVoxelUpdate), 0);
+  EXPECT_GT(work.Get(WorkUnit::kRebuildVoxel), 0);
   EXPECT_EQ(Name(map.Query({3.1, 0.0, 0.0})), "occupied");
   EXPECT_EQ(Name(map.Query({1.5, 0.0, 0.0})), "free");
   EXPECT_EQ(Name(map.Query({4.1, 0.0, 0.0})), "unknown");
@@ -183,7 +183,9 @@ TEST(OccupancyMapTest, RebuildKeepsObstaclesOutOfViewAndDropsOldFreeSpace) {
   EXPECT_EQ(Name(map.Query({3.05, 1.0, 0.5})), "occupied");
   EXPECT_EQ(Name(map.Query({1.5, 0, 0})), "unknown");
   EXPECT_EQ(Name(map.Query({-3.1, 0, 0})), "free");
-  EXPECT_GT(work.Get(WorkUnit::kVoxelUpdate), 0) << "carrying cells over is billed";
+  EXPECT_GT(work.Get(WorkUnit::kRebuildVoxel), 0) << "carrying cells over and replaying frames is billed";
+  EXPECT_EQ(work.Get(WorkUnit::kVoxelUpdate), 0) << "a fresh tree's writes are rebuild voxels, not leaf updates";
+  EXPECT_GT(work.Get(WorkUnit::kRay), 0) << "the replayed frame's rays are cast again";
 
   // Back to the finer grid: every fine cell inside a carried coarse cell is occupied (conservative).
   map.SetResolution(0.1);
@@ -287,6 +289,7 @@ TEST(OccupancyMapTest, WorkCountsScaleWithStride) {
   const double ratio = static_cast<double>(fine.Get(WorkUnit::kRayStep)) /
                        static_cast<double>(coarse.Get(WorkUnit::kRayStep));
   EXPECT_NEAR(ratio, 4.0, 0.3) << "four times the rays, same lengths";
+  EXPECT_EQ(fine.Get(WorkUnit::kRay), 4 * coarse.Get(WorkUnit::kRay)) << "one ray per sampled pixel";
   EXPECT_GT(coarse.Get(WorkUnit::kVoxelUpdate), 0);
   EXPECT_GT(fine.Get(WorkUnit::kVoxelUpdate), coarse.Get(WorkUnit::kVoxelUpdate));
 
