@@ -73,8 +73,8 @@ TEST(EnaviLoopTest, RecordingARolloutDoesNotChangeTheFlight) {
 // A hovering vehicle whose plans keep failing turns on the spot, retrying, instead of hovering
 // blind (the scan; NavStackTest covers that the first plan to land ends it). The flight that first
 // needed it (the untrained network on s3 seed 2, pi4b, boxed in by a refined map's leftovers out
-// of view) no longer gets boxed in since the cost families repriced the stack, and none of 200
-// flights of that network (s1-s3, seeds 1-8, five boards) stopped; here the planner is starved
+// of view) no longer gets boxed in since the cost families repriced the stack, and none of that
+// network's flights on s3 and s2 (seeds 1-8, five boards) stopped; here the planner is starved
 // instead: 40 RRT samples a search, too few for any way on from the start of s3.
 TEST(EnaviLoopTest, AVehicleWhosePlansKeepFailingTurnsOnTheSpot) {
   navstack::MethodInfo starved = *navstack::FindMethod("fixed");
