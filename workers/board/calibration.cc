@@ -116,6 +116,20 @@ TaskFitQuality FitQuality(const std::vector<JobSample>& samples, const Eigen::Ve
   return q;
 }
 
+// Each sample's time under `reference` (its family's prices), seconds.
+std::vector<double> ReferenceSeconds(const std::vector<JobSample>& samples, const ReferenceCosts& reference) {
+  std::map<std::string, navstack::WorkCountCostModel> models;
+  std::vector<double> out;
+  out.reserve(samples.size());
+  for (const JobSample& s : samples) {
+    auto it = models.find(s.family);
+    if (it == models.end()) it = models.emplace(s.family, navstack::WorkCountCostModel(reference.For(s.family))).first;
+    out.push_back(it->second.JobSeconds(s.task, s.work, 0.0));
+  }
+  return out;
+}
+
+
 // FitQuality for each method and task with jobs (methods in first-seen order).
 std::vector<TaskFitQuality> PerMethodTask(const std::vector<JobSample>& samples, const Eigen::VectorXd& b,
                                           const Eigen::VectorXd& predicted) {
@@ -224,36 +238,17 @@ FamilyFits FitCostFamilies(const std::vector<JobSample>& samples) {
     out.costs.families[family] = out.fits[family].ns;
   }
   out.samples = static_cast<int>(samples.size());
-  double sum = 0, sum2 = 0, ss_res = 0;
-  for (const JobSample& s : samples) {
-    const double b = s.host_cpu_s * 1e9;
-    const double p = navstack::WorkCountCostModel(out.costs.For(s.family)).JobSeconds(s.task, s.work, 0.0) * 1e9;
-    sum += b;
-    sum2 += b * b;
-    ss_res += (b - p) * (b - p);
+  const std::vector<double> modelled = ReferenceSeconds(samples, out.costs);
+  double mean = 0;
+  for (const JobSample& s : samples) mean += s.host_cpu_s / static_cast<double>(samples.size());
+  double ss_res = 0, ss_tot = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    ss_res += (samples[i].host_cpu_s - modelled[i]) * (samples[i].host_cpu_s - modelled[i]);
+    ss_tot += (samples[i].host_cpu_s - mean) * (samples[i].host_cpu_s - mean);
   }
-  const double n = static_cast<double>(samples.size());
-  const double ss_tot = n > 0 ? sum2 - sum * sum / n : 0.0;
   out.r2 = ss_tot > 0 ? 1.0 - ss_res / ss_tot : 0.0;
   return out;
 }
-
-namespace {
-
-// Each sample's time under `reference` (its family's prices), seconds.
-std::vector<double> ReferenceSeconds(const std::vector<JobSample>& samples, const ReferenceCosts& reference) {
-  std::map<std::string, navstack::WorkCountCostModel> models;
-  std::vector<double> out;
-  out.reserve(samples.size());
-  for (const JobSample& s : samples) {
-    auto it = models.find(s.family);
-    if (it == models.end()) it = models.emplace(s.family, navstack::WorkCountCostModel(reference.For(s.family))).first;
-    out.push_back(it->second.JobSeconds(s.task, s.work, 0.0));
-  }
-  return out;
-}
-
-}  // namespace
 
 double RelativeSpeed(const std::vector<JobSample>& samples, const ReferenceCosts& reference) {
   const std::vector<double> modelled = ReferenceSeconds(samples, reference);
