@@ -146,13 +146,15 @@ ReferenceCosts LoadReferenceCosts() {
   return ParseReferenceCosts(it->second, std::string("workers/board/profiles/") + kReferenceFile);
 }
 
+navstack::WorkCountCostModel::Coefficients Scaled(navstack::WorkCountCostModel::Coefficients c, double factor) {
+  for (double& v : c.ns_per_job) v *= factor;
+  for (double& v : c.ns_per_unit) v *= factor;
+  return c;
+}
+
 navstack::WorkCountCostModel::Coefficients BoardCoefficients(const BoardProfile& board, const ReferenceCosts& reference,
                                                              const std::string& family) {
-  navstack::WorkCountCostModel::Coefficients c = reference.For(family);
-  const double slowdown = 1.0 / board.per_core_speed;
-  for (double& v : c.ns_per_job) v *= slowdown;
-  for (double& v : c.ns_per_unit) v *= slowdown;
-  return c;
+  return Scaled(reference.For(family), 1.0 / board.per_core_speed);
 }
 
 }  // namespace enavi::board

@@ -50,6 +50,9 @@ BoardProfile ParseBoardProfile(const std::string& yaml_text, const std::string& 
 ReferenceCosts LoadReferenceCosts();
 ReferenceCosts ParseReferenceCosts(const std::string& yaml_text, const std::string& source);
 
+/// Every price of `c` times `factor`.
+navstack::WorkCountCostModel::Coefficients Scaled(navstack::WorkCountCostModel::Coefficients c, double factor);
+
 /// The board's cost-model coefficients for a cost family: reference ns per unit / per-core speed.
 navstack::WorkCountCostModel::Coefficients BoardCoefficients(const BoardProfile& board, const ReferenceCosts& reference,
                                                              const std::string& family);

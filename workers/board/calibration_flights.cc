@@ -158,10 +158,7 @@ void WriteReferenceCosts(const std::string& path, const CalibrationRun& run) {
              "): a new fit moves prices between units,\ntasks and families, not the reference core the board "
              "profiles' per_core_speed is relative to.\n";
   ReferenceCosts costs = fit.costs;
-  for (auto& [family, c] : costs.families) {
-    for (double& v : c.ns_per_job) v *= run.relative_speed;
-    for (double& v : c.ns_per_unit) v *= run.relative_speed;
-  }
+  for (auto& [family, c] : costs.families) c = Scaled(c, run.relative_speed);
   std::ofstream out(path);
   out << ReferenceCostsYaml(costs, comment);
   if (!out) throw std::runtime_error("cannot write " + path);

@@ -42,11 +42,20 @@ const CoefficientFit& Named(const std::vector<CoefficientFit>& group, const std:
   return *it;
 }
 
+// Uniform draws in [lo, hi) from a seeded engine: the tests' work counts and timing noise.
+class Uniform {
+ public:
+  explicit Uniform(std::uint64_t seed) : rng_(seed) {}
+  double operator()(double lo, double hi) { return lo + (hi - lo) * ((rng_() >> 11) * 0x1.0p-53); }
+
+ private:
+  std::mt19937_64 rng_;
+};
+
 TEST(CalibrationTest, FitRecoversPerUnitCostsAndPerTaskOverheadsFromNoisyJobs) {
   // Two tasks with different unit mixes and overheads (30 us a perception job, 5 us a planning
   // job), 3 % multiplicative timing noise; a tenth of the perception jobs find nothing to do.
-  std::mt19937_64 rng(7);
-  auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * ((rng() >> 11) * 0x1.0p-53); };
+  Uniform uniform(7);
   std::vector<JobSample> samples;
   for (int i = 0; i < 400; ++i) {
     JobSample s;
@@ -128,8 +137,7 @@ TEST(CalibrationTest, ATaskWhoseJobsAllCountTheSameOfItsOwnUnitLeavesTheCostToTh
 TEST(CalibrationTest, AZeroCoefficientSaysWhy) {
   // Collision jobs: cell probes cost 9 ns; trajectory samples always come 4 per probe (collinear
   // with them); the planning jobs' state checks cost nothing above noise.
-  std::mt19937_64 rng(3);
-  auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * ((rng() >> 11) * 0x1.0p-53); };
+  Uniform uniform(3);
   std::vector<JobSample> samples;
   for (int i = 0; i < 300; ++i) {
     JobSample s;
@@ -167,8 +175,7 @@ TEST(CalibrationTest, AZeroCoefficientSaysWhy) {
 // The same unit at two prices in two code bases: one fit per family recovers each, and the
 // reference that priced both alike shows up as opposite residuals of the two methods.
 TEST(CalibrationTest, EachCostFamilyGetsItsOwnPricesAndAOnePriceReferenceShowsItsBias) {
-  std::mt19937_64 rng(5);
-  auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * ((rng() >> 11) * 0x1.0p-53); };
+  Uniform uniform(5);
   std::vector<JobSample> samples;
   for (int i = 0; i < 400; ++i) {
     JobSample s;
