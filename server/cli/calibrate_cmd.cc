@@ -172,6 +172,8 @@ void Run(const CalibrateArgs& args) {
   j["load_average"] = {{"before", run.load_before}, {"after", run.load_after}};
   j["relative_speed_vs_reference"] = run.relative_speed;
   j["reference_calibration_id"] = run.reference.calibration_id;
+  const std::vector<std::string> unpriced = board::UnpricedFamilies(run.samples, run.reference);
+  j["unpriced_families"] = unpriced;
   for (const auto& [family, f] : fit.fits) {
     nlohmann::json& fj = j["families"][family];
     fj["samples"] = f.samples;
@@ -230,6 +232,10 @@ void Run(const CalibrateArgs& args) {
               run.reference.calibration_id.c_str(), run.relative_speed);
   print_quality_header();
   for (const board::TaskFitQuality& q : run.reference_agreement) print_quality(q);
+  for (const std::string& family : unpriced)
+    std::printf("  cost family %s: not priced by the reference (the speed is measured on the others; "
+                "--write-reference adds its prices)\n",
+                family.c_str());
   PrintBoardTable(host);
   if (!stored.empty()) std::printf("host calibration written to %s\n", stored.c_str());
 }

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -250,7 +252,35 @@ FamilyFits FitCostFamilies(const std::vector<JobSample>& samples) {
   return out;
 }
 
-double RelativeSpeed(const std::vector<JobSample>& samples, const ReferenceCosts& reference) {
+std::vector<std::string> UnpricedFamilies(const std::vector<JobSample>& samples, const ReferenceCosts& reference) {
+  std::set<std::string> out;
+  for (const JobSample& s : samples)
+    if (reference.families.count(s.family) == 0) out.insert(s.family);
+  return {out.begin(), out.end()};
+}
+
+namespace {
+
+// The samples whose family `reference` prices.
+std::vector<JobSample> PricedSamples(const std::vector<JobSample>& samples, const ReferenceCosts& reference) {
+  std::vector<JobSample> out;
+  for (const JobSample& s : samples)
+    if (reference.families.count(s.family) > 0) out.push_back(s);
+  return out;
+}
+
+}  // namespace
+
+double RelativeSpeed(const std::vector<JobSample>& all, const ReferenceCosts& reference) {
+  const std::vector<JobSample> samples = PricedSamples(all, reference);
+  if (samples.empty() && !all.empty()) {
+    std::string flown, known;
+    for (const std::string& f : UnpricedFamilies(all, reference)) flown += (flown.empty() ? "" : ", ") + f;
+    for (const auto& [name, c] : reference.families) known += (known.empty() ? "" : ", ") + name;
+    throw std::invalid_argument("calibration: the reference costs " + reference.calibration_id +
+                                " price none of the flown cost families (" + flown + "; known: " + known +
+                                "): a host's speed is measured on work the reference prices");
+  }
   const std::vector<double> modelled = ReferenceSeconds(samples, reference);
   double reference_s = 0, host_s = 0;
   for (std::size_t i = 0; i < samples.size(); ++i) {
@@ -261,9 +291,10 @@ double RelativeSpeed(const std::vector<JobSample>& samples, const ReferenceCosts
   return reference_s / host_s;
 }
 
-std::vector<TaskFitQuality> ReferenceAgreement(const std::vector<JobSample>& samples, const ReferenceCosts& reference,
+std::vector<TaskFitQuality> ReferenceAgreement(const std::vector<JobSample>& all, const ReferenceCosts& reference,
                                                double relative_speed) {
   if (!(relative_speed > 0)) throw std::invalid_argument("calibration: relative speed must be > 0");
+  const std::vector<JobSample> samples = PricedSamples(all, reference);
   const std::vector<double> modelled = ReferenceSeconds(samples, reference);
   const Eigen::Index n = static_cast<Eigen::Index>(samples.size());
   Eigen::VectorXd b(n), predicted(n);

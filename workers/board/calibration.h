@@ -68,14 +68,22 @@ struct FamilyFits {
 };
 FamilyFits FitCostFamilies(const std::vector<JobSample>& samples);
 
+/// Cost families of the samples that `reference` has no prices for (sorted): a code base
+/// calibrated for the first time.
+std::vector<std::string> UnpricedFamilies(const std::vector<JobSample>& samples, const ReferenceCosts& reference);
+
 /// This host's single-core speed relative to the reference core: the reference model's time for
 /// the samples' work (each priced by its family) divided by the time this host took (> 1: faster).
+/// Samples of unpriced families are left out, so a new family can be calibrated against a
+/// reference that does not know it yet; throws std::invalid_argument naming the families when the
+/// reference prices none of them.
 double RelativeSpeed(const std::vector<JobSample>& samples, const ReferenceCosts& reference);
 
 /// How the reference model prices the samples' jobs against what they took here, per method and
 /// task (predicted: the reference model's time over `relative_speed`): what the virtual clock
 /// charges a method for what the emulated clock would measure. A residual of +30 % on one method
-/// and 0 on the others means the reference over-prices that method's work by 30 %.
+/// and 0 on the others means the reference over-prices that method's work by 30 %. Methods of
+/// unpriced families are left out.
 std::vector<TaskFitQuality> ReferenceAgreement(const std::vector<JobSample>& samples, const ReferenceCosts& reference,
                                                double relative_speed);
 

@@ -216,6 +216,54 @@ TEST(CalibrationTest, EachCostFamilyGetsItsOwnPricesAndAOnePriceReferenceShowsIt
   EXPECT_THROW(ReferenceAgreement(samples, one, 0.0), std::invalid_argument);
 }
 
+TEST(CalibrationTest, ANewCostFamilyIsCalibratedAgainstAReferenceThatDoesNotPriceItYet) {
+  // The reference prices `navstack` only; this host runs its work at half the reference core's
+  // speed. A code base flown here for the first time (`newstack`) must not stop the speed from
+  // being measured on the work the reference knows, nor enter the reference's agreement table.
+  ReferenceCosts reference;
+  reference.calibration_id = "ref-1";
+  ReferenceCosts::Coefficients known;
+  known.ns_per_job[static_cast<int>(TaskId::kPerception)] = 20e3;
+  known.ns_per_unit[static_cast<int>(WorkUnit::kRayStep)] = 15.0;
+  reference.families["navstack"] = known;
+
+  Uniform uniform(7);
+  std::vector<JobSample> samples;
+  for (int i = 0; i < 200; ++i) {
+    JobSample s;
+    s.task = TaskId::kPerception;
+    const bool fresh = i % 2 == 0;
+    s.method = fresh ? "newmethod" : "fixed";
+    s.family = fresh ? "newstack" : "navstack";
+    s.work.Add(WorkUnit::kRayStep, static_cast<std::int64_t>(uniform(1e4, 1e5)));
+    const double ray_ns = fresh ? 90.0 : 15.0;
+    s.host_cpu_s = 2.0 * (20e3 + ray_ns * s.work.Get(WorkUnit::kRayStep)) * 1e-9 * uniform(0.99, 1.01);
+    samples.push_back(s);
+  }
+  EXPECT_EQ(UnpricedFamilies(samples, reference), std::vector<std::string>{"newstack"});
+  const double speed = RelativeSpeed(samples, reference);
+  EXPECT_NEAR(speed, 0.5, 0.01);
+  const std::vector<TaskFitQuality> agreement = ReferenceAgreement(samples, reference, speed);
+  ASSERT_EQ(agreement.size(), 1u);
+  EXPECT_EQ(agreement[0].method, "fixed");
+  EXPECT_NEAR(agreement[0].relative_residual(), 0.0, 0.02);
+  // The fit prices both families; the new one at its own cost.
+  const FamilyFits fits = FitCostFamilies(samples);
+  EXPECT_NEAR(fits.costs.For("newstack").ns_per_unit[static_cast<int>(WorkUnit::kRayStep)], 180.0, 5.0);
+
+  // A reference that prices none of the flown families cannot give a speed, and says why.
+  std::vector<JobSample> only_new;
+  for (const JobSample& s : samples)
+    if (s.family == "newstack") only_new.push_back(s);
+  try {
+    RelativeSpeed(only_new, reference);
+    FAIL() << "no priced work, yet a speed";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("newstack"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("known: navstack"), std::string::npos) << e.what();
+  }
+}
+
 TEST(CalibrationTest, TooFewSamplesIsAnError) {
   EXPECT_THROW(FitCosts({JobSample{}}), std::invalid_argument);
 }
