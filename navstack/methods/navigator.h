@@ -55,6 +55,13 @@ struct NavStackOptions {
   /// lands: what boxes it in is often what it cannot see from where it looks (NavStack::Scan).
   int scan_after_failures = 3;
   double scan_yaw_rate = 1.0;  ///< rad/s: a full turn in 6.3 s, 200 frames at 30 Hz
+  /// A scan that has turned a full circle without a plan forgets the occupied cells farther than
+  /// this from the vehicle (the next map rebuild carries only nearer ones), m; 0: never. ROS
+  /// move_base's recovery does the same after its rotation fails (clear_costmap_recovery,
+  /// conservative_reset_dist 3 m). What it clears here is what the vehicle cannot see again from
+  /// where it hovers: cells a coarser map left behind when the map was refined (a 0.5 m leaf
+  /// carried as 125 occupied 0.1 m cells) that close a doorway beyond the mapping range.
+  double scan_reset_distance = 3.0;
   /// A predicted collision sooner than this is the vehicle already inside inflated space, s.
   double escape_window_s = 0.15;
   /// A collision predicted sooner than this triggers an emergency stop, not only a replan.

@@ -449,7 +449,7 @@ void OccupancyMap::SetResolution(double resolution, WorkCounts* work) {
   *this = std::move(*Rebuilt(resolution, work));
 }
 
-std::shared_ptr<OccupancyMap> OccupancyMap::Rebuilt(double resolution, WorkCounts* work) const {
+std::shared_ptr<OccupancyMap> OccupancyMap::Rebuilt(double resolution, WorkCounts* work, double carry_radius) const {
   RequireResolution(resolution, "OccupancyMap::Rebuilt resolution");
   MapOptions options = options_;
   options.resolution = resolution;
@@ -466,6 +466,7 @@ std::shared_ptr<OccupancyMap> OccupancyMap::Rebuilt(double resolution, WorkCount
     const float hit_log_odds = map->store_->HitLogOdds();
     std::int64_t carried = 0;
     store_->ForEachOccupiedLeaf(centre - half, centre + half, [&](const Eigen::Vector3d& c, double edge) {
+      if ((c - centre).norm() > carry_radius) return;
       const double h = 0.5 * edge - 1e-6;
       // int counters: a key of 65535 must not wrap the loop.
       for (int x = key(c.x() - h); x <= key(c.x() + h); ++x) {

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -126,8 +127,12 @@ class OccupancyMap {
   /// unchanged. Counts the replay's kRay and kRayStep, and every cell written as kRebuildVoxel. Throws std::invalid_argument if out of range.
   void SetResolution(double resolution, WorkCounts* work = nullptr);
   /// The same rebuild into a new map, leaving this one untouched: the perception job builds it
-  /// when it starts and swaps it in when it finishes.
-  std::shared_ptr<OccupancyMap> Rebuilt(double resolution, WorkCounts* work = nullptr) const;
+  /// when it starts and swaps it in when it finishes. Only occupied leaves whose centre is within
+  /// `carry_radius` of the newest frame's origin carry over; the rest of the map is forgotten
+  /// (unknown) unless a kept frame sees it again: the stack's recovery from obstacles it cannot
+  /// re-observe (NavStackOptions::scan_reset_distance).
+  std::shared_ptr<OccupancyMap> Rebuilt(double resolution, WorkCounts* work = nullptr,
+                                        double carry_radius = std::numeric_limits<double>::infinity()) const;
 
   /// Dense snapshot of the cells overlapping `box`, aligned to the octree keys (the grid origin is
   /// a cell corner of the map). Filled from the octree leaves in the box (pruned leaves fill

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <utility>
 
 #include "navstack/methods/method_util.h"
@@ -58,6 +59,7 @@ void NavStack::Stop(const char* why) {
 void NavStack::Scan() {
   scanning_ = true;
   scan_t0_ = executor_->now();
+  scan_reset_done_ = false;
   ++stops_;
   hold_ = HoldAt(state_.p_WB, YawOf(state_.q_WB));
   AddEvent("scan");
@@ -126,12 +128,17 @@ void NavStack::RequestReplan(const char* why) {
 JobOutput NavStack::PerceptionJob() {
   JobOutput out;
   const DepthFramePtr frame = latest_frame_;
-  const bool rebuild = pending_resolution_ != map_->resolution();
+  const bool reset = map_reset_pending_;
+  const bool rebuild = reset || pending_resolution_ != map_->resolution();
   if (!rebuild && (!frame || frame == last_mapped_frame_)) return out;
+  map_reset_pending_ = false;
   // A resolution change rebuilds the map from recent frames (paper Sec. V.A); the rebuilt map
-  // replaces the current one when this job finishes.
+  // replaces the current one when this job finishes. A map reset is the same rebuild, carrying
+  // only the near cells.
   std::shared_ptr<OccupancyMap> next;
-  if (rebuild) next = map_->Rebuilt(pending_resolution_, &out.work);
+  if (rebuild)
+    next = map_->Rebuilt(pending_resolution_, &out.work,
+                         reset ? options_.scan_reset_distance : std::numeric_limits<double>::infinity());
   const OccupancyMap& target = next ? *next : *map_;
   std::shared_ptr<const MapUpdate> update;
   if (frame && frame != last_mapped_frame_) {
@@ -142,11 +149,12 @@ JobOutput NavStack::PerceptionJob() {
                  static_cast<std::int64_t>(update->free_keys.size() + update->occupied_keys.size()));
     last_mapped_frame_ = frame;
   }
-  out.commit = [this, next, update] {
+  out.commit = [this, next, update, reset] {
     if (next) map_ = next;
     if (update) map_->Apply(*update);
-    // A refined (or coarsened) map is what the Resolution Adapter asked for: plan on it now.
-    if (next && strategy_) RequestReplan("resolution");
+    // A refined (or coarsened) map is what the Resolution Adapter asked for, a reset map what
+    // the scan asked for: plan on it now.
+    if (next && (strategy_ || reset)) RequestReplan(reset ? "map_reset" : "resolution");
     if (rates_.collision_on_map_update && trajectory_) executor_->Trigger(TaskId::kCollision, 1.0 / rates_.f_per);
   };
   return out;
@@ -252,6 +260,15 @@ JobOutput NavStack::PlanningJob() {
       if (++failed_plans_in_row_ >= options_.scan_after_failures && !scanning_ && !failsafe_ &&
           Hovering(executor_->now()))
         Scan();
+      // A full turn has shown everything within the mapping range and no plan was found: what
+      // blocks the way is beyond it, where the vehicle cannot look again from here.
+      const double full_turn_s = 2.0 * std::numbers::pi / options_.scan_yaw_rate;
+      if (scanning_ && !scan_reset_done_ && options_.scan_reset_distance > 0 &&
+          executor_->now() - scan_t0_ >= full_turn_s) {
+        scan_reset_done_ = true;
+        map_reset_pending_ = true;
+        AddEvent("map_reset", std::to_string(options_.scan_reset_distance));
+      }
       return;
     }
     failed_plans_in_row_ = 0;

@@ -89,6 +89,8 @@ class NavStack final : public Navigator {
   bool stopped_ = false;               ///< emergency stop active until the next plan lands
   bool scanning_ = false;              ///< turning on the spot at hold_ until the next plan lands
   double scan_t0_ = 0;                 ///< when the scan began (hold_.yaw is the yaw then)
+  bool scan_reset_done_ = false;       ///< this scan has asked for the map reset
+  bool map_reset_pending_ = false;     ///< the next perception job rebuilds the map without far cells
   int stops_ = 0;                      ///< emergency stops, fail-safe hovers and scans so far
   std::vector<Eigen::Vector3d> last_search_path_;
   std::int64_t replans_ = 0;

@@ -28,6 +28,13 @@ TaskRates EnaviInitialRates() {
   return r;
 }
 
+// Both methods of our stack turn on the spot when boxed in (NavStack::Scan) and reset the far map
+// after a fruitless full turn.
+MethodTunable ScanResetTunable() {
+  return {"scan.reset_distance", 0.0, 50.0, NavStackOptions{}.scan_reset_distance, false,
+          "after a full scan turn without a plan, forget occupied cells farther than this, m (0: never)"};
+}
+
 MethodInfo FixedMethod() {
   MethodInfo m;
   m.name = "fixed";
@@ -38,6 +45,7 @@ MethodInfo FixedMethod() {
       {"rates.f_plan", 0.0, 50.0, 20.0, false, "planning timer, Hz (0: triggered)"},
       {"rates.f_dif", 0.0, 30.0, 0.0, false, "difference detection rate, Hz"},
       {"map.resolution", 0.05, 1.0, 0.1, false, "map resolution, m"},
+      ScanResetTunable(),
   };
   m.configure = [](const MethodSetup&, NavStackOptions* o) { o->rates = FixedRates(); };
   m.make = [](const NavStackOptions& options, TaskExecutor* executor, const VehicleState& initial) {
@@ -46,6 +54,7 @@ MethodInfo FixedMethod() {
     o.rates.f_plan = o.Param("rates.f_plan");
     o.rates.f_dif = o.Param("rates.f_dif");
     o.rates.resolution = o.map.resolution = o.Param("map.resolution");
+    o.scan_reset_distance = o.Param("scan.reset_distance");
     return std::unique_ptr<Navigator>(std::make_unique<NavStack>(o, executor, initial));
   };
   return m;
@@ -63,6 +72,7 @@ MethodInfo EnaviMethod() {
       {"strategy.f_adapt", 1.0, 30.0, 5.0, false, "strategy controller decisions per second, Hz"},
       {"resolution.quiet_period", 0.5, 60.0, ResolutionAdapterOptions{}.quiet_period, false,
        "go one map step coarser after this long without a refinement trigger, sim s"},
+      ScanResetTunable(),
   };
   m.configure = [](const MethodSetup& setup, NavStackOptions* o) {
     if (!setup.policy) throw std::invalid_argument("policy: method enavi needs a frequency-adapter policy");
@@ -77,6 +87,7 @@ MethodInfo EnaviMethod() {
     o.strategy->mode = o.Param("strategy.explore") > 0 ? rl::ActMode::kSample : rl::ActMode::kGreedy;
     o.strategy->f_adapt = o.Param("strategy.f_adapt");
     o.strategy->resolution.quiet_period = o.Param("resolution.quiet_period");
+    o.scan_reset_distance = o.Param("scan.reset_distance");
     return std::unique_ptr<Navigator>(std::make_unique<NavStack>(o, executor, initial));
   };
   return m;

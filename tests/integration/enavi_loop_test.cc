@@ -100,6 +100,31 @@ TEST(EnaviLoopTest, AVehicleWhosePlansKeepFailingTurnsOnTheSpot) {
   EXPECT_FALSE(r.success);
 }
 
+// The boxed-in flight of a deployed policy: E-Navi with the shipped policy on s3 seed 445, tx2.
+// After an emergency stop it hovers where its map, refined from 0.5 m, still holds the coarse
+// cells of a partition and two columns 7-9 m away, beyond the 5 m mapping range: they close the
+// only door, turning cannot show them again, and without the map reset it turns for the rest of
+// the flight (timed out at 71 s). With the reset it forgets them after one fruitless turn, flies
+// to the door and sees it open. (If a retrained policy no longer meets this, the second half
+// fails: find the case again with `enavi fly --set scan.reset_distance=0`.)
+TEST(EnaviLoopTest, AVehicleBoxedInByCellsItCannotSeeAgainForgetsThemAfterAFullTurn) {
+  api::EpisodeSpec spec = Spec("s3", 445);
+  spec.board = "tx2";
+  spec.method = "enavi";  // the shipped policy
+  const api::EpisodeResult r = sim::RunEpisode(spec);
+  int resets = 0;
+  for (const api::EpisodeEvent& e : r.events) resets += e.kind == "map_reset";
+  EXPECT_GE(resets, 1) << Describe(r);
+  EXPECT_TRUE(r.success) << Describe(r);
+  EXPECT_FALSE(r.collided) << Describe(r);
+
+  spec.overrides["scan.reset_distance"] = 0;
+  spec.timeout_s = 45;
+  const api::EpisodeResult kept = sim::RunEpisode(spec);
+  EXPECT_FALSE(kept.success) << "without the reset it stays boxed in: " << Describe(kept);
+  EXPECT_FALSE(kept.collided) << Describe(kept);
+}
+
 TEST(EnaviLoopTest, ExploringEpisodeRecordsARolloutWithRewards) {
   const TempDir dir;
   api::EpisodeSpec spec = EnaviSpec(WritePolicy(dir));

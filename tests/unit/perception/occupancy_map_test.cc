@@ -205,6 +205,27 @@ TEST(OccupancyMapTest, RebuildDropsObstaclesOutsideTheLocalBox) {
   EXPECT_EQ(Name(map.Query({3.05, 0, 0})), "unknown");
 }
 
+TEST(OccupancyMapTest, ARebuildWithACarryRadiusForgetsWhatItCannotSeeAgain) {
+  // The wall (3.05-3.45 m ahead) was seen, then the camera turned away: no kept frame shows it.
+  // A rebuild carrying only cells within 2 m of the camera forgets it (unknown); one within 4 m
+  // keeps it. The resolution may stay the same: this is the stack's map reset, not a switch.
+  MapOptions o;
+  o.rebuild_frames = 1;
+  OccupancyMap map(o);
+  map.Insert(WallFrame(), kCam, {});
+  map.Insert(RenderFrame(Wall(), kCam, CameraPose({0, 0, 0}, M_PI)), kCam, {});
+  ASSERT_EQ(Name(map.Query({3.05, 0, 0})), "occupied");
+  WorkCounts near_work, far_work;
+  const std::shared_ptr<OccupancyMap> near = map.Rebuilt(0.1, &near_work, 2.0);
+  const std::shared_ptr<OccupancyMap> far = map.Rebuilt(0.1, &far_work, 4.0);
+  EXPECT_EQ(Name(near->Query({3.05, 0, 0})), "unknown");
+  EXPECT_EQ(Name(far->Query({3.05, 0, 0})), "occupied");
+  EXPECT_EQ(Name(near->Query({-3.1, 0, 0})), "free") << "what the kept frame sees stays";
+  EXPECT_LT(near_work.Get(WorkUnit::kRebuildVoxel), far_work.Get(WorkUnit::kRebuildVoxel)) << "fewer cells carried";
+  EXPECT_DOUBLE_EQ(near->resolution(), 0.1);
+  EXPECT_EQ(Name(map.Query({3.05, 0, 0})), "occupied") << "the original is untouched";
+}
+
 TEST(OccupancyMapTest, ExtractGridMatchesQueryCellByCell) {
   OccupancyMap map;
   // Repeated frames drive free cells to the clamp, so OctoMap prunes them into big leaves that

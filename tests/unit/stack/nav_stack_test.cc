@@ -3,7 +3,9 @@
 // the stack decides is checked without a simulator or a clock.
 #include "navstack/stack/nav_stack.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <optional>
 #include <utility>
@@ -66,20 +68,26 @@ VehicleState Hovering() {
   return s;
 }
 
-// A frame with nothing in view, from a camera at the hovering vehicle looking along +x (camera
-// z forward, x right, y down): the stack maps the view cone free up to its mapping range.
-DepthFramePtr OpenViewAhead(const NavStackOptions& o, double t) {
+// A frame from a level camera at p_W looking along yaw (camera z forward, x right, y down), every
+// pixel at `depth` m (0: nothing in view, so the stack maps the view cone free up to its mapping
+// range).
+DepthFramePtr ViewFrom(const NavStackOptions& o, double t, const Eigen::Vector3d& p_W, double yaw = 0.0,
+                       float depth = 0.0f) {
   auto frame = std::make_shared<DepthFrame>();
   frame->t = t;
   frame->image = DepthImage(o.camera.width, o.camera.height);
+  std::fill(frame->image.data.begin(), frame->image.data.end(), depth);
+  const Eigen::Vector3d forward(std::cos(yaw), std::sin(yaw), 0.0);
   Eigen::Matrix3d R_WC;
-  R_WC.col(0) = -Eigen::Vector3d::UnitY();
+  R_WC.col(2) = forward;
   R_WC.col(1) = -Eigen::Vector3d::UnitZ();
-  R_WC.col(2) = Eigen::Vector3d::UnitX();
+  R_WC.col(0) = R_WC.col(1).cross(R_WC.col(2));
   frame->X_WC.linear() = R_WC;
-  frame->X_WC.translation() = Hovering().p_WB;
+  frame->X_WC.translation() = p_W;
   return frame;
 }
+
+DepthFramePtr OpenViewAhead(const NavStackOptions& o, double t) { return ViewFrom(o, t, Hovering().p_WB); }
 
 // The stack plans only into space it has seen near the vehicle (observed_space.h): show it the
 // way ahead first.
@@ -185,6 +193,66 @@ TEST(NavStackTest, AHoveringStackWhosePlansKeepFailingTurnsOnTheSpotUntilOneLand
   ex.Run(TaskId::kPlanning);
   ASSERT_NE(stack.trajectory(), nullptr);
   EXPECT_EQ(stack.Reference(1.5).yaw_rate, stack.trajectory()->Sample(1.5).yaw_rate) << "the plan ends the turn";
+}
+
+TEST(NavStackTest, AScanThatTurnsAFullCircleWithoutAPlanForgetsTheFarMap) {
+  // A wall 4.5 m ahead is mapped from a camera 1.5 m ahead of the vehicle, so the vehicle's own
+  // surroundings stay unobserved and every plan fails (as above).
+  // The vehicle scans; once it has turned a full circle without a plan, the next perception job
+  // rebuilds the map keeping only cells within scan_reset_distance (3 m): the wall, which the
+  // vehicle can no longer see from where it hovers, is forgotten, and a plan is asked for on the
+  // new map. One reset per scan.
+  ScriptedExecutor ex;
+  NavStackOptions o = OpenVolume();
+  o.rates.f_plan = 0;
+  o.map.rebuild_frames = 1;
+  NavStack stack(o, &ex, Hovering());
+  const Eigen::Vector3d wall(4.55, 0, 1.5);
+  stack.OnFrame(ViewFrom(o, 0.0, Hovering().p_WB + Eigen::Vector3d(1.5, 0, 0), 0.0, 3.0f));
+  ex.Run(TaskId::kPerception);
+  ASSERT_EQ(stack.map().Query(wall), CellState::kOccupied);
+  for (int i = 0; i < o.scan_after_failures; ++i) ex.Run(TaskId::kPlanning);
+  ASSERT_TRUE(HasEvent(stack.TakeEvents(), "scan"));
+
+  // Looking the other way now, at a wall 1.05 m behind; just short of a full turn: no reset.
+  const double full_turn = 2.0 * 3.14159265358979323846 / o.scan_yaw_rate;
+  ex.AdvanceTo(full_turn - 0.1);
+  stack.OnFrame(ViewFrom(o, ex.now(), Hovering().p_WB, 3.14159265358979323846, 1.05f));
+  ex.Run(TaskId::kPlanning);
+  EXPECT_FALSE(HasEvent(stack.TakeEvents(), "map_reset"));
+  ex.Run(TaskId::kPerception);
+  EXPECT_EQ(stack.map().Query(wall), CellState::kOccupied) << "an ordinary map update keeps it";
+
+  ex.AdvanceTo(full_turn + 0.1);
+  ex.Run(TaskId::kPlanning);
+  EXPECT_TRUE(HasEvent(stack.TakeEvents(), "map_reset"));
+  EXPECT_EQ(stack.map().Query(wall), CellState::kOccupied) << "the reset is the next perception job's";
+  ex.triggers.clear();
+  ex.Run(TaskId::kPerception);
+  EXPECT_EQ(stack.map().Query(wall), CellState::kUnknown);
+  EXPECT_EQ(stack.map().Query(Eigen::Vector3d(-1.05, 0, 1.5)), CellState::kOccupied) << "near cells stay";
+  EXPECT_EQ(stack.map().Query(Eigen::Vector3d(-0.5, 0, 1.5)), CellState::kFree) << "the newest frame's view stays";
+  EXPECT_EQ(ex.Triggered(TaskId::kPlanning), 1) << "plans on the reset map at once";
+
+  ex.AdvanceTo(2 * full_turn + 0.2);
+  ex.Run(TaskId::kPlanning);
+  EXPECT_FALSE(HasEvent(stack.TakeEvents(), "map_reset")) << "once per scan";
+}
+
+TEST(NavStackTest, AScanResetDistanceOfZeroKeepsTheMap) {
+  ScriptedExecutor ex;
+  NavStackOptions o = OpenVolume();
+  o.rates.f_plan = 0;
+  o.scan_reset_distance = 0;
+  NavStack stack(o, &ex, Hovering());
+  stack.OnFrame(ViewFrom(o, 0.0, Hovering().p_WB + Eigen::Vector3d(1.5, 0, 0), 0.0, 3.0f));
+  ex.Run(TaskId::kPerception);
+  for (int i = 0; i < o.scan_after_failures; ++i) ex.Run(TaskId::kPlanning);
+  ex.AdvanceTo(20.0);
+  ex.Run(TaskId::kPlanning);
+  const std::vector<NavEvent> events = stack.TakeEvents();
+  EXPECT_TRUE(HasEvent(events, "scan"));
+  EXPECT_FALSE(HasEvent(events, "map_reset"));
 }
 
 TEST(NavStackTest, AMapUpdateChecksTheTrajectoryAgainstTheNewMap) {
