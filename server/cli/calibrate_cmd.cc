@@ -171,6 +171,7 @@ void Run(const CalibrateArgs& args) {
   j["r2"] = fit.r2;
   j["load_average"] = {{"before", run.load_before}, {"after", run.load_after}};
   j["relative_speed_vs_reference"] = run.relative_speed;
+  j["probe_speed_vs_reference"] = run.host.probe_speed;
   j["reference_calibration_id"] = run.reference.calibration_id;
   const std::vector<std::string> unpriced = board::UnpricedFamilies(run.samples, run.reference);
   j["unpriced_families"] = unpriced;
@@ -206,6 +207,9 @@ void Run(const CalibrateArgs& args) {
   std::printf("calibration of %s: %d jobs, R^2 %.3f, speed %.3f x the reference core (load %.2f -> %.2f)\n",
               fit.costs.reference_cpu.c_str(), fit.samples, fit.r2, run.relative_speed, run.load_before,
               run.load_after);
+  std::printf("speed probe (%zu flights of %.0f s on each CPU, before the plan; what an emulated episode "
+              "compares its own with): %.3f x the reference core\n",
+              board::SpeedProbePlan().size(), board::kSpeedProbeSeconds, run.host.probe_speed);
   auto print_coefficient = [](const std::string& label, const board::CoefficientFit& c) {
     std::printf("  %-22s %12.4f %7d %7.1f%s%s\n", label.c_str(), c.ns, c.jobs, 100 * c.share,
                 c.zero_reason.empty() ? "" : "  0: ", c.zero_reason.c_str());

@@ -8,6 +8,10 @@
 
 #include <CLI/CLI.hpp>
 
+namespace enavi::emulation {
+struct EmulationOptions;
+}
+
 namespace enavi::cli {
 
 /// Exit codes shared by every subcommand (README.md, "What it does").
@@ -26,6 +30,11 @@ struct ExitStatus {
 /// `enavi fly` and `enavi world` (server/cli/world_cmd.cc).
 void AddPlacementOptions(CLI::App* app, std::string* units, double* scale, std::string* up, bool* recenter,
                          std::vector<std::string>* model_path);
+
+/// --speed-probe use|check|off of the commands that run an emulated episode (`enavi fly`,
+/// `enavi episode`), and what it makes of their emulation options (server/cli/episode_cmd.cc).
+void AddSpeedProbeOption(CLI::App* app, std::string* mode);
+void ApplySpeedProbe(const std::string& mode, emulation::EmulationOptions* emulation);
 
 /// `enavi world gen|check|show|convert` (server/cli/world_cmd.cc).
 void RegisterWorldCommands(CLI::App& app);

@@ -32,6 +32,7 @@ struct FlyArgs {
   bool json = false;
   double dilation = 0.0;  // emulated clock; 0 (absent): the smallest that fits the host
   std::string calibration;
+  std::string speed_probe = "check";
   emulation::EmulationOptions emulation;  // experiments: hidden flags
 };
 
@@ -45,6 +46,7 @@ void Run(FlyArgs args) {
   sim::EpisodeOptions options;
   options.emulation = args.emulation;
   options.emulation.calibration_file = args.calibration;
+  ApplySpeedProbe(args.speed_probe, &options.emulation);
   // An absent --dilation means "the smallest that fits" (spec.dilation 0; the value used is in
   // the result's notes).
   if (spec.clock == "emulated" || args.dilation > 0) spec.dilation = args.dilation;
@@ -117,6 +119,7 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--calibration", args->calibration,
                   "emulated clock: host calibration file (default: $ENAVI_CALIBRATION, else "
                   "$XDG_STATE_HOME/enavi/calibration.json or ~/.local/state/enavi/calibration.json)");
+  AddSpeedProbeOption(fly, &args->speed_probe);
   // Experiments with the emulation itself (defaults documented in workers/emulation/emulation_options.h).
   fly->add_option("--emulation-server-period-us", args->emulation.server_period_us)->group("")->check(CLI::Range(100, 1000000));
   fly->add_option("--emulation-lead-us", args->emulation.lead_us)->group("")->check(CLI::Range(0, 1000000));

@@ -10,10 +10,12 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdlib>
 #include <cstdio>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -110,6 +112,64 @@ TEST_F(EmulatedClockTest, ShortEpisodeReachesTheGoalOnDeadlineServersAndLeavesNo
       << "as root with the episode cpuset spanning the host, the kernel grants DL: " << sched;
   EXPECT_NE(r.notes.at("emulation.cgroup").find("board quota"), std::string::npos);
   EXPECT_NE(r.notes.at("emulation.dilation").find("auto"), std::string::npos);
+  EXPECT_NE(r.notes.at("emulation.speed_probe").find("none"), std::string::npos)
+      << "no probe was supplied: " << r.notes.at("emulation.speed_probe");
+}
+
+// Leading number of a note ("0.3200 of a host core per board core (...)").
+double LeadingNumber(const std::string& note) { return std::stod(note.substr(0, note.find(' '))); }
+
+TEST_F(EmulatedClockTest, AProbeFindingTheHostTwiceAsFastHalvesTheBoardsShareOfAHostCoreOnlyWhenUsed) {
+  // The test calibration says this host is the reference core (1.0) and has no probe of its own,
+  // so the probe is compared with that: 2.0 now means the host doubled its speed since.
+  options_.emulation.probe_host_speed = [] {
+    board::SpeedProbe p;
+    p.per_cpu = {{0, 1.6}, {1, 2.4}};  // one vCPU 50 % faster than the other
+    p.speed = 2.0;
+    return p;
+  };
+  options_.emulation.use_probed_speed = true;
+  api::EpisodeSpec spec = ShortFlight("tx2");
+  spec.timeout_s = 1.0;
+  ::testing::internal::CaptureStderr();
+  const api::EpisodeResult used = RunEpisode(spec, options_);
+  const std::string warning = ::testing::internal::GetCapturedStderr();
+  const std::string& probe = used.notes.at("emulation.speed_probe");
+  EXPECT_NE(probe.find("moved +100.0 %"), std::string::npos) << probe;
+  EXPECT_NE(probe.find("host speed 2.000 used"), std::string::npos) << probe;
+  EXPECT_NE(warning.find("moved +100.0 %"), std::string::npos) << "a drift beyond 10 % warns: '" << warning << "'";
+  EXPECT_NE(warning.find("enavi calibrate"), std::string::npos) << warning;
+  EXPECT_NE(probe.find("its CPUs differ by 50.0 % (CPU 0 1.600, CPU 1 2.400)"), std::string::npos) << probe;
+  EXPECT_NE(warning.find("CPUs differ by 50.0 %"), std::string::npos) << "so does a spread beyond 10 %: " << warning;
+  const double tx2 = board::LoadBoard("tx2").per_core_speed;
+  EXPECT_NEAR(LeadingNumber(used.notes.at("emulation.speed")), tx2 / 2.0, 1e-4) << used.notes.at("emulation.speed");
+
+  options_.emulation.use_probed_speed = false;
+  const api::EpisodeResult kept = RunEpisode(spec, options_);
+  EXPECT_NE(kept.notes.at("emulation.speed_probe").find("not used"), std::string::npos)
+      << kept.notes.at("emulation.speed_probe");
+  EXPECT_NEAR(LeadingNumber(kept.notes.at("emulation.speed")), tx2, 1e-4) << kept.notes.at("emulation.speed");
+}
+
+TEST_F(EmulatedClockTest, FlyProbesTheHostsSpeedBeforeAnEmulatedEpisode) {
+  // The real probe (three flights in process) through the command a user runs; its speed is
+  // whatever this host has, so only its presence and sense are checked.
+  const std::string enavi = std::string(ENAVI_BINARY_DIR) + "/bin/enavi";
+  const std::string out = (dir_ / "fly.json").string();
+  const std::string command = enavi + " fly --world empty --param length=10 --board tx2 --clock emulated --timeout 1" +
+                              " --calibration " + options_.emulation.calibration_file + " --json > " + out + " 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  std::ifstream in(out);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t at = text.find("\"emulation.speed_probe\":\"this host's speed moved ");
+  ASSERT_NE(at, std::string::npos) << text;
+  EXPECT_NE(text.find("not used (the calibration's 1.000 is)", at), std::string::npos)
+      << "--speed-probe check is the default: " << text.substr(at, 300);
+
+  const std::string bad = enavi + " fly --world empty --clock emulated --speed-probe sometimes > /dev/null 2>&1";
+  const int status = std::system(bad.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2) << "an unknown --speed-probe mode is bad input";
 }
 
 TEST_F(EmulatedClockTest, NarrowCpusetRefusesDeadlineAndTheFallbackIsRecorded) {
@@ -187,7 +247,7 @@ TEST_F(EmulatedClockTest, AdmissionRefusalAndSigintOfFlyAreCleanExits) {
 
   // SIGINT mid-flight: child and groups removed, then fly dies of the signal.
   pid = spawn({"fly", "--world", "empty", "--param", "length=30", "--board", "tx2", "--clock", "emulated",
-               "--calibration", cal, "--json"});
+               "--calibration", cal, "--speed-probe", "off", "--json"});  // in its cgroup at once
   std::this_thread::sleep_for(2500ms);
   EXPECT_FALSE(EnaviCgroups().empty()) << "the episode should be running in its cgroup by now";
   kill(pid, SIGINT);

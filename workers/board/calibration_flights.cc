@@ -1,10 +1,14 @@
 #include "workers/board/calibration_flights.h"
 
+#include <sched.h>
 #include <sys/utsname.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -93,22 +97,25 @@ std::vector<CalibrationFlight> CalibrationPlan() {
   return plan;
 }
 
-CalibrationRun RunCalibration(const CalibrationOptions& options) {
-  CalibrationRun run;
+namespace {
+
+// Flies `flights` in this process, each `seconds` long, with every job's host CPU time measured.
+std::vector<JobSample> FlyMeasured(const std::vector<CalibrationFlight>& flights, double seconds,
+                                   const std::function<void(const CalibrationFlight&)>& on_flight) {
+  std::vector<JobSample> samples;
   sim::EpisodeOptions episode;
   std::string method, family;  // of the flight in progress
   episode.job_observer = [&](navstack::TaskId task, const navstack::WorkCounts& work, double cpu) {
-    run.samples.push_back({task, method, family, work, cpu});
+    samples.push_back({task, method, family, work, cpu});
   };
   const ScratchPolicy policy;
-  run.load_before = LoadAverage();
-  for (const CalibrationFlight& flight : CalibrationPlan()) {
+  for (const CalibrationFlight& flight : flights) {
     api::EpisodeSpec spec;
     spec.world = flight.world;
     spec.seed = 1;
     spec.board = "host";
     spec.cost = "measured";
-    spec.timeout_s = options.episode_seconds;
+    spec.timeout_s = seconds;
     spec.method = method = flight.method;
     const navstack::MethodInfo* info = navstack::FindMethod(flight.method);
     if (info == nullptr) throw std::logic_error("calibration plan names an unknown method " + flight.method);
@@ -119,9 +126,62 @@ CalibrationRun RunCalibration(const CalibrationOptions& options) {
     }
     if (flight.resolution > 0) spec.overrides["map.resolution"] = flight.resolution;
     if (flight.method == "fixed") spec.overrides["rates.f_dif"] = flight.f_dif;
-    if (options.on_flight) options.on_flight(flight);
+    if (on_flight) on_flight(flight);
     sim::RunEpisode(spec, episode);
   }
+  return samples;
+}
+
+}  // namespace
+
+std::vector<CalibrationFlight> SpeedProbePlan() {
+  // Each method at its own resolution and rates, on a world of its own: the work an emulated
+  // episode does, both cost families.
+  return {{"baseline", "s1", 0, 0}, {"fixed", "s2", 0, 0}, {"enavi", "s3", 0, 0}};
+}
+
+SpeedProbe ProbeHostSpeed() {
+  const auto start = std::chrono::steady_clock::now();
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  if (sched_getaffinity(0, sizeof allowed, &allowed) != 0)
+    throw std::runtime_error(std::string("host speed probe: sched_getaffinity: ") + std::strerror(errno));
+  SpeedProbe probe;
+  double sum = 0;
+  for (int cpu = 0; cpu < CPU_SETSIZE && static_cast<int>(probe.per_cpu.size()) < kMaxProbedCpus; ++cpu) {
+    if (!CPU_ISSET(cpu, &allowed)) continue;
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(cpu, &one);
+    if (sched_setaffinity(0, sizeof one, &one) != 0) continue;  // offline since: not a CPU to run on
+    std::vector<JobSample> samples;
+    try {
+      samples = FlyMeasured(SpeedProbePlan(), kSpeedProbeSeconds, {});
+    } catch (...) {
+      sched_setaffinity(0, sizeof allowed, &allowed);
+      throw;
+    }
+    const double speed = RelativeSpeed(samples, LoadReferenceCosts());
+    probe.per_cpu.emplace_back(cpu, speed);
+    probe.jobs += static_cast<int>(samples.size());
+    sum += speed;
+  }
+  if (sched_setaffinity(0, sizeof allowed, &allowed) != 0)
+    throw std::runtime_error(std::string("host speed probe: restoring the CPU affinity: ") + std::strerror(errno));
+  if (probe.per_cpu.empty())
+    throw std::runtime_error("host speed probe: no CPU of this thread's affinity set could be used");
+  probe.speed = sum / static_cast<double>(probe.per_cpu.size());
+  probe.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return probe;
+}
+
+CalibrationRun RunCalibration(const CalibrationOptions& options) {
+  CalibrationRun run;
+  run.load_before = LoadAverage();
+  // First, in a process that has flown nothing yet, as an emulated episode probes: the drift is
+  // one probe against another in the same conditions.
+  const double probe_speed = ProbeHostSpeed().speed;
+  run.samples = FlyMeasured(CalibrationPlan(), options.episode_seconds, options.on_flight);
   run.load_after = LoadAverage();
   run.fit = FitCostFamilies(run.samples);
   run.reference = LoadReferenceCosts();
@@ -132,6 +192,7 @@ CalibrationRun RunCalibration(const CalibrationOptions& options) {
   std::snprintf(id, sizeof id, "%ld-%d", static_cast<long>(std::time(nullptr)), run.fit.samples);
   run.fit.costs.calibration_id = id;
   run.host = MakeHostCalibration(run.fit, run.relative_speed, run.reference, run.samples);
+  run.host.probe_speed = probe_speed;
   return run;
 }
 

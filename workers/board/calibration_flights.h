@@ -44,8 +44,24 @@ struct CalibrationRun {
   double load_before = 0, load_after = 0;
 };
 
-/// Flies the plan and fits. Throws if the fit cannot be made (too few samples).
+/// Runs the speed probe (stored as the calibration's probe_speed), then flies the plan and fits.
+/// Throws if the fit cannot be made (too few samples).
 CalibrationRun RunCalibration(const CalibrationOptions& options);
+
+/// The speed probe's flights: each method once, at its own resolution and rates (both cost
+/// families), kSpeedProbeSeconds each.
+std::vector<CalibrationFlight> SpeedProbePlan();
+inline constexpr double kSpeedProbeSeconds = 2.0;
+
+/// CPUs a probe measures at most (the first of the calling thread's affinity set): each costs
+/// one run of the probe plan, ~1.8 s here.
+inline constexpr int kMaxProbedCpus = 4;
+
+/// Flies the probe plan in this process on each CPU the calling thread may run on (pinned to one
+/// at a time, at most kMaxProbedCpus; the affinity is restored), every job's CPU time measured
+/// and priced by the embedded reference: the host's speed now, per CPU. An emulated episode
+/// compares the mean with the probe its calibration stored (DriftSinceCalibration).
+SpeedProbe ProbeHostSpeed();
 
 /// Writes the run's fit as a reference costs file (workers/board/profiles/reference_costs.yaml)
 /// with a header comment saying where, how and under what load it was fitted, and why any

@@ -65,6 +65,7 @@ void SaveHostCalibration(const HostCalibration& c, const std::string& path) {
   j["format"] = kFormat;
   j["version"] = HostCalibration::kFormatVersion;
   j["relative_speed"] = c.relative_speed;
+  if (c.probe_speed > 0) j["probe_speed"] = c.probe_speed;
   j["cpu_model"] = c.cpu_model;
   j["kernel"] = c.kernel;
   j["date"] = c.date;
@@ -108,6 +109,11 @@ HostCalibration LoadHostCalibration(const std::string& path) {
   c.relative_speed = r.Number(r.Field(j, "", "relative_speed"), "relative_speed");
   if (!(c.relative_speed > 0.01 && c.relative_speed < 100))
     r.Fail("relative_speed", "is " + std::to_string(c.relative_speed) + ", outside (0.01, 100)");
+  if (const nlohmann::json* probe = r.Optional(j, "", "probe_speed")) {
+    c.probe_speed = r.Number(*probe, "probe_speed");
+    if (!(c.probe_speed > 0.01 && c.probe_speed < 100))
+      r.Fail("probe_speed", "is " + std::to_string(c.probe_speed) + ", outside (0.01, 100)");
+  }
   c.cpu_model = r.String(r.Field(j, "", "cpu_model"), "cpu_model");
   c.kernel = r.String(r.Field(j, "", "kernel"), "kernel");
   c.date = r.String(r.Field(j, "", "date"), "date");
@@ -189,9 +195,27 @@ CalibrationCheck CheckHostCalibration(const std::string& path) {
   return CheckHostCalibration(path, HostCpuModel(), LoadReferenceCosts().calibration_id);
 }
 
-double SpeedVsHost(const BoardProfile& board, const HostCalibration& host) {
+double SpeedVsHost(const BoardProfile& board, double host_speed) {
   if (board.is_host) return 1.0;
-  return board.per_core_speed / host.relative_speed;
+  return board.per_core_speed / host_speed;
+}
+
+double SpeedProbe::Spread() const {
+  if (per_cpu.size() < 2) return 0;
+  const auto [lo, hi] = std::minmax_element(per_cpu.begin(), per_cpu.end(),
+                                            [](const auto& a, const auto& b) { return a.second < b.second; });
+  return hi->second / lo->second - 1;
+}
+
+SpeedDrift DriftSinceCalibration(const HostCalibration& host, double probed) {
+  if (!(probed > 0 && std::isfinite(probed)))
+    throw std::invalid_argument("host speed probe: speed " + std::to_string(probed) + " is not a positive number");
+  SpeedDrift d;
+  d.probed = probed;
+  d.at_calibration = host.probe_speed > 0 ? host.probe_speed : host.relative_speed;
+  d.ratio = probed / d.at_calibration;
+  d.host_speed = host.relative_speed * d.ratio;
+  return d;
 }
 
 TaskTiming SummariseTimes(std::vector<double> seconds) {

@@ -11,6 +11,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "workers/board/board_profile.h"
@@ -31,6 +32,10 @@ struct HostCalibration {
   static constexpr int kFormatVersion = 3;
   /// This host's single-core speed relative to the reference core (> 1: faster).
   double relative_speed = 1.0;
+  /// The speed probe's measure of the same (ProbeHostSpeed, right after the fit): what an
+  /// emulated episode's probe is compared with. 0: not measured (a file written before the
+  /// probe existed; the probe is then compared with relative_speed).
+  double probe_speed = 0.0;
   /// The cost model fitted on this host, by cost family (ns per unit on THIS host's cores).
   std::map<std::string, navstack::WorkCountCostModel::Coefficients> fitted;
   int samples = 0;
@@ -80,9 +85,40 @@ CalibrationCheck CheckHostCalibration(const std::string& path);
 /// cannot be emulated by throttling.
 inline constexpr double kFasterBoardTolerance = 0.05;
 
-/// Per-core speed of `board` relative to this host: 1 for the host itself, else
-/// board.per_core_speed / host.relative_speed.
-double SpeedVsHost(const BoardProfile& board, const HostCalibration& host);
+/// Per-core speed of `board` relative to a host whose core is `host_speed` x the reference core:
+/// 1 for the host itself, else board.per_core_speed / host_speed.
+double SpeedVsHost(const BoardProfile& board, double host_speed);
+
+/// One speed probe (ProbeHostSpeed, workers/board/calibration_flights.h): this host's speed
+/// against the reference core now, on each CPU the probing thread may run on. A VM's vCPUs do not
+/// run at one speed: with no steal time reported to the guest, a vCPU whose physical core is
+/// shared with another guest just looks slower (this VM's two: 33 % apart for minutes, then equal).
+struct SpeedProbe {
+  std::vector<std::pair<int, double>> per_cpu;  ///< (CPU number, speed x the reference core)
+  double speed = 0;   ///< the mean over per_cpu
+  int jobs = 0;       ///< jobs timed
+  double wall_s = 0;  ///< how long the probe took
+  /// (fastest - slowest) / slowest CPU; 0 with one CPU.
+  double Spread() const;
+};
+
+/// How far this host's speed has moved since its calibration, from a speed probe run now
+/// (ProbeHostSpeed, workers/board/calibration_flights.h). A shared host's speed drifts by tens of
+/// per cent over hours (noisy neighbours, boost clocks), and an emulated board is exactly as fast
+/// as the host speed it is divided by.
+struct SpeedDrift {
+  double probed = 0;       ///< the probe's speed now, x the reference core
+  double at_calibration = 0;  ///< the probe's speed when the calibration was made (or relative_speed)
+  double ratio = 1;        ///< probed / at_calibration
+  double host_speed = 0;   ///< relative_speed x ratio: the calibration's speed moved by the drift
+};
+/// @throws std::invalid_argument if `probed` is not a positive finite speed.
+SpeedDrift DriftSinceCalibration(const HostCalibration& host, double probed);
+
+/// Drift (|ratio - 1|) or spread between CPUs beyond which an emulated episode warns: the clock
+/// agreement the project aims at between the virtual and the emulated clock is 15 %, and an error
+/// of this size in the host's speed alone would use up most of it.
+inline constexpr double kSpeedDriftWarning = 0.10;
 
 /// Timing summary of a task's job times (seconds); empty input gives jobs = 0.
 TaskTiming SummariseTimes(std::vector<double> seconds);

@@ -11,7 +11,7 @@ BoardEmulation DescribeBoardEmulation(const board::BoardProfile& board, const bo
   BoardEmulation e;
   e.board = board.id;
   e.cores = board.cores;
-  e.speed_vs_host = board::SpeedVsHost(board, host);
+  e.speed_vs_host = board::SpeedVsHost(board, host.relative_speed);
   e.emulable = e.speed_vs_host <= 1.0 + board::kFasterBoardTolerance;
   e.quota_cpus_k1 = board.cores * e.speed_vs_host;
   e.min_dilation = e.emulable && host_cpus_free > 0

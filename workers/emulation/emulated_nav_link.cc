@@ -167,6 +167,8 @@ struct EmulatedNavLink::Impl {
 
   ~Impl() { Shutdown(); }
 
+  /// This host's speed for the episode: the calibration's, or moved by the speed probe's drift.
+  double HostSpeedNow(const board::HostCalibration& cal);
   void Start();
   void Shutdown();
   void SetEpoch();
@@ -185,23 +187,57 @@ struct EmulatedNavLink::Impl {
   void SampleProc() const;
 };
 
+double EmulatedNavLink::Impl::HostSpeedNow(const board::HostCalibration& cal) {
+  if (!emulation.probe_host_speed) {
+    notes["emulation.speed_probe"] = "none: the calibration's speed " + Fixed(cal.relative_speed, 3) + " stands";
+    return cal.relative_speed;
+  }
+  const board::SpeedProbe probe = emulation.probe_host_speed();
+  const board::SpeedDrift d = board::DriftSinceCalibration(cal, probe.speed);
+  std::string cpus;
+  for (const auto& [cpu, s] : probe.per_cpu)
+    cpus += (cpus.empty() ? "CPU " : ", CPU ") + std::to_string(cpu) + " " + Fixed(s, 3);
+  const std::string what = "this host's speed moved " + std::string(d.ratio >= 1 ? "+" : "") +
+                           Fixed(100 * (d.ratio - 1), 1) + " % since its calibration (" + cal.date + "; probe " +
+                           Fixed(d.probed, 3) + " x the reference core now, " + Fixed(d.at_calibration, 3) + " then)";
+  const std::string spread = "its CPUs differ by " + Fixed(100 * probe.Spread(), 1) + " % (" + cpus + ")";
+  const double used = emulation.use_probed_speed ? d.host_speed : cal.relative_speed;
+  notes["emulation.speed_probe"] =
+      what + "; " + spread + "; " + Fixed(probe.wall_s, 1) + " s, " + std::to_string(probe.jobs) + " jobs" +
+      (emulation.use_probed_speed ? ": host speed " + Fixed(used, 3) + " used"
+                                  : ": not used (the calibration's " + Fixed(used, 3) + " is)");
+  if (std::abs(d.ratio - 1) > board::kSpeedDriftWarning) {
+    std::fprintf(stderr, "enavi: warning: %s; %s; `enavi calibrate` refits this host's costs\n", what.c_str(),
+                 emulation.use_probed_speed ? "the board is emulated at the speed now"
+                                            : "the board is emulated at the calibration's speed, off by as much");
+  }
+  if (probe.Spread() > board::kSpeedDriftWarning) {
+    std::fprintf(stderr,
+                 "enavi: warning: %s: a VM whose vCPUs share physical cores with other guests; the board runs "
+                 "at the speed of whichever its threads land on\n",
+                 spread.c_str());
+  }
+  return used;
+}
+
 void EmulatedNavLink::Impl::Start() {
   // 1. This host's speed (calibration) -> the board's speed relative to it.
   const std::string path = board::CalibrationPath(emulation.calibration_file);
   const board::CalibrationCheck check = board::CheckHostCalibration(path);
   if (!check.ok()) throw std::invalid_argument("--clock emulated needs a valid host calibration: " + check.message);
   const board::HostCalibration& cal = *check.calibration;
-  speed = board::SpeedVsHost(board, cal);
+  const double host_speed = HostSpeedNow(cal);
+  speed = board::SpeedVsHost(board, host_speed);
   const double raw_speed = speed;
   if (speed > 1.0 + board::kFasterBoardTolerance) {
     throw std::invalid_argument("--clock emulated: board '" + board.id + "' has cores " + Fixed(speed, 3) +
                                 " x as fast as this host's (board " + Fixed(board.per_core_speed, 3) + ", host " +
-                                Fixed(cal.relative_speed, 3) +
+                                Fixed(host_speed, 3) +
                                 " x the reference core); a CPU throttle can only slow down, use the virtual clock");
   }
   speed = std::min(1.0, speed);
   notes["emulation.speed"] = Fixed(speed, 4) + " of a host core per board core (board " +
-                             Fixed(board.per_core_speed, 3) + " / host " + Fixed(cal.relative_speed, 3) +
+                             Fixed(board.per_core_speed, 3) + " / host " + Fixed(host_speed, 3) +
                              " x the reference core; calibration " + path + ", " + cal.date + ")" +
                              (raw_speed > 1.0 ? "; the board is " + Fixed(100 * (raw_speed - 1), 1) +
                                                     " % faster than the host: emulated at full host speed"

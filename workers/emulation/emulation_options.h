@@ -8,6 +8,8 @@
 #include <functional>
 #include <string>
 
+#include "workers/board/host_calibration.h"
+
 namespace enavi::emulation {
 
 struct EmulationOptions {
@@ -39,6 +41,16 @@ struct EmulationOptions {
   std::string cpus;
   /// Called with the navstack process id once it runs inside its cgroup.
   std::function<void(pid_t)> on_navstack_started;
+  /// Measures this host's speed against the reference core now, per CPU (board::ProbeHostSpeed),
+  /// before the episode starts; empty: no probe, the calibration's speed stands. Supplied by the command
+  /// that runs the episode: the probe flies episodes, and this library sits below them.
+  std::function<board::SpeedProbe()> probe_host_speed;
+  /// Divide the board by the probed speed (the calibration's, moved by the probe's drift) rather
+  /// than the calibration's: the board then is as fast as its profile says on the host as it is
+  /// now, give or take the probe's own scatter (a few per cent here, and now and then a probe 35 %
+  /// low: workers/board/EMULATION.md). false: the probe only reports the drift (and warns beyond
+  /// board::kSpeedDriftWarning).
+  bool use_probed_speed = false;
 };
 
 }  // namespace enavi::emulation

@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -65,6 +66,32 @@ TEST_F(HostCalibrationTest, SaveLoadRoundTrip) {
   ASSERT_EQ(c.tasks.count("planning"), 1u);
   EXPECT_EQ(c.tasks.at("planning").max_s, 0.050);
   EXPECT_EQ(c.tasks.at("perception").jobs, 100);
+  EXPECT_EQ(c.probe_speed, 0.0) << "a calibration without a speed probe (written before it existed) still reads";
+
+  HostCalibration probed = Sample();
+  probed.probe_speed = 1.31;
+  SaveHostCalibration(probed, path);
+  EXPECT_EQ(LoadHostCalibration(path).probe_speed, 1.31);
+}
+
+TEST_F(HostCalibrationTest, ABadProbeSpeedIsRefusedWithTheFieldNamed) {
+  HostCalibration c = Sample();
+  c.probe_speed = 1.31;
+  const std::string path = Path("c.json");
+  SaveHostCalibration(c, path);
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t at = text.find("1.31");
+  ASSERT_NE(at, std::string::npos) << text;
+  text.replace(at, 4, "-2");
+  std::ofstream(path) << text;
+  try {
+    LoadHostCalibration(path);
+    FAIL() << "a negative probe speed was read";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("probe_speed"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(HostCalibrationTest, ValidWhenCpuAndReferenceMatch) {
@@ -172,10 +199,27 @@ TEST_F(HostCalibrationTest, PathPrecedenceFlagThenEnvThenXdgThenHome) {
 }
 
 TEST(HostCalibrationSpeedTest, BoardSpeedIsRelativeToTheHostAndTheHostIsItself) {
-  HostCalibration host;
-  host.relative_speed = 2.0;  // a host twice the reference: every board is slower still
+  const double host = 2.0;  // a host twice the reference: every board is slower still
   EXPECT_DOUBLE_EQ(SpeedVsHost(LoadBoard("opi5"), host), 0.43);
   EXPECT_DOUBLE_EQ(SpeedVsHost(LoadBoard("host"), host), 1.0) << "the host is itself, whatever the calibration";
+}
+
+TEST(HostCalibrationSpeedTest, AProbeMovesTheCalibrationsSpeedByHowMuchTheProbeMoved) {
+  HostCalibration host;
+  host.relative_speed = 1.20;  // the full calibration plan's measure
+  host.probe_speed = 1.25;     // the probe's, right after: its shorter flights weigh the work otherwise
+  const SpeedDrift d = DriftSinceCalibration(host, 1.50);
+  EXPECT_DOUBLE_EQ(d.at_calibration, 1.25);
+  EXPECT_DOUBLE_EQ(d.ratio, 1.2);
+  EXPECT_DOUBLE_EQ(d.host_speed, 1.44) << "the calibration's speed, moved by the probe's drift, not the probe's own";
+  EXPECT_DOUBLE_EQ(SpeedVsHost(LoadBoard("opi5"), d.host_speed), 0.86 / 1.44);
+
+  host.probe_speed = 0;  // a file written before the probe existed: compared with relative_speed
+  EXPECT_DOUBLE_EQ(DriftSinceCalibration(host, 0.9).ratio, 0.75);
+  EXPECT_DOUBLE_EQ(DriftSinceCalibration(host, 0.9).host_speed, 0.9);
+
+  for (double bad : {0.0, -1.0, std::nan(""), HUGE_VAL})
+    EXPECT_THROW(DriftSinceCalibration(host, bad), std::invalid_argument) << bad;
 }
 
 TEST(HostCalibrationSummaryTest, SummariseTimes) {
