@@ -27,6 +27,7 @@ struct CalibrateArgs {
   std::string calibration;
   bool no_store = false;
   bool status = false;
+  bool probe = false;   // with --status: also measure the host's speed now
   std::string samples;  // CSV of every job sample, for analysis outside
 };
 
@@ -127,7 +128,17 @@ void RunStatus(const CalibrateArgs& args) {
       j["kernel"] = c.kernel;
       j["date"] = c.date;
       j["reference_calibration_id"] = c.reference_calibration_id;
+      j["probe_speed"] = c.probe_speed;
       if (check.ok()) j["boards"] = BoardTableJson(c);
+      if (check.ok() && args.probe) {
+        const board::SpeedProbe probe = board::ProbeHostSpeed();
+        const board::SpeedDrift d = board::DriftSinceCalibration(c, probe.speed);
+        nlohmann::json per_cpu = nlohmann::json::object();
+        for (const auto& [cpu, s] : probe.per_cpu) per_cpu[std::to_string(cpu)] = s;
+        j["probe"] = {{"speed", probe.speed}, {"per_cpu", per_cpu}, {"spread", probe.Spread()},
+                      {"at_calibration", d.at_calibration}, {"drift", d.ratio - 1}, {"jobs", probe.jobs},
+                      {"wall_s", probe.wall_s}};
+      }
     }
     std::printf("%s\n", j.dump(2).c_str());
   } else if (check.ok()) {
@@ -135,6 +146,11 @@ void RunStatus(const CalibrateArgs& args) {
     std::printf("host calibration %s: valid (%s, kernel %s, %s, reference %s)\n", check.path.c_str(),
                 c.cpu_model.c_str(), c.kernel.c_str(), c.date.c_str(), c.reference_calibration_id.c_str());
     PrintBoardTable(c);
+    if (args.probe) {
+      const board::SpeedProbe probe = board::ProbeHostSpeed();
+      const board::DriftText text = board::DescribeDrift(c, probe);
+      std::printf("%s; %s (%.1f s, %d jobs)\n", text.drift.c_str(), text.spread.c_str(), probe.wall_s, probe.jobs);
+    }
   }
   if (!check.ok()) throw std::invalid_argument(check.message);
 }
@@ -260,8 +276,12 @@ void RegisterCalibrateCommand(CLI::App& app) {
                   "host calibration file to write or check (default: $ENAVI_CALIBRATION, else "
                   "$XDG_STATE_HOME/enavi/calibration.json or ~/.local/state/enavi/calibration.json)");
   cmd->add_flag("--no-store", args->no_store, "do not write the host calibration file");
-  cmd->add_flag("--status", args->status,
-                "fly nothing: check the stored host calibration (missing, stale) and print the board table");
+  CLI::Option* status = cmd->add_flag(
+      "--status", args->status, "fly nothing: check the stored host calibration (missing, stale) and print the board table");
+  cmd->add_flag("--probe", args->probe,
+                "with --status: also run the speed probe an emulated episode runs first (~2 s a CPU) and say how "
+                "far this host's speed moved since the calibration")
+      ->needs(status);
   cmd->callback([args] { Run(*args); });
 }
 

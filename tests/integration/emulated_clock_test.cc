@@ -4,6 +4,7 @@
 // `enavi fly` cleans up, no cgroup with "enavi" in its name is ever left behind, and one flight
 // agrees with the virtual clock's within EMULATION.md's tolerance.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <signal.h>
 #include <fcntl.h>
 #include <sys/wait.h>
@@ -151,7 +152,7 @@ TEST_F(EmulatedClockTest, AProbeFindingTheHostTwiceAsFastHalvesTheBoardsShareOfA
   EXPECT_NEAR(LeadingNumber(kept.notes.at("emulation.speed")), tx2, 1e-4) << kept.notes.at("emulation.speed");
 }
 
-TEST_F(EmulatedClockTest, FlyProbesTheHostsSpeedBeforeAnEmulatedEpisode) {
+TEST_F(EmulatedClockTest, FlyProbesTheHostsSpeedBeforeAnEmulatedEpisodeAndCalibrateStatusOnDemand) {
   // The real probe (three flights in process) through the command a user runs; its speed is
   // whatever this host has, so only its presence and sense are checked.
   const std::string enavi = std::string(ENAVI_BINARY_DIR) + "/bin/enavi";
@@ -166,10 +167,26 @@ TEST_F(EmulatedClockTest, FlyProbesTheHostsSpeedBeforeAnEmulatedEpisode) {
   EXPECT_NE(text.find("not used (the calibration's 1.000 is)", at), std::string::npos)
       << "--speed-probe check is the default: " << text.substr(at, 300);
 
-  const std::string bad = enavi + " fly --world empty --clock emulated --speed-probe sometimes > /dev/null 2>&1";
-  const int status = std::system(bad.c_str());
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 2) << "an unknown --speed-probe mode is bad input";
+  // The same probe on demand, with what it found per CPU.
+  const std::string status_json = (dir_ / "status.json").string();
+  const std::string status = enavi + " calibrate --status --probe --json --calibration " +
+                             options_.emulation.calibration_file + " > " + status_json;
+  ASSERT_EQ(std::system(status.c_str()), 0) << status;
+  std::ifstream status_in(status_json);
+  const nlohmann::json j = nlohmann::json::parse(status_in);
+  ASSERT_TRUE(j.contains("probe")) << j.dump();
+  const nlohmann::json& p = j["probe"];
+  EXPECT_GE(p["per_cpu"].size(), 1u) << p.dump();
+  EXPECT_GT(p["speed"].get<double>(), 0) << p.dump();
+  EXPECT_EQ(p["at_calibration"].get<double>(), 1.0) << "a file without its own probe is compared with its speed";
+  EXPECT_NEAR(p["drift"].get<double>(), p["speed"].get<double>() - 1.0, 1e-12) << p.dump();
+
+  for (const std::string& bad : {enavi + " fly --world empty --clock emulated --speed-probe sometimes",
+                                enavi + " calibrate --probe"}) {
+    const int code = std::system((bad + " > /dev/null 2>&1").c_str());
+    ASSERT_TRUE(WIFEXITED(code)) << bad;
+    EXPECT_EQ(WEXITSTATUS(code), 2) << bad << ": an unknown --speed-probe mode, or --probe without --status";
+  }
 }
 
 TEST_F(EmulatedClockTest, NarrowCpusetRefusesDeadlineAndTheFallbackIsRecorded) {

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/atomic_file.h"
+#include "api/fixed.h"
 #include "api/json_read.h"
 
 namespace enavi::board {
@@ -198,6 +199,19 @@ CalibrationCheck CheckHostCalibration(const std::string& path) {
 double SpeedVsHost(const BoardProfile& board, double host_speed) {
   if (board.is_host) return 1.0;
   return board.per_core_speed / host_speed;
+}
+
+DriftText DescribeDrift(const HostCalibration& host, const SpeedProbe& probe) {
+  const SpeedDrift d = DriftSinceCalibration(host, probe.speed);
+  DriftText text;
+  text.drift = "this host's speed moved " + std::string(d.ratio >= 1 ? "+" : "") + api::Fixed(100 * (d.ratio - 1), 1) +
+               " % since its calibration (" + host.date + "; probe " + api::Fixed(d.probed, 3) +
+               " x the reference core now, " + api::Fixed(d.at_calibration, 3) + " then)";
+  std::string cpus;
+  for (const auto& [cpu, s] : probe.per_cpu)
+    cpus += (cpus.empty() ? "CPU " : ", CPU ") + std::to_string(cpu) + " " + api::Fixed(s, 3);
+  text.spread = "its CPUs differ by " + api::Fixed(100 * probe.Spread(), 1) + " % (" + cpus + ")";
+  return text;
 }
 
 double SpeedProbe::Spread() const {

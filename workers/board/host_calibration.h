@@ -115,6 +115,17 @@ struct SpeedDrift {
 /// @throws std::invalid_argument if `probed` is not a positive finite speed.
 SpeedDrift DriftSinceCalibration(const HostCalibration& host, double probed);
 
+/// How a probe reads against a calibration, in the words of an emulated episode's note and
+/// warnings and of `enavi calibrate --status --probe`.
+struct DriftText {
+  /// "this host's speed moved -5.1 % since its calibration (DATE; probe 1.176 x the reference core
+  /// now, 1.239 then)"
+  std::string drift;
+  /// "its CPUs differ by 2.1 % (CPU 0 1.188, CPU 1 1.163)"
+  std::string spread;
+};
+DriftText DescribeDrift(const HostCalibration& host, const SpeedProbe& probe);
+
 /// Drift (|ratio - 1|) or spread between CPUs beyond which an emulated episode warns: the clock
 /// agreement the project aims at between the virtual and the emulated clock is 15 %, and an error
 /// of this size in the host's speed alone would use up most of it.

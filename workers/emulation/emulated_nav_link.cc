@@ -194,20 +194,14 @@ double EmulatedNavLink::Impl::HostSpeedNow(const board::HostCalibration& cal) {
   }
   const board::SpeedProbe probe = emulation.probe_host_speed();
   const board::SpeedDrift d = board::DriftSinceCalibration(cal, probe.speed);
-  std::string cpus;
-  for (const auto& [cpu, s] : probe.per_cpu)
-    cpus += (cpus.empty() ? "CPU " : ", CPU ") + std::to_string(cpu) + " " + Fixed(s, 3);
-  const std::string what = "this host's speed moved " + std::string(d.ratio >= 1 ? "+" : "") +
-                           Fixed(100 * (d.ratio - 1), 1) + " % since its calibration (" + cal.date + "; probe " +
-                           Fixed(d.probed, 3) + " x the reference core now, " + Fixed(d.at_calibration, 3) + " then)";
-  const std::string spread = "its CPUs differ by " + Fixed(100 * probe.Spread(), 1) + " % (" + cpus + ")";
+  const board::DriftText text = board::DescribeDrift(cal, probe);
   const double used = emulation.use_probed_speed ? d.host_speed : cal.relative_speed;
   notes["emulation.speed_probe"] =
-      what + "; " + spread + "; " + Fixed(probe.wall_s, 1) + " s, " + std::to_string(probe.jobs) + " jobs" +
+      text.drift + "; " + text.spread + "; " + Fixed(probe.wall_s, 1) + " s, " + std::to_string(probe.jobs) + " jobs" +
       (emulation.use_probed_speed ? ": host speed " + Fixed(used, 3) + " used"
                                   : ": not used (the calibration's " + Fixed(used, 3) + " is)");
   if (std::abs(d.ratio - 1) > board::kSpeedDriftWarning) {
-    std::fprintf(stderr, "enavi: warning: %s; %s; `enavi calibrate` refits this host's costs\n", what.c_str(),
+    std::fprintf(stderr, "enavi: warning: %s; %s; `enavi calibrate` refits this host's costs\n", text.drift.c_str(),
                  emulation.use_probed_speed ? "the board is emulated at the speed now"
                                             : "the board is emulated at the calibration's speed, off by as much");
   }
@@ -215,7 +209,7 @@ double EmulatedNavLink::Impl::HostSpeedNow(const board::HostCalibration& cal) {
     std::fprintf(stderr,
                  "enavi: warning: %s: a VM whose vCPUs share physical cores with other guests; the board runs "
                  "at the speed of whichever its threads land on\n",
-                 spread.c_str());
+                 text.spread.c_str());
   }
   return used;
 }
