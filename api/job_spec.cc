@@ -84,6 +84,17 @@ double Number(const Context& ctx, const YAML::Node& n, const std::string& field,
   return ctx.reader().Range(n, field, lo, hi);
 }
 
+// A dilation: wall seconds per sim second, or `auto` (kAutoDilation).
+double Dilation(const Context& ctx, const YAML::Node& n, const std::string& field) {
+  if (n.IsScalar()) {
+    if (n.Scalar() == "auto") return kAutoDilation;
+    double v = 0;
+    if (!YAML::convert<double>::decode(n, v))
+      ctx.Fail(n, field, "expected wall seconds per sim second in [0.01, 100] or auto (got " + n.Scalar() + ")");
+  }
+  return Number(ctx, n, field, 0.01, kMaxDilation);
+}
+
 std::vector<YAML::Node> Items(const Context& ctx, const YAML::Node& n, const std::string& field) {
   return ctx.reader().Items(n, field);
 }
@@ -340,7 +351,7 @@ EpisodeOverride Override(const Context& ctx, const YAML::Node& n, const std::vec
     }
   }
   if (n["timeout_s"]) o.timeout_s = Number(ctx, n["timeout_s"], f + ".timeout_s", 0, kMaxTimeoutS);
-  if (n["dilation"]) o.dilation = Number(ctx, n["dilation"], f + ".dilation", 0.01, kMaxDilation);
+  if (n["dilation"]) o.dilation = Dilation(ctx, n["dilation"], f + ".dilation");
   if (n["policy"]) {
     o.policy = Policy(ctx, n["policy"], f + ".policy");
   }
@@ -433,7 +444,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   }
   if (root["clock"]) job.clock = Choices(ctx, root["clock"], "clock", ctx.catalog().clocks, "clock").front();
   if (root["cost"]) job.cost = Choices(ctx, root["cost"], "cost", kCostModes, "cost mode").front();
-  if (root["dilation"]) job.dilation = Number(ctx, root["dilation"], "dilation", 0.01, kMaxDilation);
+  if (root["dilation"]) job.dilation = Dilation(ctx, root["dilation"], "dilation");
   if (root["timeout_s"]) job.timeout_s = Number(ctx, root["timeout_s"], "timeout_s", 0, kMaxTimeoutS);
   if (root["policy"]) {
     job.policy = Policy(ctx, root["policy"], "policy");

@@ -14,7 +14,7 @@
 //   seeds: 3                      # a count (1..N) or a list [1, 7, 9]
 //   clock: virtual                # a registered clock: virtual | emulated
 //   cost: model                   # model | measured
-//   dilation: 1.0                 # emulated clock only: 1 sim s = dilation wall s
+//   dilation: 1.0                 # emulated clock only: 1 sim s = dilation wall s, or auto
 //   timeout_s: 0                  # 0: derived from the start-goal distance
 //   policy: policies/enavi.json   # E-Navi policy file under an allowed root; default: shipped
 //   world_params: {density: "0.3"}
@@ -55,6 +55,9 @@ inline constexpr std::int64_t kMaxSeedCount = 1000;
 inline constexpr double kMaxTimeoutS = 3600.0;
 /// Largest emulated-clock dilation (1 sim second = dilation wall seconds).
 inline constexpr double kMaxDilation = 100.0;
+/// `dilation: auto`: the smallest multiple of 0.25 at which the board fits the host's free CPUs
+/// when the episode starts (what `enavi fly --clock emulated` does without --dilation).
+inline constexpr double kAutoDilation = 0.0;
 /// A job carries at most this many labels.
 inline constexpr std::size_t kMaxLabels = 32;
 

@@ -33,6 +33,7 @@ std::string EvalJobYaml(const EvalOptions& o) {
     << "seeds: " << o.seeds << "\n"
     << "clock: \"" << o.clock << "\"\n"
     << "cost: \"" << o.cost << "\"\n";
+  if (o.clock == "emulated") y << "dilation: \"" << o.dilation << "\"\n";
   return y.str();
 }
 

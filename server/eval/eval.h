@@ -29,6 +29,9 @@ struct EvalOptions {
   int seeds = 1;
   std::string clock = "virtual";
   std::string cost = "model";
+  /// Emulated clock: wall seconds per sim second, or "auto" (the smallest at which each board fits
+  /// the host when its episode starts); not written into a virtual-clock job.
+  std::string dilation = "auto";
   std::filesystem::path db;      ///< empty: a temporary database, removed afterwards
   int workers = 2;
   int slots = 1;                 ///< per worker

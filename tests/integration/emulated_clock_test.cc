@@ -189,6 +189,32 @@ TEST_F(EmulatedClockTest, FlyProbesTheHostsSpeedBeforeAnEmulatedEpisodeAndCalibr
   }
 }
 
+TEST_F(EmulatedClockTest, EvalRunsAnEmulatedEpisodeThroughTheFarmAtTheDilationThatFits) {
+  // The farm path: `enavi eval` -> server -> worker -> `enavi episode`, with the host
+  // calibration from the environment, as a user's batch would run. tx2's four cores need 2.6 host
+  // CPUs at dilation 1 on this test's calibration, more than a small host has: without `auto`
+  // (the default of --dilation) the episode would be refused admission there.
+  const std::string enavi = std::string(ENAVI_BINARY_DIR) + "/bin/enavi";
+  const fs::path db = dir_ / "eval.db";
+  const std::string command = "ENAVI_CALIBRATION=" + options_.emulation.calibration_file + " " + enavi +
+                              " eval --clock emulated --boards tx2 --scenarios empty --methods baseline --seeds 1" +
+                              " --db " + db.string() + " > " + (dir_ / "eval.out").string() + " 2>&1";
+  const int code = std::system(command.c_str());
+  std::ifstream in(dir_ / "eval.out");
+  const std::string out((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("1 results stored"), std::string::npos) << out;
+  const std::string query = "sqlite3 " + db.string() +
+                            " \"select json_extract(result_json, '$.notes.\\\"emulation.dilation\\\"') || ' | ' ||"
+                            " json_extract(result_json, '$.notes.\\\"emulation.speed_probe\\\"') from results\" > " +
+                            (dir_ / "notes.txt").string();
+  ASSERT_EQ(std::system(query.c_str()), 0) << query;
+  std::ifstream notes_in(dir_ / "notes.txt");
+  const std::string notes((std::istreambuf_iterator<char>(notes_in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(notes.find("(auto: smallest multiple of 0.25"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("this host's speed moved"), std::string::npos) << "the worker's episode probed: " << notes;
+}
+
 TEST_F(EmulatedClockTest, NarrowCpusetRefusesDeadlineAndTheFallbackIsRecorded) {
   // A cpuset narrower than the root domain makes sched_setattr(SCHED_DEADLINE) fail with EPERM
   // (workers/board/EMULATION.md, E4): the worker stays SCHED_OTHER under its cgroup quota.

@@ -155,6 +155,25 @@ episode_overrides:
   }
 }
 
+TEST_F(JobSpecTest, DilationIsANumberOrAutoForTheSmallestThatFitsWhenTheEpisodeStarts) {
+  const JobSpec job = Parse(R"(boards: [tx2, pi4b]
+scenarios: [s1]
+methods: [baseline]
+seeds: 1
+clock: emulated
+dilation: auto
+episode_overrides:
+  - match: {board: pi4b}
+    dilation: "2.5"
+)");
+  EXPECT_EQ(job.dilation, kAutoDilation);
+  for (const EpisodeSpec& e : ExpandJob(job)) EXPECT_EQ(e.dilation, e.board == "pi4b" ? 2.5 : kAutoDilation) << e.board;
+  EXPECT_EQ(Parse(std::string(kMinimal) + "dilation: 3\n").dilation, 3.0);
+  EXPECT_EQ(Parse(kMinimal).dilation, 1.0) << "the default stays 1: a stored spec means what it meant";
+  EXPECT_EQ(Error("boards: tx2\nscenarios: s1\nmethods: enavi\nseeds: 1\ndilation: sometimes\n"),
+            "job.yaml:5: dilation: expected wall seconds per sim second in [0.01, 100] or auto (got sometimes)");
+}
+
 TEST_F(JobSpecTest, WorldFilesResolveUnderTheAllowedRoot) {
   const JobSpec job = Parse(R"(boards: tx2
 methods: enavi
