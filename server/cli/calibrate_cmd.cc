@@ -1,6 +1,7 @@
 // `enavi calibrate`: fits the board cost model to this host (docs/design.md, "Time: two clocks").
 #include <sched.h>
 
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
@@ -159,12 +160,23 @@ void Run(const CalibrateArgs& args) {
   if (args.status) return RunStatus(args);
   board::CalibrationOptions options;
   options.episode_seconds = args.episode_seconds;
-  if (!args.json)
+  const std::size_t total = board::CalibrationPlan().size();
+  std::size_t flown = 0;
+  std::chrono::steady_clock::time_point start;  // of the first flight (the probe before it is no guide)
+  if (!args.json) {
+    std::fprintf(stderr, "calibrate: speed probe (%zu flights of %.0f s on each CPU)\n", board::SpeedProbePlan().size(),
+                 board::kSpeedProbeSeconds);
     options.on_flight = [&](const board::CalibrationFlight& f) {
-      std::fprintf(stderr, "calibrate: flying %s on %s%s for %.0f s\n", f.method.c_str(), f.world.c_str(),
+      if (flown == 0) start = std::chrono::steady_clock::now();
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const std::string eta =
+          flown > 0 ? ", ETA " + std::to_string(static_cast<int>(elapsed / flown * (total - flown))) + " s" : "";
+      std::fprintf(stderr, "calibrate: [%zu/%zu%s] flying %s on %s%s for %.0f s\n", ++flown, total, eta.c_str(),
+                   f.method.c_str(), f.world.c_str(),
                    f.resolution > 0 ? (" at " + std::to_string(f.resolution).substr(0, 4) + " m").c_str() : "",
                    args.episode_seconds);
     };
+  }
   const board::CalibrationRun run = board::RunCalibration(options);
   const board::FamilyFits& fit = run.fit;
   if (!args.write_reference.empty()) board::WriteReferenceCosts(args.write_reference, run);
