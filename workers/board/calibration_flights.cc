@@ -132,6 +132,18 @@ std::vector<JobSample> FlyMeasured(const std::vector<CalibrationFlight>& flights
   return samples;
 }
 
+// Puts the calling thread's CPU affinity back as it was, however the probe ends.
+class AffinityRestore {
+ public:
+  explicit AffinityRestore(const cpu_set_t& allowed) : allowed_(allowed) {}
+  ~AffinityRestore() { sched_setaffinity(0, sizeof allowed_, &allowed_); }
+  AffinityRestore(const AffinityRestore&) = delete;
+  AffinityRestore& operator=(const AffinityRestore&) = delete;
+
+ private:
+  cpu_set_t allowed_;
+};
+
 }  // namespace
 
 std::vector<CalibrationFlight> SpeedProbePlan() {
@@ -146,6 +158,8 @@ SpeedProbe ProbeHostSpeed() {
   CPU_ZERO(&allowed);
   if (sched_getaffinity(0, sizeof allowed, &allowed) != 0)
     throw std::runtime_error(std::string("host speed probe: sched_getaffinity: ") + std::strerror(errno));
+  const AffinityRestore restore(allowed);
+  const ReferenceCosts reference = LoadReferenceCosts();
   SpeedProbe probe;
   double sum = 0;
   for (int cpu = 0; cpu < CPU_SETSIZE && static_cast<int>(probe.per_cpu.size()) < kMaxProbedCpus; ++cpu) {
@@ -154,20 +168,12 @@ SpeedProbe ProbeHostSpeed() {
     CPU_ZERO(&one);
     CPU_SET(cpu, &one);
     if (sched_setaffinity(0, sizeof one, &one) != 0) continue;  // offline since: not a CPU to run on
-    std::vector<JobSample> samples;
-    try {
-      samples = FlyMeasured(SpeedProbePlan(), kSpeedProbeSeconds, {});
-    } catch (...) {
-      sched_setaffinity(0, sizeof allowed, &allowed);
-      throw;
-    }
-    const double speed = RelativeSpeed(samples, LoadReferenceCosts());
+    const std::vector<JobSample> samples = FlyMeasured(SpeedProbePlan(), kSpeedProbeSeconds, {});
+    const double speed = RelativeSpeed(samples, reference);
     probe.per_cpu.emplace_back(cpu, speed);
     probe.jobs += static_cast<int>(samples.size());
     sum += speed;
   }
-  if (sched_setaffinity(0, sizeof allowed, &allowed) != 0)
-    throw std::runtime_error(std::string("host speed probe: restoring the CPU affinity: ") + std::strerror(errno));
   if (probe.per_cpu.empty())
     throw std::runtime_error("host speed probe: no CPU of this thread's affinity set could be used");
   probe.speed = sum / static_cast<double>(probe.per_cpu.size());

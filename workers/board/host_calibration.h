@@ -32,7 +32,7 @@ struct HostCalibration {
   static constexpr int kFormatVersion = 3;
   /// This host's single-core speed relative to the reference core (> 1: faster).
   double relative_speed = 1.0;
-  /// The speed probe's measure of the same (ProbeHostSpeed, right after the fit): what an
+  /// The speed probe's measure of the same (ProbeHostSpeed, just before the plan): what an
   /// emulated episode's probe is compared with. 0: not measured (a file written before the
   /// probe existed; the probe is then compared with relative_speed).
   double probe_speed = 0.0;
