@@ -40,6 +40,12 @@ struct WorkCounts {
 
   void Add(WorkUnit unit, std::int64_t count) { n[static_cast<int>(unit)] += count; }
   std::int64_t Get(WorkUnit unit) const { return n[static_cast<int>(unit)]; }
+  /// No unit counted: a job that found nothing to do and returned.
+  bool Idle() const {
+    for (std::int64_t c : n)
+      if (c != 0) return false;
+    return true;
+  }
   WorkCounts& operator+=(const WorkCounts& o) {
     for (std::size_t i = 0; i < n.size(); ++i) n[i] += o.n[i];
     return *this;

@@ -22,7 +22,15 @@ class CostModel {
   virtual bool uses_host_cpu() const = 0;
 };
 
+/// How the model turns prices into time; in the provenance digest with the prices, so that two
+/// results priced alike by different rules never look comparable. 2: idle jobs cost nothing.
+inline constexpr int kCostModelRevision = 2;
+
 /// model: time = the task's fixed per-job overhead + sum(count x ns_per_unit). Bit-reproducible.
+/// A job that counted no work costs nothing: it found nothing to do and returned (Ego-Planner's
+/// 100 Hz FSM tick between plans, a check with no trajectory) in ~2 us on the reference core,
+/// while the overheads are the fixed part of jobs that work (workers/board/EMULATION.md, "The
+/// baseline's idle planning jobs": priced at the overhead, idle ticks came out 31x their time).
 class WorkCountCostModel final : public CostModel {
  public:
   struct Coefficients {
@@ -34,6 +42,7 @@ class WorkCountCostModel final : public CostModel {
   };
   explicit WorkCountCostModel(const Coefficients& board) : c_(board) {}
   double JobSeconds(TaskId task, const WorkCounts& work, double) const override {
+    if (work.Idle()) return 0.0;
     double ns = c_.ns_per_job[static_cast<int>(task)];
     for (std::size_t i = 0; i < work.n.size(); ++i) ns += static_cast<double>(work.n[i]) * c_.ns_per_unit[i];
     return ns * 1e-9;

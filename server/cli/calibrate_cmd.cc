@@ -196,6 +196,7 @@ void Run(const CalibrateArgs& args) {
   nlohmann::json j;
   j["cpu"] = fit.costs.reference_cpu;
   j["samples"] = fit.samples;
+  j["idle_jobs"] = fit.idle;
   j["r2"] = fit.r2;
   j["load_average"] = {{"before", run.load_before}, {"after", run.load_after}};
   j["relative_speed_vs_reference"] = run.relative_speed;
@@ -232,8 +233,9 @@ void Run(const CalibrateArgs& args) {
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
-  std::printf("calibration of %s: %d jobs, R^2 %.3f, speed %.3f x the reference core (load %.2f -> %.2f)\n",
-              fit.costs.reference_cpu.c_str(), fit.samples, fit.r2, run.relative_speed, run.load_before,
+  std::printf("calibration of %s: %d jobs (%d idle: no work counted, priced 0, not fitted), R^2 %.3f, speed %.3f x "
+              "the reference core (load %.2f -> %.2f)\n",
+              fit.costs.reference_cpu.c_str(), fit.samples, fit.idle, fit.r2, run.relative_speed, run.load_before,
               run.load_after);
   std::printf("speed probe (%zu flights of %.0f s on each CPU, before the plan; what an emulated episode "
               "compares its own with): %.3f x the reference core\n",

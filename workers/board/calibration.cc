@@ -228,9 +228,16 @@ CostFit FitCosts(const std::vector<JobSample>& samples) {
 }
 
 FamilyFits FitCostFamilies(const std::vector<JobSample>& samples) {
+  // Idle jobs are priced at 0 by the model (navstack/runtime/cost_model.h), not fitted: thousands
+  // of them would pull the per-job overheads of the jobs that work towards their ~2 us.
   std::map<std::string, std::vector<JobSample>> by_family;
-  for (const JobSample& s : samples) by_family[s.family].push_back(s);
   FamilyFits out;
+  for (const JobSample& s : samples) {
+    if (s.work.Idle())
+      ++out.idle;
+    else
+      by_family[s.family].push_back(s);
+  }
   for (const auto& [family, own] : by_family) {
     try {
       out.fits[family] = FitCosts(own);

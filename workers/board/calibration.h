@@ -64,6 +64,7 @@ struct FamilyFits {
   ReferenceCosts costs;                   ///< every family's prices (reference_cpu, id left empty)
   std::map<std::string, CostFit> fits;    ///< by family
   int samples = 0;
+  int idle = 0;   ///< jobs that counted no work: priced 0 by the model, left out of the fits
   double r2 = 0;  ///< over all jobs, each priced by its family's fit
 };
 FamilyFits FitCostFamilies(const std::vector<JobSample>& samples);

@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "api/provenance.h"
+#include "navstack/runtime/cost_model.h"
 
 namespace enavi::sim {
 
@@ -27,13 +28,15 @@ std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spe
     }
   }
   // The digest covers exactly what prices a job of this method on this board: its cost family's
-  // reference ns per unit and per job divided by the board's per-core speed.
+  // reference ns per unit and per job divided by the board's per-core speed, and the rule that
+  // applies them.
   const board::ReferenceCosts reference = board::LoadReferenceCosts();
   const auto coefficients = board::BoardCoefficients(board, reference, cost_family);
   std::string bytes(reinterpret_cast<const char*>(coefficients.ns_per_unit.data()),
                     sizeof(double) * coefficients.ns_per_unit.size());
   bytes.append(reinterpret_cast<const char*>(coefficients.ns_per_job.data()),
                sizeof(double) * coefficients.ns_per_job.size());
+  bytes.append("revision " + std::to_string(navstack::kCostModelRevision));
   notes["provenance.cost_model_sha256"] = api::Sha256Hex(bytes).substr(0, 16);
   notes["provenance.calibration_id"] = reference.calibration_id;
   return notes;

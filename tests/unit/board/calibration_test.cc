@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "navstack/methods/registry.h"
+#include "navstack/runtime/cost_model.h"
 #include "workers/board/nnls.h"
 
 namespace enavi::board {
@@ -214,6 +215,45 @@ TEST(CalibrationTest, EachCostFamilyGetsItsOwnPricesAndAOnePriceReferenceShowsIt
   EXPECT_GT(baseline.relative_residual(), 0.2);
   EXPECT_LT(fixed.relative_residual(), -0.1);
   EXPECT_THROW(ReferenceAgreement(samples, one, 0.0), std::invalid_argument);
+}
+
+TEST(CalibrationTest, IdleJobsArePricedAtZeroAndDoNotPullTheOverheadOfJobsThatWork) {
+  // Ego-Planner's FSM timer: 40 idle ticks (2 us, nothing counted) for every tick that plans
+  // (67 us + its units). Fitted with the idle ticks, the per-job overhead would fall towards
+  // their 2 us and the planning jobs would be under-priced; priced at the overhead, the ticks
+  // would cost 33x their time.
+  Uniform uniform(11);
+  std::vector<JobSample> samples;
+  for (int i = 0; i < 4100; ++i) {
+    JobSample s;
+    s.task = TaskId::kPlanning;
+    s.method = "baseline";
+    s.family = "ego_planner";
+    if (i % 41 == 0) {
+      s.work.Add(WorkUnit::kAstarExpansion, static_cast<std::int64_t>(uniform(1e2, 2e3)));
+      s.work.Add(WorkUnit::kOptimizerEval, static_cast<std::int64_t>(uniform(1e3, 1e4)));
+      s.host_cpu_s = (67e3 + 900.0 * s.work.Get(WorkUnit::kAstarExpansion) +
+                      40.0 * s.work.Get(WorkUnit::kOptimizerEval)) * 1e-9 * uniform(0.995, 1.005);
+    } else {
+      s.host_cpu_s = 2e-6 * uniform(0.9, 1.1);
+    }
+    samples.push_back(s);
+  }
+  const FamilyFits fits = FitCostFamilies(samples);
+  EXPECT_EQ(fits.samples, 4100);
+  EXPECT_EQ(fits.idle, 4000);
+  const ReferenceCosts::Coefficients& c = fits.costs.For("ego_planner");
+  EXPECT_NEAR(c.ns_per_job[static_cast<int>(TaskId::kPlanning)], 67e3, 67e3 * 0.05);
+  const navstack::WorkCountCostModel model(c);
+  EXPECT_EQ(model.JobSeconds(TaskId::kPlanning, samples[1].work, 0.0), 0.0) << "an idle tick";
+  EXPECT_NEAR(model.JobSeconds(TaskId::kPlanning, samples[0].work, 0.0), samples[0].host_cpu_s,
+              samples[0].host_cpu_s * 0.05);
+  double measured = 0, priced = 0;
+  for (const JobSample& s : samples) {
+    measured += s.host_cpu_s;
+    priced += model.JobSeconds(s.task, s.work, 0.0);
+  }
+  EXPECT_NEAR(priced / measured, 1.0, 0.15) << "the ticks' 8 ms of 4000 x 2 us is all the model leaves out";
 }
 
 TEST(CalibrationTest, ANewCostFamilyIsCalibratedAgainstAReferenceThatDoesNotPriceItYet) {

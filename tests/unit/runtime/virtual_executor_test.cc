@@ -43,6 +43,27 @@ TEST(VirtualExecutorTest, PeriodicTaskUtilisationMatchesCostTimesRate) {
   EXPECT_NEAR(s.busy_s / 3.0, 0.30, 1e-6);
 }
 
+TEST(VirtualExecutorTest, AJobThatCountedNoWorkTakesNoBoardTimeDespiteTheTasksOverhead) {
+  // A 100 Hz timer whose jobs mostly find nothing to do (Ego-Planner's FSM tick): the per-job
+  // overhead is the fixed part of a job that works, not a price for returning at once.
+  WorkCountCostModel::Coefficients c;
+  c.ns_per_unit[static_cast<int>(WorkUnit::kPixel)] = 1e6;
+  c.ns_per_job[static_cast<int>(TaskId::kPlanning)] = 2e6;
+  const WorkCountCostModel cost(c);
+  VirtualExecutor ex(1, cost);
+  int ticks = 0;
+  ex.Register(TaskId::kPlanning, [&ticks]() {
+    JobOutput out;
+    if (++ticks % 10 == 0) out.work.Add(WorkUnit::kPixel, 3);  // every tenth tick plans: 2 + 3 ms
+    return out;
+  });
+  ex.SetRate(TaskId::kPlanning, 100);
+  AdvanceInSteps(ex, 1.0);
+  const TaskStats& s = ex.stats(TaskId::kPlanning);
+  EXPECT_EQ(s.released, 101);
+  EXPECT_NEAR(s.busy_s, 10 * 0.005, 1e-9) << "ten working jobs of 5 ms; the 91 idle ones are free";
+}
+
 TEST(VirtualExecutorTest, CommitTakesEffectAtSimulatedFinish) {
   const auto cost = MillisecondPerPixel();
   VirtualExecutor ex(1, cost);
