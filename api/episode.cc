@@ -79,6 +79,7 @@ void ReadSpec(const Fields& f, EpisodeSpec& s) {
   f.Optional("clock", s.clock);
   f.Optional("cost", s.cost);
   f.Optional("dilation", s.dilation);
+  f.Optional("speed_probe", s.speed_probe);
   f.Optional("timeout_s", s.timeout_s);
   f.Optional("policy", s.policy);
   f.Optional("overrides", s.overrides);
@@ -103,6 +104,7 @@ nlohmann::json SpecFields(const EpisodeSpec& s) {
   if (!s.up.empty()) j["up"] = s.up;
   if (s.recenter) j["recenter"] = true;
   if (!s.model_path.empty()) j["model_path"] = s.model_path;
+  if (s.speed_probe != "check") j["speed_probe"] = s.speed_probe;
   return j;
 }
 

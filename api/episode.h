@@ -18,6 +18,11 @@ using Vec3 = std::array<double, 3>;
 
 /// Cost modes of the virtual clock (docs/design.md, "Time: two clocks").
 inline constexpr std::array<const char*, 2> kCostModes = {"model", "measured"};
+/// What the emulated clock does with its measurement of the host's speed before an episode
+/// (workers/board/EMULATION.md, "Host calibration file"): check reports the drift since the
+/// calibration and keeps the calibration's speed, use emulates the board on the speed now, off
+/// measures nothing.
+inline constexpr std::array<const char*, 3> kSpeedProbeModes = {"check", "use", "off"};
 
 /// A tunable as job validation sees it.
 struct TunableRange {
@@ -67,6 +72,7 @@ struct EpisodeSpec {
   std::string clock = "virtual";
   std::string cost = "model";
   double dilation = 1.0;      ///< emulated clock: 1 sim second = dilation wall seconds
+  std::string speed_probe = "check";  ///< emulated clock: one of kSpeedProbeModes
   double timeout_s = 0.0;     ///< 0: derived from the start-goal distance
   std::string policy;         ///< E-Navi policy file; empty: the shipped default
   std::map<std::string, double> overrides;  ///< named tunables (validated by the runner)

@@ -399,7 +399,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   const YAML::Node root = loaded;
   if (!root.IsMap()) ctx.Fail(root, "job", "expected a YAML map of name, boards, scenarios, ...");
   CheckKeys(ctx, root, "",
-            {"name", "boards", "scenarios", "methods", "seeds", "clock", "cost", "dilation",
+            {"name", "boards", "scenarios", "methods", "seeds", "clock", "cost", "dilation", "speed_probe",
              "timeout_s", "policy", "world_params", "overrides", "episode_overrides", "episodes",
              "collect", "sample", "labels"});
   // Either the matrix or an explicit episode list.
@@ -445,6 +445,11 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   if (root["clock"]) job.clock = Choices(ctx, root["clock"], "clock", ctx.catalog().clocks, "clock").front();
   if (root["cost"]) job.cost = Choices(ctx, root["cost"], "cost", kCostModes, "cost mode").front();
   if (root["dilation"]) job.dilation = Dilation(ctx, root["dilation"], "dilation");
+  if (const YAML::Node probe = root["speed_probe"]) {
+    job.speed_probe = Choices(ctx, probe, "speed_probe", kSpeedProbeModes, "speed probe mode").front();
+    if (job.clock != "emulated")
+      ctx.Fail(probe, "speed_probe", "the emulated clock's (this job's clock is " + job.clock + ")");
+  }
   if (root["timeout_s"]) job.timeout_s = Number(ctx, root["timeout_s"], "timeout_s", 0, kMaxTimeoutS);
   if (root["policy"]) {
     job.policy = Policy(ctx, root["policy"], "policy");
@@ -536,6 +541,7 @@ std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
           e.clock = job.clock;
           e.cost = job.cost;
           e.dilation = job.dilation;
+          e.speed_probe = job.speed_probe;
           e.timeout_s = job.timeout_s;
           e.policy = job.policy;
           e.overrides = job.overrides;

@@ -15,6 +15,7 @@
 //   clock: virtual                # a registered clock: virtual | emulated
 //   cost: model                   # model | measured
 //   dilation: 1.0                 # emulated clock only: 1 sim s = dilation wall s, or auto
+//   speed_probe: check            # emulated clock only: check | use | off (api/episode.h)
 //   timeout_s: 0                  # 0: derived from the start-goal distance
 //   policy: policies/enavi.json   # E-Navi policy file under an allowed root; default: shipped
 //   world_params: {density: "0.3"}
@@ -123,6 +124,7 @@ struct JobSpec {
   std::string clock = "virtual";
   std::string cost = "model";
   double dilation = 1.0;
+  std::string speed_probe = "check";
   double timeout_s = 0.0;
   std::string policy;
   std::map<std::string, std::string> world_params;

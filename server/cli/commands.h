@@ -31,10 +31,9 @@ struct ExitStatus {
 void AddPlacementOptions(CLI::App* app, std::string* units, double* scale, std::string* up, bool* recenter,
                          std::vector<std::string>* model_path);
 
-/// --speed-probe use|check|off of the commands that run an emulated episode (`enavi fly`,
-/// `enavi episode`), and what it makes of their emulation options (server/cli/episode_cmd.cc).
+/// --speed-probe check|use|off of the commands that start emulated episodes (`enavi fly`,
+/// `enavi eval`): an episode spec's or a job's `speed_probe` (server/cli/fly_cmd.cc).
 void AddSpeedProbeOption(CLI::App* app, std::string* mode);
-void ApplySpeedProbe(const std::string& mode, emulation::EmulationOptions* emulation);
 
 /// `enavi world gen|check|show|convert` (server/cli/world_cmd.cc).
 void RegisterWorldCommands(CLI::App& app);

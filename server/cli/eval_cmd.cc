@@ -140,6 +140,7 @@ void RegisterEvalCommand(CLI::App& app) {
                   "emulated clock: 1 sim second = K wall seconds, or auto: the smallest multiple of 0.25 at which "
                   "each board fits this host when its episode starts")
       ->capture_default_str();
+  AddSpeedProbeOption(sub, &o.speed_probe);
   sub->add_option("--db", f->db, "keep the results in this SQLite database (default: temporary)");
   sub->add_option("--workers", o.workers, "local worker processes")->capture_default_str();
   sub->add_option("--slots", o.slots, "episodes per worker at once")->capture_default_str();

@@ -16,6 +16,7 @@
 #include "server/cli/registry_help.h"
 #include "server/report/flight_report.h"
 #include "workers/board/board_profile.h"
+#include "workers/board/calibration_flights.h"
 #include "workers/sim/episode.h"
 #include "workers/sim/episode_config.h"
 #include "worlds/resolve.h"
@@ -32,7 +33,6 @@ struct FlyArgs {
   bool json = false;
   double dilation = 0.0;  // emulated clock; 0 (absent): the smallest that fits the host
   std::string calibration;
-  std::string speed_probe = "check";
   emulation::EmulationOptions emulation;  // experiments: hidden flags
 };
 
@@ -46,7 +46,7 @@ void Run(FlyArgs args) {
   sim::EpisodeOptions options;
   options.emulation = args.emulation;
   options.emulation.calibration_file = args.calibration;
-  ApplySpeedProbe(args.speed_probe, &options.emulation);
+  options.emulation.probe_host_speed = board::ProbeHostSpeed;  // spec.speed_probe says what for
   // An absent --dilation means "the smallest that fits" (spec.dilation 0; the value used is in
   // the result's notes).
   if (spec.clock == "emulated" || args.dilation > 0) spec.dilation = args.dilation;
@@ -81,6 +81,17 @@ void Run(FlyArgs args) {
 }
 
 }  // namespace
+
+void AddSpeedProbeOption(CLI::App* app, std::string* mode) {
+  app->add_option("--speed-probe", *mode,
+                  "emulated clock: measure this host's speed on each CPU before the episode (~2 s of flights "
+                  "a CPU) against its calibration's:\n"
+                  "    use: emulate the board on the host's speed now\n"
+                  "    check: report the drift (a warning beyond 10 %), keep the calibration's speed\n"
+                  "    off: no probe")
+      ->capture_default_str()
+      ->check(CLI::IsMember(std::vector<std::string>(api::kSpeedProbeModes.begin(), api::kSpeedProbeModes.end())));
+}
 
 void RegisterFlyCommand(CLI::App& app) {
   auto args = std::make_shared<FlyArgs>();
@@ -119,7 +130,7 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--calibration", args->calibration,
                   "emulated clock: host calibration file (default: $ENAVI_CALIBRATION, else "
                   "$XDG_STATE_HOME/enavi/calibration.json or ~/.local/state/enavi/calibration.json)");
-  AddSpeedProbeOption(fly, &args->speed_probe);
+  AddSpeedProbeOption(fly, &args->spec.speed_probe);
   // Experiments with the emulation itself (defaults documented in workers/emulation/emulation_options.h).
   fly->add_option("--emulation-server-period-us", args->emulation.server_period_us)->group("")->check(CLI::Range(100, 1000000));
   fly->add_option("--emulation-lead-us", args->emulation.lead_us)->group("")->check(CLI::Range(0, 1000000));

@@ -32,6 +32,7 @@ struct EvalOptions {
   /// Emulated clock: wall seconds per sim second, or "auto" (the smallest at which each board fits
   /// the host when its episode starts); not written into a virtual-clock job.
   std::string dilation = "auto";
+  std::string speed_probe = "check";  ///< emulated clock: api::kSpeedProbeModes
   std::filesystem::path db;      ///< empty: a temporary database, removed afterwards
   int workers = 2;
   int slots = 1;                 ///< per worker

@@ -129,9 +129,9 @@ TEST_F(EmulatedClockTest, AProbeFindingTheHostTwiceAsFastHalvesTheBoardsShareOfA
     p.speed = 2.0;
     return p;
   };
-  options_.emulation.use_probed_speed = true;
   api::EpisodeSpec spec = ShortFlight("tx2");
   spec.timeout_s = 1.0;
+  spec.speed_probe = "use";
   ::testing::internal::CaptureStderr();
   const api::EpisodeResult used = RunEpisode(spec, options_);
   const std::string warning = ::testing::internal::GetCapturedStderr();
@@ -145,11 +145,24 @@ TEST_F(EmulatedClockTest, AProbeFindingTheHostTwiceAsFastHalvesTheBoardsShareOfA
   const double tx2 = board::LoadBoard("tx2").per_core_speed;
   EXPECT_NEAR(LeadingNumber(used.notes.at("emulation.speed")), tx2 / 2.0, 1e-4) << used.notes.at("emulation.speed");
 
-  options_.emulation.use_probed_speed = false;
+  spec.speed_probe = "check";
   const api::EpisodeResult kept = RunEpisode(spec, options_);
   EXPECT_NE(kept.notes.at("emulation.speed_probe").find("not used"), std::string::npos)
       << kept.notes.at("emulation.speed_probe");
   EXPECT_NEAR(LeadingNumber(kept.notes.at("emulation.speed")), tx2, 1e-4) << kept.notes.at("emulation.speed");
+
+  spec.speed_probe = "off";
+  const api::EpisodeResult off = RunEpisode(spec, options_);
+  EXPECT_NE(off.notes.at("emulation.speed_probe").find("none"), std::string::npos)
+      << "the probe supplied is not run: " << off.notes.at("emulation.speed_probe");
+
+  spec.speed_probe = "sometimes";
+  try {
+    RunEpisode(spec, options_);
+    FAIL() << "an unknown speed_probe mode in a spec file";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "speed_probe: unknown mode 'sometimes' (known: check, use, off)");
+  }
 }
 
 TEST_F(EmulatedClockTest, FlyProbesTheHostsSpeedBeforeAnEmulatedEpisodeAndCalibrateStatusOnDemand) {
@@ -191,13 +204,14 @@ TEST_F(EmulatedClockTest, FlyProbesTheHostsSpeedBeforeAnEmulatedEpisodeAndCalibr
 
 TEST_F(EmulatedClockTest, EvalRunsAnEmulatedEpisodeThroughTheFarmAtTheDilationThatFits) {
   // The farm path: `enavi eval` -> server -> worker -> `enavi episode`, with the host
-  // calibration from the environment, as a user's batch would run. tx2's four cores need 2.6 host
+  // calibration from the environment, as a user's batch would run, and the job's speed-probe mode. tx2's four cores need 2.6 host
   // CPUs at dilation 1 on this test's calibration, more than a small host has: without `auto`
   // (the default of --dilation) the episode would be refused admission there.
   const std::string enavi = std::string(ENAVI_BINARY_DIR) + "/bin/enavi";
   const fs::path db = dir_ / "eval.db";
   const std::string command = "ENAVI_CALIBRATION=" + options_.emulation.calibration_file + " " + enavi +
-                              " eval --clock emulated --boards tx2 --scenarios empty --methods baseline --seeds 1" +
+                              " eval --clock emulated --speed-probe use --boards tx2 --scenarios empty --methods baseline"
+                              " --seeds 1" +
                               " --db " + db.string() + " > " + (dir_ / "eval.out").string() + " 2>&1";
   const int code = std::system(command.c_str());
   std::ifstream in(dir_ / "eval.out");
@@ -213,6 +227,8 @@ TEST_F(EmulatedClockTest, EvalRunsAnEmulatedEpisodeThroughTheFarmAtTheDilationTh
   const std::string notes((std::istreambuf_iterator<char>(notes_in)), std::istreambuf_iterator<char>());
   EXPECT_NE(notes.find("(auto: smallest multiple of 0.25"), std::string::npos) << notes;
   EXPECT_NE(notes.find("this host's speed moved"), std::string::npos) << "the worker's episode probed: " << notes;
+  EXPECT_NE(notes.find("used"), std::string::npos) << "and used it, as the job said: " << notes;
+  EXPECT_EQ(notes.find("not used"), std::string::npos) << notes;
 }
 
 TEST_F(EmulatedClockTest, NarrowCpusetRefusesDeadlineAndTheFallbackIsRecorded) {

@@ -156,6 +156,19 @@ TEST_F(FarmFixture, EvalPresetPaperRefusesAnotherMatrix) {
       << ReadText(dir_ / "preset.err");
 }
 
+TEST_F(FarmFixture, EvalRefusesASpeedProbeOnTheVirtualClockByName) {
+  worker::SpawnOptions o;
+  o.argv = {EnaviBinary().string(), "eval", "--speed-probe", "use"};
+  o.stderr_file = dir_ / "probe.err";
+  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
+  const auto status = eval.Wait(std::chrono::seconds(60));
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(status->code, 2) << status->Describe();
+  EXPECT_NE(ReadText(dir_ / "probe.err").find("speed_probe: the emulated clock's (this job's clock is virtual)"),
+            std::string::npos)
+      << ReadText(dir_ / "probe.err");
+}
+
 TEST_F(FarmFixture, BadJobSpecIsRejectedByTheCliWithExitCodeTwo) {
   StartServer();
   std::ofstream(dir_ / "bad.yaml") << "boards: [tx2]\nscenarios: [s1]\nmethods: [enavi]\nseeds: -1\n";

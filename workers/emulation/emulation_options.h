@@ -49,7 +49,7 @@ struct EmulationOptions {
   /// than the calibration's: the board then is as fast as its profile says on the host as it is
   /// now, give or take the probe's own scatter (a few per cent here, and now and then a probe 35 %
   /// low: workers/board/EMULATION.md). false: the probe only reports the drift (and warns beyond
-  /// board::kSpeedDriftWarning).
+  /// board::kSpeedDriftWarning). Set by the runner from the episode spec's `speed_probe`.
   bool use_probed_speed = false;
 };
 

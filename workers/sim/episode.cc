@@ -37,6 +37,19 @@ std::unique_ptr<navstack::CostModel> MakeCostModel(const api::EpisodeSpec& spec,
   throw std::invalid_argument("cost: unknown cost mode '" + spec.cost + "' (known: model, measured)");
 }
 
+void CheckSpeedProbeMode(const std::string& mode) {
+  for (const char* known : api::kSpeedProbeModes)
+    if (mode == known) return;
+  throw std::invalid_argument("speed_probe: unknown mode '" + mode + "' (known: check, use, off)");
+}
+
+// The spec's speed-probe mode applied to the probe the command supplied (options.emulation).
+emulation::EmulationOptions WithSpeedProbe(const api::EpisodeSpec& spec, emulation::EmulationOptions e) {
+  if (spec.speed_probe == "off") e.probe_host_speed = nullptr;
+  e.use_probed_speed = spec.speed_probe == "use";
+  return e;
+}
+
 // Navigation-task busy time: the four tasks the paper counts as navigation workload.
 double NavBusy(const NavAccounting& acc) {
   double busy = 0;
@@ -96,7 +109,7 @@ const std::vector<ClockEntry>& ClockEntries() {
        [](const api::EpisodeSpec& spec, const EpisodeConfig& config, const board::BoardProfile& board, int threads,
           const navstack::VehicleState& initial, const EpisodeOptions& options) -> std::unique_ptr<NavLink> {
          return std::make_unique<emulation::EmulatedNavLink>(*config.method, config.nav, threads, config.scheduler.policy, board,
-                                                  spec.dilation, initial, options.emulation);
+                                                  spec.dilation, initial, WithSpeedProbe(spec, options.emulation));
        }},
   };
   return entries;
@@ -128,6 +141,7 @@ const std::vector<ClockInfo>& Clocks() {
 api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld& prepared,
                               const EpisodeOptions& options) {
   const worlds::World& world = prepared.world;
+  CheckSpeedProbeMode(spec.speed_probe);
   const board::BoardProfile board = board::LoadBoard(spec.board);
   EpisodeConfig config = MakeEpisodeConfig(spec);
   if (options.rollout && config.nav.strategy) config.nav.strategy->record = true;

@@ -24,6 +24,7 @@ void CheckSpecFields(const nlohmann::json& j, const std::string& file) {
   every.scale = 2.0;
   every.recenter = true;
   every.model_path = {"d"};
+  every.speed_probe = "use";
   const nlohmann::json known = every;
   for (const auto& item : j.items()) {
     if (known.contains(item.key())) continue;

@@ -174,6 +174,24 @@ episode_overrides:
             "job.yaml:5: dilation: expected wall seconds per sim second in [0.01, 100] or auto (got sometimes)");
 }
 
+TEST_F(JobSpecTest, AnEmulatedJobSaysWhatItsWorkersDoWithTheHostsSpeedProbe) {
+  const JobSpec job = Parse(std::string(kMinimal) + "clock: emulated\nspeed_probe: use\n");
+  for (const EpisodeSpec& e : ExpandJob(job)) {
+    EXPECT_EQ(e.speed_probe, "use");
+    const nlohmann::json j = e;
+    EXPECT_EQ(j.at("speed_probe"), "use");
+    EXPECT_EQ(j.get<EpisodeSpec>().speed_probe, "use") << "the worker's spec file carries it";
+  }
+  for (const EpisodeSpec& e : ExpandJob(Parse(std::string(kMinimal) + "clock: emulated\n"))) {
+    EXPECT_EQ(e.speed_probe, "check");
+    EXPECT_FALSE(nlohmann::json(e).contains("speed_probe")) << "the default is not written: specs stay as they were";
+  }
+  EXPECT_EQ(Error(std::string(kMinimal) + "clock: emulated\nspeed_probe: sometimes\n"),
+            "job.yaml:7: speed_probe: unknown speed probe mode 'sometimes' (known: check, use, off)");
+  EXPECT_EQ(Error(std::string(kMinimal) + "speed_probe: off\n"),
+            "job.yaml:6: speed_probe: the emulated clock's (this job's clock is virtual)");
+}
+
 TEST_F(JobSpecTest, WorldFilesResolveUnderTheAllowedRoot) {
   const JobSpec job = Parse(R"(boards: tx2
 methods: enavi
