@@ -51,6 +51,34 @@ Side Index(const nlohmann::json& results) {
 
 std::string EpisodeOf(const nlohmann::json& r) { return r.value("episode_id", std::string()); }
 
+// A result's provenance notes, without their prefix.
+std::map<std::string, std::string> ProvenanceOf(const nlohmann::json& r) {
+  static const std::string kPrefix = "provenance.";
+  std::map<std::string, std::string> out;
+  const auto notes = r.find("notes");
+  if (notes == r.end() || !notes->is_object()) return out;
+  for (const auto& [key, value] : notes->items()) {
+    if (key.rfind(kPrefix, 0) == 0 && value.is_string()) out[key.substr(kPrefix.size())] = value.get<std::string>();
+  }
+  return out;
+}
+
+// What a provenance difference does to the comparison, for the notes that change what a flight
+// measures besides the code.
+std::string ProvenanceMeaning(const std::string& name) {
+  if (name == "cost_model_sha256")
+    return "the cost model's prices or pricing rule differ: on the virtual clock, CPU and timing deltas include "
+           "the re-pricing, not only the code's";
+  if (name == "calibration_id") return "the reference costs were fitted by another calibration";
+  if (name == "policy_sha256") return "E-Navi flew another policy";
+  return "";
+}
+
+struct ProvenanceTally {
+  std::set<std::string> base, candidate;
+  int cells = 0;
+};
+
 double Mean(const std::vector<double>& v) {
   double s = 0;
   for (double x : v) s += x;
@@ -185,6 +213,7 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
   }
   const bool exact = report.mode == "exact";
 
+  std::map<std::string, ProvenanceTally> provenance;
   auto unpaired = [&](const std::string& side, const CellKey& key, const std::string& scenario,
                       std::uint64_t seed, const nlohmann::json& r) {
     report.unpaired.push_back({side, std::get<0>(key), scenario, std::get<2>(key), EpisodeOf(r), seed});
@@ -214,6 +243,19 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
     }
     if (pairs.empty()) continue;
     cell.pairs = static_cast<int>(pairs.size());
+
+    std::set<std::string> differing;
+    for (const auto& [br, cr] : pairs) {
+      std::map<std::string, std::string> bp = ProvenanceOf(*br), cp = ProvenanceOf(*cr);
+      for (const auto& kv : cp) bp.emplace(kv.first, "(none)");
+      for (const auto& kv : bp) cp.emplace(kv.first, "(none)");
+      for (const auto& [name, value] : bp) {
+        provenance[name].base.insert(value);
+        provenance[name].candidate.insert(cp[name]);
+        if (value != cp[name]) differing.insert(name);
+      }
+    }
+    for (const std::string& name : differing) ++provenance[name].cells;
 
     std::vector<std::map<std::string, double>> bm, cm;
     std::set<std::string> names;
@@ -259,6 +301,11 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
     if (b.cells.count(key)) continue;
     for (const auto& [seed, r] : c.cells.at(key)) unpaired("candidate", key, c.scenario.at(key), seed, *r);
   }
+  for (const auto& [name, tally] : provenance) {
+    if (tally.cells == 0) continue;
+    report.provenance.push_back({name, tally.cells, {tally.base.begin(), tally.base.end()},
+                                 {tally.candidate.begin(), tally.candidate.end()}, ProvenanceMeaning(name)});
+  }
   return report;
 }
 
@@ -289,7 +336,12 @@ nlohmann::json CompareJson(const CompareReport& r) {
     unpaired.push_back({{"side", u.side}, {"board", u.board}, {"scenario", u.scenario},
                         {"method", u.method}, {"seed", u.seed}, {"episode_id", u.episode_id}});
   }
-  return {{"base", r.base}, {"candidate", r.candidate}, {"mode", r.mode},
+  nlohmann::json provenance = nlohmann::json::array();
+  for (const ProvenanceChange& p : r.provenance) {
+    provenance.push_back({{"name", p.name}, {"cells", p.cells}, {"base_values", p.base_values},
+                          {"candidate_values", p.candidate_values}, {"meaning", p.meaning}});
+  }
+  return {{"base", r.base}, {"candidate", r.candidate}, {"mode", r.mode}, {"provenance", provenance},
           {"base_results", r.base_results}, {"candidate_results", r.candidate_results},
           {"regressions", r.regressions}, {"improvements", r.improvements},
           {"changed_metrics", r.changed_metrics}, {"no_change", r.no_change()},
@@ -304,6 +356,20 @@ std::string CompareTable(const CompareReport& r) {
       << (exact ? "exact deltas (virtual clock, cost model: any difference is real)"
                 : "paired t-test over seeds, 95% confidence intervals")
       << "\n";
+  if (!r.provenance.empty()) {
+    // A few values each: a job holds one cost model digest per board and cost family.
+    auto values = [](const std::vector<std::string>& v) {
+      std::string out;
+      for (std::size_t i = 0; i < v.size() && i < 3; ++i) out += (i ? ", " : "") + v[i];
+      return v.size() > 3 ? out + " (+" + std::to_string(v.size() - 3) + " more)" : out;
+    };
+    out << "\nprovenance that differs between paired episodes (result notes provenance.*):\n";
+    for (const ProvenanceChange& p : r.provenance) {
+      out << "  " << p.name << " in " << p.cells << " of " << r.cells.size() << " cells: " << values(p.base_values)
+          << " -> " << values(p.candidate_values) << "\n";
+      if (!p.meaning.empty()) out << "    " << p.meaning << "\n";
+    }
+  }
   // Worst first: regressions, improvements, then changes of judged and of unjudged metrics.
   auto rank = [](const MetricChange& m) {
     if (m.verdict == "regression") return 0;
@@ -352,7 +418,10 @@ std::string CompareTable(const CompareReport& r) {
     int cells = 0;
     for (const CellChange& c : r.cells) cells += c.regressions > 0 ? 1 : 0;
     out << "REGRESSION: " << r.regressions << " metric(s) in " << cells << " cell(s) got worse";
-    out << (r.improvements ? ", " + std::to_string(r.improvements) + " improved" : "") << "\n";
+    out << (r.improvements ? ", " + std::to_string(r.improvements) + " improved" : "");
+    const bool repriced = std::any_of(r.provenance.begin(), r.provenance.end(),
+                                      [](const ProvenanceChange& p) { return p.name == "cost_model_sha256"; });
+    out << (repriced ? " (with another cost model: see provenance above)" : "") << "\n";
   } else {
     out << "no regression: " << r.changed_metrics << " metric(s) changed, " << r.improvements
         << " improved" << (r.unpaired.empty() ? "" : ", " + std::to_string(r.unpaired.size()) + " unpaired") << "\n";

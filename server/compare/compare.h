@@ -55,6 +55,17 @@ struct CellChange {
   int regressions = 0, improvements = 0;
 };
 
+/// A provenance note (a result's notes "provenance.*", workers/sim/episode_provenance.h) whose
+/// value differs between paired episodes: what, besides the code under test, changed between the
+/// jobs. A different cost model (its prices or its pricing rule) re-prices CPU and timing on the
+/// virtual clock, so those deltas are not the code's alone.
+struct ProvenanceChange {
+  std::string name;                  ///< without the "provenance." prefix, e.g. cost_model_sha256
+  int cells = 0;                     ///< cells with at least one pair whose values differ
+  std::vector<std::string> base_values, candidate_values;  ///< distinct values, sorted; "(none)": absent
+  std::string meaning;               ///< what the difference does to the comparison; empty: nothing known
+};
+
 /// An episode result present in one job only.
 struct Unpaired {
   std::string side;  ///< base or candidate
@@ -68,6 +79,7 @@ struct CompareReport {
   int base_results = 0, candidate_results = 0;
   std::vector<CellChange> cells;
   std::vector<Unpaired> unpaired;
+  std::vector<ProvenanceChange> provenance;  ///< by name
   int regressions = 0, improvements = 0, changed_metrics = 0;
   bool no_change() const { return changed_metrics == 0 && unpaired.empty(); }
 };

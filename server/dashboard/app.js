@@ -403,11 +403,17 @@ async function comparePage() {
       };
       return td;
     }))));
+  // What changed besides the code: another cost model re-prices CPU and timing.
+  const provenance = (report.provenance || []).map(p => el('tr', {'data-name': p.name}, el('td', {}, p.name),
+      el('td', {class: 'num'}, `${p.cells} of ${report.cells.length}`), el('td', {}, p.base_values.join(', ')),
+      el('td', {}, p.candidate_values.join(', ')), el('td', {}, p.meaning)));
   const unpaired = report.unpaired.map(u => el('tr', {}, el('td', {}, u.side), el('td', {}, u.board),
       el('td', {}, u.scenario), el('td', {}, u.method), el('td', {class: 'num'}, u.seed)));
   show(el('h1', {}, 'Compare'), form,
        el('p', {class: 'verdict'}, `${report.mode} mode: ${report.regressions} regressions, ${report.improvements} improvements, ` +
           `${report.changed_metrics} changed metrics` + (report.no_change ? ' — no change' : '')),
+       provenance.length ? el('div', {id: 'provenance'}, el('h2', {}, 'Provenance that differs'),
+                              table(['note', 'cells', 'base', 'candidate', 'meaning'], provenance)) : '',
        matrix, el('p', {class: 'muted'}, 'click a cell for its metrics and both flights'),
        unpaired.length ? el('div', {}, el('h2', {}, 'Unpaired (in one job only)'),
                             table(['only in', 'board', 'scenario', 'method', 'seed'], unpaired)) : '',

@@ -42,6 +42,9 @@ class CompareCliTest(unittest.TestCase):
         self.assertIn("tx2/s1/baseline", r.stdout)
         self.assertRegex(r.stdout, r"REGRESSION\s+flight_time_s 36.2 -> 48.2667 \(\+12.0667, \+33.3%\)")
         self.assertIn("REGRESSION: 1 metric(s) in 1 cell(s) got worse", r.stdout)
+        # That cell also flew on another cost model (planted): named above the cells, and in the verdict.
+        self.assertIn("cost_model_sha256 in 1 of 8 cells: (none) -> fake-revision-2", r.stdout)
+        self.assertIn("(with another cost model: see provenance above)", r.stdout)
         # Exact mode lists the changed episodes, and only cells that changed are printed.
         self.assertIn("changed episodes: seed 1", r.stdout)
         self.assertNotIn("pi4b/", r.stdout)

@@ -141,6 +141,11 @@ class DashboardBrowserTest(unittest.TestCase):
         for board, scenario, verdict in cells:
             expected = "regression" if (board, scenario) == ("tx2", "s1") else "same"
             self.assertEqual(verdict, expected, (board, scenario))
+        # The planted cell also flew on another cost model: the page says so above the matrix.
+        row = self.driver.find_element("css selector", "#provenance tr[data-name='cost_model_sha256']").text
+        self.assertIn("1 of 8", row)
+        self.assertIn("fake-revision-2", row)
+        self.assertIn("re-pricing", row)
         self.driver.find_element("css selector", "td.cell.regression").click()
         from selenium.webdriver.support.ui import WebDriverWait
         WebDriverWait(self.driver, 15).until(

@@ -1,7 +1,8 @@
 // seed_dashboard_db DB: a farm database for the dashboard and compare tests, without a farm.
 //   nightly-1  suite=nightly  tx2, pi4b x s1, s3 x baseline, enavi x 3 seeds; one episode fails
 //   nightly-2  suite=nightly  the same, with planner.v_max 1.5 on tx2/s1/baseline: slower
-//                             flights there, the planted regression
+//                             flights there, the planted regression, and another cost model
+//                             digest in their provenance
 //   hostile    suite=hostile  a job named <img src=x onerror=alert(1)>
 // Prints {"base", "candidate", "hostile"} job ids as JSON.
 #include <iostream>
@@ -43,7 +44,7 @@ int main(int argc, char** argv) {
       store, std::string("name: nightly-2\nlabels: {suite: nightly, branch: feature}\n") + kNightly +
                  "episode_overrides:\n" + kFailing +
                  "  - match: {board: tx2, scenario: s1, method: baseline}\n"
-                 "    overrides: {planner.v_max: 1.5}\n",
+                 "    overrides: {planner.v_max: 1.5, fake.cost_model_revision: 2}\n",
       t0 + 86400000);
   const std::string hostile = enavi::testing::SeedJob(
       store, "name: \"<img src=x onerror=alert(1)>\"\nlabels: {suite: hostile}\n"

@@ -43,6 +43,9 @@ api::EpisodeResult SyntheticResult(const api::EpisodeSpec& spec, int series_len)
   r.eci = {0.1, 0.4, 0.8};
   r.sim_time_s = r.flight_time_s;
   r.notes["producer"] = "fake_episode";
+  // A planted provenance difference (enavi compare names it).
+  if (const auto rev = spec.overrides.find("fake.cost_model_revision"); rev != spec.overrides.end())
+    r.notes["provenance.cost_model_sha256"] = "fake-revision-" + std::to_string(static_cast<int>(rev->second));
   r.events.push_back({1.0, "replan", "initial"});
   // A path along x that weaves in y, with speed and eci varying over the flight.
   const double dt = r.flight_time_s / std::max(series_len, 1);

@@ -70,6 +70,41 @@ TEST(CompareTest, ExactModeGivesExactDeltasAndNamesTheRegressedCell) {
   EXPECT_EQ(CompareJson(r).dump(), CompareJson(Compare(a, b, {})).dump());
 }
 
+TEST(CompareTest, ProvenanceThatDiffersIsNamedWithWhatItMeans) {
+  auto stamp = [](nlohmann::json job, const std::string& tx2_cost_model) {
+    for (auto& r : job) {
+      r["notes"]["provenance.git_commit"] = "abc123";
+      r["notes"]["provenance.cost_model_sha256"] = r["board"] == "tx2" ? tx2_cost_model : "pi4b-prices";
+    }
+    return job;
+  };
+  const auto a = stamp(Job("a", {"tx2", "pi4b"}, 2), "tx2-rev1");
+  EXPECT_TRUE(Compare(a, a, {}).provenance.empty());
+
+  auto b = stamp(Job("b", {"tx2", "pi4b"}, 2), "tx2-rev2");
+  b[0]["notes"].erase("provenance.git_commit");  // a result stored before the note existed
+  const CompareReport r = Compare(a, b, {});
+  ASSERT_EQ(r.provenance.size(), 2u);
+  const ProvenanceChange& cost = r.provenance[0];
+  EXPECT_EQ(cost.name, "cost_model_sha256");
+  EXPECT_EQ(cost.cells, 2) << "tx2 baseline and tx2 enavi, not pi4b";
+  EXPECT_EQ(cost.base_values, (std::vector<std::string>{"pi4b-prices", "tx2-rev1"}));
+  EXPECT_EQ(cost.candidate_values, (std::vector<std::string>{"pi4b-prices", "tx2-rev2"}));
+  EXPECT_NE(cost.meaning.find("re-pricing"), std::string::npos) << cost.meaning;
+  const ProvenanceChange& commit = r.provenance[1];
+  EXPECT_EQ(commit.name, "git_commit");
+  EXPECT_EQ(commit.cells, 1);
+  EXPECT_EQ(commit.candidate_values, (std::vector<std::string>{"(none)", "abc123"}));
+  EXPECT_TRUE(commit.meaning.empty());
+  EXPECT_TRUE(r.no_change()) << "provenance alone is not a change of any metric";
+
+  const std::string table = CompareTable(r);
+  EXPECT_NE(table.find("cost_model_sha256 in 2 of 4 cells: pi4b-prices, tx2-rev1 -> pi4b-prices, tx2-rev2"),
+            std::string::npos)
+      << table;
+  EXPECT_EQ(CompareJson(r)["provenance"][0]["cells"], 2);
+}
+
 TEST(CompareTest, BetterIsAnImprovementAndUnjudgedMetricsOnlyChange) {
   const auto a = Job("a", {"tx2"}, 2, 1.0);
   const auto b = Job("b", {"tx2"}, 2);
