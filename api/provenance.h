@@ -16,4 +16,8 @@ std::string BuildVersion();
 /// or "unknown" when built outside a git checkout.
 std::string BuildCommit();
 
+/// A result's provenance is its notes under this prefix (workers/sim/episode_provenance.h writes
+/// them, `enavi compare` reads them).
+inline constexpr const char* kProvenanceNotePrefix = "provenance.";
+
 }  // namespace enavi::api

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "api/provenance.h"
 #include "api/result_metrics.h"
 
 namespace enavi::server {
@@ -53,12 +54,12 @@ std::string EpisodeOf(const nlohmann::json& r) { return r.value("episode_id", st
 
 // A result's provenance notes, without their prefix.
 std::map<std::string, std::string> ProvenanceOf(const nlohmann::json& r) {
-  static const std::string kPrefix = "provenance.";
+  const std::string prefix = api::kProvenanceNotePrefix;
   std::map<std::string, std::string> out;
   const auto notes = r.find("notes");
   if (notes == r.end() || !notes->is_object()) return out;
   for (const auto& [key, value] : notes->items()) {
-    if (key.rfind(kPrefix, 0) == 0 && value.is_string()) out[key.substr(kPrefix.size())] = value.get<std::string>();
+    if (key.rfind(prefix, 0) == 0 && value.is_string()) out[key.substr(prefix.size())] = value.get<std::string>();
   }
   return out;
 }

@@ -143,45 +143,34 @@ TEST_F(FarmFixture, EvalPresetPaperRunsThePapersMatrixAndPrintsOursBesideIt) {
   EXPECT_EQ(store.Results(jobs[0].id).size(), 50u) << "5 boards x 5 scenarios x 2 methods x 1 seed";
 }
 
-TEST_F(FarmFixture, EvalPresetPaperRefusesAnotherMatrix) {
+// Runs `enavi ARGS...`, which must refuse the request: exit 2 and `message` on stderr.
+void ExpectRefused(const fs::path& dir, const std::vector<std::string>& args, const std::string& message) {
   worker::SpawnOptions o;
-  o.argv = {EnaviBinary().string(), "eval", "--preset", "paper", "--boards", "x86"};
-  o.stderr_file = dir_ / "preset.err";
-  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
-  const auto status = eval.Wait(std::chrono::seconds(60));
+  o.argv = {EnaviBinary().string()};
+  o.argv.insert(o.argv.end(), args.begin(), args.end());
+  o.stderr_file = dir / (args.front() + ".err");
+  worker::ChildProcess child = worker::ChildProcess::Spawn(o);
+  const auto status = child.Wait(std::chrono::seconds(60));
   ASSERT_TRUE(status.has_value());
   EXPECT_EQ(status->code, 2) << status->Describe();
-  EXPECT_NE(ReadText(dir_ / "preset.err").find("--preset paper fixes the boards and scenarios; drop --boards"),
-            std::string::npos)
-      << ReadText(dir_ / "preset.err");
+  EXPECT_NE(ReadText(o.stderr_file).find(message), std::string::npos) << ReadText(o.stderr_file);
+}
+
+TEST_F(FarmFixture, EvalPresetPaperRefusesAnotherMatrix) {
+  ExpectRefused(dir_, {"eval", "--preset", "paper", "--boards", "x86"},
+                "--preset paper fixes the boards and scenarios; drop --boards");
 }
 
 TEST_F(FarmFixture, EvalRefusesASpeedProbeOnTheVirtualClockByName) {
-  worker::SpawnOptions o;
-  o.argv = {EnaviBinary().string(), "eval", "--speed-probe", "use"};
-  o.stderr_file = dir_ / "probe.err";
-  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
-  const auto status = eval.Wait(std::chrono::seconds(60));
-  ASSERT_TRUE(status.has_value());
-  EXPECT_EQ(status->code, 2) << status->Describe();
-  EXPECT_NE(ReadText(dir_ / "probe.err").find("speed_probe: the emulated clock's (this job's clock is virtual)"),
-            std::string::npos)
-      << ReadText(dir_ / "probe.err");
+  ExpectRefused(dir_, {"eval", "--speed-probe", "use"},
+                "speed_probe: the emulated clock's (this job's clock is virtual)");
 }
 
 TEST_F(FarmFixture, BadJobSpecIsRejectedByTheCliWithExitCodeTwo) {
   StartServer();
   std::ofstream(dir_ / "bad.yaml") << "boards: [tx2]\nscenarios: [s1]\nmethods: [enavi]\nseeds: -1\n";
-  worker::SpawnOptions o;
-  o.argv = {EnaviBinary().string(), "submit", (dir_ / "bad.yaml").string(), "--server", url_};
-  o.stderr_file = dir_ / "submit.err";
-  worker::ChildProcess submit = worker::ChildProcess::Spawn(o);
-  const auto status = submit.Wait(std::chrono::seconds(60));
-  ASSERT_TRUE(status.has_value());
-  EXPECT_EQ(status->code, 2) << status->Describe();
-  EXPECT_NE(ReadText(dir_ / "submit.err").find("bad.yaml:4: seeds: count -1 outside [1, 1000]"),
-            std::string::npos)
-      << ReadText(dir_ / "submit.err");
+  ExpectRefused(dir_, {"submit", (dir_ / "bad.yaml").string(), "--server", url_},
+                "bad.yaml:4: seeds: count -1 outside [1, 1000]");
 }
 
 }  // namespace

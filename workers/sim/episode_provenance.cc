@@ -14,17 +14,20 @@ std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spe
                                                      const board::BoardProfile& board,
                                                      const std::string& cost_family, bool uses_policy) {
   std::map<std::string, std::string> notes;
-  notes["provenance.enavi_version"] = api::BuildVersion();
-  notes["provenance.git_commit"] = api::BuildCommit();
+  const auto note = [&notes](const char* name) -> std::string& {
+    return notes[std::string(api::kProvenanceNotePrefix) + name];
+  };
+  note("enavi_version") = api::BuildVersion();
+  note("git_commit") = api::BuildCommit();
   if (uses_policy) {
     if (spec.policy.empty()) {
       const auto& files = EmbeddedPolicies();
       const auto it = files.find("enavi_default.json");
-      if (it != files.end()) notes["provenance.policy_sha256"] = api::Sha256Hex(it->second);
-      notes["provenance.policy"] = "shipped enavi_default.json";
+      if (it != files.end()) note("policy_sha256") = api::Sha256Hex(it->second);
+      note("policy") = "shipped enavi_default.json";
     } else {
-      notes["provenance.policy_sha256"] = api::Sha256File(spec.policy);
-      notes["provenance.policy"] = spec.policy;
+      note("policy_sha256") = api::Sha256File(spec.policy);
+      note("policy") = spec.policy;
     }
   }
   // The digest covers exactly what prices a job of this method on this board: its cost family's
@@ -37,8 +40,8 @@ std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spe
   bytes.append(reinterpret_cast<const char*>(coefficients.ns_per_job.data()),
                sizeof(double) * coefficients.ns_per_job.size());
   bytes.append("revision " + std::to_string(navstack::kCostModelRevision));
-  notes["provenance.cost_model_sha256"] = api::Sha256Hex(bytes).substr(0, 16);
-  notes["provenance.calibration_id"] = reference.calibration_id;
+  note("cost_model_sha256") = api::Sha256Hex(bytes).substr(0, 16);
+  note("calibration_id") = reference.calibration_id;
   return notes;
 }
 
