@@ -1,5 +1,6 @@
 #include "navstack/adapt/resolution_adapter.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -11,7 +12,6 @@ namespace {
 
 // Tolerance on sim-time comparisons, so a period that ends exactly on a sample counts as elapsed.
 constexpr double kTimeSlack = 1e-9;
-
 
 constexpr ArgumentCheck kCheck("path score");
 
@@ -67,12 +67,9 @@ ResolutionAdapter::ResolutionAdapter(const ResolutionAdapterOptions& options) : 
   }
   RequireRange(options_.gamma, 0.0, 100.0, "gamma");
   RequireRange(options_.score_threshold, 0.0, 1.0, "score_threshold");
-  RequireRange(options_.low_eci, 0.0, 1.0, "low_eci");
-  RequireRange(options_.coarsen_after, 0.0, 1e6, "coarsen_after", /*lo_open=*/true);
-  RequireRange(options_.quiet_period, 0.0, 1e6, "quiet_period", /*lo_open=*/true);
-  RequireRange(options_.refine_hold, 0.0, 1e6, "refine_hold");
+  RequireRange(options_.high_eci, 0.0, 1.0, "high_eci");
+  RequireRange(options_.step_lifetime, 0.0, 1e6, "step_lifetime", /*lo_open=*/true);
   RequireRange(options_.min_refine_interval, 0.0, 1e6, "min_refine_interval");
-  RequireRange(options_.high_eci, options_.low_eci, 1.0, "high_eci");
   if (!options_.grid_origin.allFinite()) {
     throw std::invalid_argument("resolution adapter: grid_origin must be finite");
   }
@@ -114,17 +111,33 @@ void ResolutionAdapter::ReportPlanningOutcome(int level, bool found_path) {
   outcome_[static_cast<std::size_t>(level)] = found_path ? Outcome::kFound : Outcome::kFailed;
 }
 
+void ResolutionAdapter::Advance(double t) {
+  if (std::isnan(t)) throw std::domain_error("ResolutionAdapter: t must be a number");
+  if (!step_ends_.empty()) {
+    if (t + kTimeSlack < step_ends_.front()) return;
+    step_ends_.pop_front();
+  } else if (t - last_change_t_ + kTimeSlack < options_.step_lifetime) {
+    return;
+  }
+  last_change_t_ = t;
+  if (level_ == 0) return;
+  // One level coarser than where we plan now, and give that level another try.
+  const int target = level_ - 1;
+  floor_ = std::min(floor_, target);
+  outcome_[static_cast<std::size_t>(target)] = Outcome::kUnknown;
+}
+
 void ResolutionAdapter::Refine(double t) {
-  // Every trigger restarts the quiet period, also one held back below.
-  quiet_since_ = t;
+  Advance(t);
   // Several triggers in a row usually report the same obstacle coming into view: one step each
   // min_refine_interval, so a burst does not jump straight to the finest (costliest) map.
   if (has_refined_ && t - last_refine_t_ + kTimeSlack < options_.min_refine_interval) return;
-  floor_ = std::min(std::max(floor_, level_ + 1), num_levels() - 1);
+  if (level_ == num_levels() - 1) return;
   has_refined_ = true;
   last_refine_t_ = t;
-  // A refinement restarts the low-eci period: coarsening needs fresh evidence.
-  eci_low_ = false;
+  last_change_t_ = t;
+  floor_ = std::max(floor_, level_ + 1);
+  step_ends_.push_back(t + options_.step_lifetime);
 }
 
 void ResolutionAdapter::OnCollisionTrigger(double t) { Refine(t); }
@@ -136,29 +149,13 @@ double ResolutionAdapter::OnPathPlanned(double t, const PathScoreInputs& path) {
 }
 
 void ResolutionAdapter::ObserveEci(double t, double eci) {
-  if (std::isnan(eci) || std::isnan(t)) {
-    throw std::domain_error("ResolutionAdapter::ObserveEci: eci and t must be numbers");
+  if (std::isnan(eci)) throw std::domain_error("ResolutionAdapter::ObserveEci: eci must be a number");
+  // A cluttered view ahead: plan on a finer map before the triggers ask for it.
+  if (eci >= options_.high_eci) {
+    Refine(t);
+  } else {
+    Advance(t);
   }
-  if (eci > options_.low_eci) {
-    eci_low_ = false;
-    // Cluttered view ahead: plan on a finer map before the triggers ask for it (paper Sec. VI:
-    // higher eci, finer resolution).
-    if (eci >= options_.high_eci) Refine(t);
-  } else if (!eci_low_) {
-    eci_low_ = true;
-    eci_low_since_ = t;
-  }
-  const bool low_sustained = eci_low_ && t - eci_low_since_ + kTimeSlack >= options_.coarsen_after;
-  const bool quiet = t - quiet_since_ + kTimeSlack >= options_.quiet_period;
-  const bool held = !has_refined_ || t - last_refine_t_ + kTimeSlack >= options_.refine_hold;
-  if (!(low_sustained || quiet) || !held || level_ == 0) return;
-  // One step coarser than where we plan now, and give that level another try.
-  const int target = level_ - 1;
-  floor_ = std::min(floor_, target);
-  outcome_[static_cast<std::size_t>(target)] = Outcome::kUnknown;
-  // The next step needs another full period of either kind (and a Select() at the new level).
-  eci_low_since_ = t;
-  quiet_since_ = t;
 }
 
 }  // namespace enavi::navstack

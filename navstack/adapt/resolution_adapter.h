@@ -6,6 +6,7 @@
 // quality and eci; nothing here touches a map.
 
 #include <cstdint>
+#include <deque>
 #include <vector>
 
 #include <Eigen/Core>
@@ -40,25 +41,22 @@ struct ResolutionAdapterOptions {
   double gamma = 1.0;
   /// Refine one step when a planned path scores below this. Range [0, 1].
   double score_threshold = 0.9;
-  /// eci at or below this counts as "low" (open space). Range [0, 1].
-  double low_eci = 0.3;
-  /// eci at or above this refines one step (at most every min_refine_interval). Range [low_eci, 1].
+  /// eci at or above this refines one step (paper Sec. VI: higher eci, finer map). Range [0, 1].
   double high_eci = 0.5;
-  /// eci must stay low this long (sim s) before going one step coarser. Range > 0.
-  double coarsen_after = 3.0;
-  /// Also go one step coarser when no refinement trigger (collision-check trigger, path score
-  /// below the threshold, eci at or above high_eci) has come for this long (sim s), whatever
-  /// the eci: the paper (Sec. V.A) refines on those events and says nothing of coarsening, and
-  /// eci alone keeps a refinement for the rest of a flight wherever it hovers between low_eci
-  /// and high_eci. Default 3 s: the time to fly through the mapping range (5 m) at the planner's
-  /// top speed (2 m/s), 2.5 s, after which the obstacles that raised the last trigger are behind
-  /// the vehicle, rounded up to the adapter's other hysteresis periods (coarsen_after,
-  /// refine_hold). Range > 0.
-  double quiet_period = 3.0;
-  /// No coarsening within this time (sim s) after a refinement: the hysteresis that stops
-  /// refine / coarsen oscillation. Range >= 0.
-  double refine_hold = 3.0;
-  /// At most one refinement per this many sim seconds. Range >= 0.
+  /// How long a refinement step counts (sim s): each one expires this long after the trigger that
+  /// made it, and the map then goes one level coarser than the one in use. With no step live,
+  /// the map also goes one level coarser after this long without a refinement or a coarsening
+  /// (so a level that failed gets another try). The paper (Sec. V.A) refines on triggers and says
+  /// nothing of coarsening. Steps that expire on their own make the level follow how many
+  /// triggers came recently; a rule that coarsens only after a trigger-free period instead adds
+  /// up every trigger of a stretch where they come about as often as that period (s2: collision
+  /// predictions every 2.5-3 s), and the map drifts to the finest level in some flights and not
+  /// in others. Default 3 s: the time to fly through the mapping range (5 m) at the planner's top
+  /// speed (2 m/s), 2.5 s, after which the obstacles that raised the trigger are behind the
+  /// vehicle, rounded up. Range (0, 1e6].
+  double step_lifetime = 3.0;
+  /// At most one refinement per this many sim seconds: several triggers in a row usually report
+  /// the same obstacle coming into view. Range [0, 1e6].
   double min_refine_interval = 2.0;
   /// Anchor of the map grid, for the Manhattan rule.
   Eigen::Vector3d grid_origin = Eigen::Vector3d::Zero();
@@ -79,17 +77,18 @@ struct ResolutionDecision {
   ResolutionReason reason = ResolutionReason::kGreedy;
 };
 
-/// Greedy coarsest-feasible resolution with event-driven refinement and two coarsening rules.
+/// Greedy coarsest-feasible resolution with event-driven refinement steps that expire.
 ///
 /// State: a refinement floor (the coarsest level currently allowed) and, per level, the outcome of
-/// the last planning attempt there. Select() takes the coarsest level >= floor whose cells separate
-/// start and goal (Manhattan distance > 0) and whose last attempt did not fail (untried levels are
-/// tried optimistically). The floor moves one step finer after a collision-check trigger, a path
-/// scoring below the threshold or an eci at or above high_eci (each is a trigger, even when
-/// min_refine_interval holds the refinement back); it moves one step coarser (and that level gets
-/// another try) when eci has stayed low for `coarsen_after` or no trigger has come for
-/// `quiet_period`, no sooner than `refine_hold` after a refinement, and again only after another
-/// full period of either kind. The coarsening rules are evaluated at each ObserveEci().
+/// the last planning attempt there. Select() takes the coarsest level >= floor whose cells
+/// separate start and goal (Manhattan distance > 0) and whose last attempt did not fail (untried
+/// levels are tried optimistically). A collision-check trigger, a path scoring below the threshold
+/// or an eci at or above high_eci moves the floor one level finer than the level in use (at most
+/// once per min_refine_interval), as a step that expires step_lifetime later. Each expiry, and
+/// with no step live each step_lifetime without a refinement or coarsening, moves one level
+/// coarser than the level in use and gives that level another try: one level at a time, so a map
+/// refined past levels that failed near an obstacle does not jump back to the coarsest.
+/// Expiry is evaluated at each call that carries a time.
 class ResolutionAdapter {
  public:
   /// @throws std::invalid_argument for an option outside its range (message names the field).
@@ -122,17 +121,18 @@ class ResolutionAdapter {
  private:
   enum class Outcome : std::uint8_t { kUnknown, kFound, kFailed };
   void Refine(double t);
+  /// Applies the coarsening that is due at t, if any.
+  void Advance(double t);
 
   ResolutionAdapterOptions options_;
   std::vector<Outcome> outcome_;
+  std::deque<double> step_ends_;  ///< when each live refinement step expires, oldest first
   int floor_ = 0;
   int level_ = 0;
   bool has_decision_ = false;
   bool has_refined_ = false;
   double last_refine_t_ = 0.0;
-  bool eci_low_ = false;
-  double eci_low_since_ = 0.0;
-  double quiet_since_ = 0.0;  ///< time of the last trigger or coarsening
+  double last_change_t_ = 0.0;  ///< last refinement or coarsening (or the start)
 };
 
 }  // namespace enavi::navstack

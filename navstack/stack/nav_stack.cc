@@ -139,6 +139,18 @@ JobOutput NavStack::PerceptionJob() {
   if (rebuild)
     next = map_->Rebuilt(pending_resolution_, &out.work,
                          reset ? options_.scan_reset_distance : std::numeric_limits<double>::infinity());
+  // A coarser map inflates every obstacle by up to a cell: the trajectory being flown, planned on
+  // the finer map, can run into it a few tenths of a second ahead, and the check would stop the
+  // vehicle for a wall it was clearing (canyon opi5 seed 1 and tx2 seed 2, 0.4 -> 0.5 m). Such a
+  // map is not adopted; the Resolution Adapter counts that level as failed.
+  double rejected = 0.0;
+  const std::shared_ptr<const Trajectory> traj = trajectory_;
+  const double now = executor_->now();
+  if (next && !reset && strategy_ && next->resolution() > map_->resolution() && traj && !stopped_ &&
+      !scanning_ && now < traj->end_time() && PredictHit(*next, *traj, now, nullptr, &out.work).collides) {
+    rejected = next->resolution();
+    next.reset();
+  }
   const OccupancyMap& target = next ? *next : *map_;
   std::shared_ptr<const MapUpdate> update;
   if (frame && frame != last_mapped_frame_) {
@@ -149,7 +161,13 @@ JobOutput NavStack::PerceptionJob() {
                  static_cast<std::int64_t>(update->free_keys.size() + update->occupied_keys.size()));
     last_mapped_frame_ = frame;
   }
-  out.commit = [this, next, update, reset] {
+  out.commit = [this, next, update, reset, rejected] {
+    if (rejected > 0.0) {
+      AddEvent("resolution_kept", std::to_string(map_->resolution()) + " (" + std::to_string(rejected) +
+                                      " would put the trajectory in collision)");
+      strategy_->OnCoarserMapRejected(rejected);
+      if (pending_resolution_ == rejected) pending_resolution_ = map_->resolution();
+    }
     if (next) map_ = next;
     if (update) map_->Apply(*update);
     // A refined (or coarsened) map is what the Resolution Adapter asked for, a reset map what
@@ -160,20 +178,26 @@ JobOutput NavStack::PerceptionJob() {
   return out;
 }
 
+CollisionCheckResult NavStack::PredictHit(const OccupancyMap& map, const Trajectory& traj, double t,
+                                          const ObservedSpaceRule* observed, WorkCounts* work) const {
+  const double radius = options_.planner.robot_radius;
+  const VoxelGrid grid = map.ExtractGrid(SweptBox(traj, t, traj.end_time(), radius + map.resolution()), work);
+  CollisionCheckResult hit = CheckTrajectory(traj, t, traj.end_time(), grid, radius, work, observed);
+  // A hit right where the vehicle is means it is already inside inflated space and the plan is
+  // escaping from it (the planner relaxes clearance near its start): look further along instead
+  // of stopping the escape over and over.
+  if (hit.collides && hit.t_hit - t < options_.escape_window_s && t + 2 * options_.escape_window_s < traj.end_time())
+    hit = CheckTrajectory(traj, t + 2 * options_.escape_window_s, traj.end_time(), grid, radius, work, observed);
+  return hit;
+}
+
 JobOutput NavStack::CollisionJob() {
   JobOutput out;
   const std::shared_ptr<const Trajectory> traj = trajectory_;
   const double t = executor_->now();
   if (!traj || stopped_ || scanning_ || t >= traj->end_time()) return out;
-  const double radius = options_.planner.robot_radius;
-  const VoxelGrid grid = map_->ExtractGrid(SweptBox(*traj, t, traj->end_time(), radius + map_->resolution()), &out.work);
   const ObservedSpaceRule observed = ObservedRule(state_.p_WB);
-  CollisionCheckResult hit = CheckTrajectory(*traj, t, traj->end_time(), grid, radius, &out.work, &observed);
-  // A hit right where the vehicle is means it is already inside inflated space and the plan is
-  // escaping from it (the planner relaxes clearance near its start): look further along instead
-  // of stopping the escape over and over.
-  if (hit.collides && hit.t_hit - t < options_.escape_window_s && t + 2 * options_.escape_window_s < traj->end_time())
-    hit = CheckTrajectory(*traj, t + 2 * options_.escape_window_s, traj->end_time(), grid, radius, &out.work, &observed);
+  const CollisionCheckResult hit = PredictHit(*map_, *traj, t, &observed, &out.work);
   if (!hit.collides) return out;
   out.commit = [this, traj, hit] {
     if (trajectory_ != traj) return;  // a newer plan landed meanwhile

@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include "navstack/methods/navigator.h"
+#include "navstack/planning/collision_check.h"
 #include "navstack/planning/observed_space.h"
 #include "navstack/runtime/executor.h"
 
@@ -58,6 +59,10 @@ class NavStack final : public Navigator {
   JobOutput PerceptionJob();
   JobOutput PlanningJob();
   JobOutput CollisionJob();
+  /// First hit of `traj` from t on against `map`, looking past a hit right at the vehicle when the
+  /// trajectory is escaping inflated space (see CollisionJob).
+  CollisionCheckResult PredictHit(const OccupancyMap& map, const Trajectory& traj, double t,
+                                  const ObservedSpaceRule* observed, WorkCounts* work) const;
   JobOutput DifferenceJob();
   JobOutput EciJob();
   JobOutput AdapterJob();

@@ -70,8 +70,8 @@ MethodInfo EnaviMethod() {
   m.tunables = {
       {"strategy.explore", 0, 1, 0, true, "1 samples the policy's actions (training), 0 greedy"},
       {"strategy.f_adapt", 1.0, 30.0, 5.0, false, "strategy controller decisions per second, Hz"},
-      {"resolution.quiet_period", 0.5, 60.0, ResolutionAdapterOptions{}.quiet_period, false,
-       "go one map step coarser after this long without a refinement trigger, sim s"},
+      {"resolution.step_lifetime", 0.5, 60.0, ResolutionAdapterOptions{}.step_lifetime, false,
+       "each map refinement step expires this long after its trigger (the map goes one level coarser), sim s"},
       ScanResetTunable(),
   };
   m.configure = [](const MethodSetup& setup, NavStackOptions* o) {
@@ -86,7 +86,7 @@ MethodInfo EnaviMethod() {
     NavStackOptions o = options;
     o.strategy->mode = o.Param("strategy.explore") > 0 ? rl::ActMode::kSample : rl::ActMode::kGreedy;
     o.strategy->f_adapt = o.Param("strategy.f_adapt");
-    o.strategy->resolution.quiet_period = o.Param("resolution.quiet_period");
+    o.strategy->resolution.step_lifetime = o.Param("resolution.step_lifetime");
     o.scan_reset_distance = o.Param("scan.reset_distance");
     return std::unique_ptr<Navigator>(std::make_unique<NavStack>(o, executor, initial));
   };

@@ -104,6 +104,12 @@ StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eige
   return d;
 }
 
+void StrategyController::OnCoarserMapRejected(double resolution) {
+  const std::vector<double>& ladder = resolution_.options().ladder;
+  const auto it = std::find(ladder.begin(), ladder.end(), resolution);
+  if (it != ladder.end()) resolution_.ReportPlanningOutcome(static_cast<int>(it - ladder.begin()), false);
+}
+
 void StrategyController::OnPlanned(double t, bool found, const PathScoreInputs& path) {
   resolution_.ReportPlanningOutcome(resolution_.level(), found);
   if (found) resolution_.OnPathPlanned(t, path);

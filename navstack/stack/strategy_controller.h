@@ -81,6 +81,9 @@ class StrategyController {
   // Events the stack reports to the Resolution Adapter (paper Sec. V.A).
   void ObserveEci(double t, double eci) { resolution_.ObserveEci(t, eci); }
   void OnCollisionTrigger(double t) { resolution_.OnCollisionTrigger(t); }
+  /// The stack did not adopt the map at `resolution` (a ladder level, coarser than the one in
+  /// use): the trajectory being flown collides with it. The level counts as failed.
+  void OnCoarserMapRejected(double resolution);
   void OnPlanned(double t, bool found, const PathScoreInputs& path);
 
   /// Ends the rollout: the last step's reward and terminal flag (goal or collision), or the

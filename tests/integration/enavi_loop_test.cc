@@ -101,28 +101,21 @@ TEST(EnaviLoopTest, AVehicleWhosePlansKeepFailingTurnsOnTheSpot) {
 }
 
 // The boxed-in flight of a deployed policy: E-Navi with the shipped policy on s3 seed 445, tx2.
-// After an emergency stop it hovers where its map, refined from 0.5 m, still holds the coarse
-// cells of a partition and two columns 7-9 m away, beyond the 5 m mapping range: they close the
-// only door, turning cannot show them again, and without the map reset it turns for the rest of
-// the flight (timed out at 71 s). With the reset it forgets them after one fruitless turn, flies
-// to the door and sees it open. (If a retrained policy no longer meets this, the second half
-// fails: find the case again with `enavi fly --set scan.reset_distance=0`.)
-TEST(EnaviLoopTest, AVehicleBoxedInByCellsItCannotSeeAgainForgetsThemAfterAFullTurn) {
+// After an emergency stop it used to hover where its map, refined from 0.5 m and kept fine, still
+// held the coarse cells of a partition and two columns 7-9 m away, beyond the 5 m mapping range:
+// they closed the only door, turning could not show them again, and without the map reset it
+// turned for the rest of the flight (timed out at 71 s); with the reset it forgot them after one
+// fruitless turn. Since refinement steps expire on their own it still stops there (12.8 s) and
+// turns, but a plan lands within the turn and it reaches the goal at 27.4 s without the reset;
+// none of tx2 s3 seeds 400-480 times out without it either. So the reset itself is covered by
+// NavStackTest's scan tests, and this keeps the flight from getting stuck again.
+TEST(EnaviLoopTest, TheFlightThatOnceGotBoxedInReachesTheGoal) {
   api::EpisodeSpec spec = Spec("s3", 445);
   spec.board = "tx2";
   spec.method = "enavi";  // the shipped policy
   const api::EpisodeResult r = sim::RunEpisode(spec);
-  int resets = 0;
-  for (const api::EpisodeEvent& e : r.events) resets += e.kind == "map_reset";
-  EXPECT_GE(resets, 1) << Describe(r);
   EXPECT_TRUE(r.success) << Describe(r);
   EXPECT_FALSE(r.collided) << Describe(r);
-
-  spec.overrides["scan.reset_distance"] = 0;
-  spec.timeout_s = 45;
-  const api::EpisodeResult kept = sim::RunEpisode(spec);
-  EXPECT_FALSE(kept.success) << "without the reset it stays boxed in: " << Describe(kept);
-  EXPECT_FALSE(kept.collided) << Describe(kept);
 }
 
 TEST(EnaviLoopTest, ExploringEpisodeRecordsARolloutWithRewards) {

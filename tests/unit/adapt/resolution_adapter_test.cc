@@ -1,9 +1,10 @@
 // Resolution Adapter (paper Sec. V.A): greedy coarsest feasible resolution, refinement on collision
-// triggers and low path scores, coarsening after sustained low eci or a quiet period without
-// triggers, the Manhattan rule.
+// triggers, low path scores and high eci, refinement steps that expire one level at a time, the
+// Manhattan rule.
 
 #include "navstack/adapt/resolution_adapter.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -101,113 +102,98 @@ TEST(ResolutionAdapterTest, HighEciRefinesAtMostOncePerInterval) {
   EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 2);
 }
 
-TEST(ResolutionAdapterTest, SustainedLowEciCoarsensOneStepPerPeriod) {
-  ResolutionAdapterOptions o;  // low_eci 0.3, coarsen_after 3 s, refine_hold 3 s
-  o.min_refine_interval = 0.0;
-  o.quiet_period = 100.0;  // the eci rule alone
-  ResolutionAdapter ra(o);
-  ra.Select(kStart, kFarGoal);
-  ra.OnCollisionTrigger(0.0);
-  ra.Select(kStart, kFarGoal);
-  ra.OnCollisionTrigger(0.0);
-  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 2);
-  int level_at_29 = -1, level_at_30 = -1, level_at_59 = -1, level_at_60 = -1;
-  for (int k = 0; k <= 60; ++k) {
-    const double t = 0.1 * k;
-    ra.ObserveEci(t, 0.1);
-    const int level = ra.Select(kStart, kFarGoal).level;
-    if (k == 29) level_at_29 = level;
-    if (k == 30) level_at_30 = level;
-    if (k == 59) level_at_59 = level;
-    if (k == 60) level_at_60 = level;
-  }
-  EXPECT_EQ(level_at_29, 2) << "2.9 s of low eci is not enough";
-  EXPECT_EQ(level_at_30, 1) << "3 s of low eci: one step coarser";
-  EXPECT_EQ(level_at_59, 1) << "the next step needs another full period";
-  EXPECT_EQ(level_at_60, 0);
-}
-
-TEST(ResolutionAdapterTest, HighEciRestartsTheLowEciPeriod) {
-  ResolutionAdapter ra({.quiet_period = 100.0});  // the eci rule alone
-  ra.Select(kStart, kFarGoal);
-  ra.OnCollisionTrigger(0.0);
-  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
-  for (int k = 0; k <= 40; ++k) {
-    const double t = 0.1 * k;
-    ra.ObserveEci(t, k == 20 ? 0.4 : 0.1);  // one busier frame at t = 2 s (not high enough to refine)
-    ra.Select(kStart, kFarGoal);
-  }
-  EXPECT_EQ(ra.level(), 1) << "low again only since t = 2.1 s";
-  for (int k = 41; k <= 51; ++k) {
-    ra.ObserveEci(0.1 * k, 0.1);
-    ra.Select(kStart, kFarGoal);
-  }
-  EXPECT_EQ(ra.level(), 0) << "3 s of low eci since t = 2.1 s";
-}
-
-TEST(ResolutionAdapterTest, NoCoarseningWithinTheHoldAfterARefinement) {
-  ResolutionAdapterOptions opt;
-  opt.coarsen_after = 1.0;
-  opt.refine_hold = 4.0;
-  ResolutionAdapter ra(opt);
-  ra.Select(kStart, kFarGoal);
-  for (int k = 0; k <= 20; ++k) ra.ObserveEci(0.1 * k, 0.05);  // eci low since t = 0
-  ra.OnCollisionTrigger(2.0);
-  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
-  for (int k = 21; k < 60; ++k) {
-    ra.ObserveEci(0.1 * k, 0.05);
-    ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1) << "t = " << 0.1 * k << " < 2 + 4";
-  }
-  ra.ObserveEci(6.0, 0.05);
-  EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 0);
-}
-
-// The quiet rule: eci 0.4 is neither low (<= 0.3) nor high (>= 0.5), so only it can coarsen.
+// eci 0.4 is below high_eci: it neither refines nor holds a step.
 constexpr double kModerateEci = 0.4;
 
-TEST(ResolutionAdapterTest, CoarsensAfterTheQuietPeriodWhateverTheEci) {
-  ResolutionAdapter ra({.quiet_period = 5.0});
-  ra.Select(kStart, kFarGoal);
-  ra.OnCollisionTrigger(0.0);
-  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
-  for (int k = 1; k < 50; ++k) {
-    ra.ObserveEci(0.1 * k, kModerateEci);
-    ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1) << "t = " << 0.1 * k << " < 5 s since the trigger";
-  }
-  ra.ObserveEci(5.0, kModerateEci);
-  EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 0) << "5 s without a trigger: one step coarser";
+// Level chosen after an eci sample at t.
+int LevelAt(ResolutionAdapter& ra, double t) {
+  ra.ObserveEci(t, kModerateEci);
+  return ra.Select(kStart, kFarGoal).level;
 }
 
-TEST(ResolutionAdapterTest, ATriggerInsideTheQuietPeriodRestartsIt) {
-  ResolutionAdapter ra({.quiet_period = 5.0});  // min_refine_interval 2 s, threshold 0.9
+TEST(ResolutionAdapterTest, ARefinementStepLastsItsLifetimeWhateverTheEci) {
+  ResolutionAdapter ra;  // step_lifetime 3 s
   ra.Select(kStart, kFarGoal);
-  ra.OnCollisionTrigger(0.0);
-  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
-  // A collision trigger at 1 s is held back by min_refine_interval, but still restarts the period.
   ra.OnCollisionTrigger(1.0);
   ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
-  const auto level_at = [&ra](double t) {
-    ra.ObserveEci(t, kModerateEci);
-    return ra.Select(kStart, kFarGoal).level;
-  };
-  EXPECT_EQ(level_at(5.9), 1) << "4.9 s since the held-back trigger";
-  // A poor path (score e^-1) at 5.95 s, just before the period ends: one step finer, and the
-  // period starts again from there.
-  ra.OnPathPlanned(5.95, {.path_length = 20.0, .straight_length = 10.0});
-  EXPECT_EQ(level_at(6.0), 2);
-  EXPECT_EQ(level_at(10.9), 2) << "4.95 s since the poor path";
-  EXPECT_EQ(level_at(10.95), 1) << "5 s since it";
-  EXPECT_EQ(level_at(15.9), 1) << "the next step needs another full period";
-  EXPECT_EQ(level_at(15.95), 0);
+  for (int k = 11; k < 40; ++k) ASSERT_EQ(LevelAt(ra, 0.1 * k), 1) << "t = " << 0.1 * k;
+  EXPECT_EQ(LevelAt(ra, 4.0), 0) << "3 s after the trigger the step is gone";
 }
 
-TEST(ResolutionAdapterTest, CoarseningGivesAFailedLevelAnotherTry) {
+TEST(ResolutionAdapterTest, StepsExpireOneByOneInTheOrderTheyCame) {
+  ResolutionAdapter ra;
+  ra.Select(kStart, kFarGoal);
+  ra.OnCollisionTrigger(0.0);
+  ra.Select(kStart, kFarGoal);
+  ra.OnPathPlanned(2.0, {.path_length = 20.0, .straight_length = 10.0});  // score e^-1
+  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 2);
+  EXPECT_EQ(LevelAt(ra, 2.9), 2);
+  EXPECT_EQ(LevelAt(ra, 3.0), 1) << "the first step expires";
+  EXPECT_EQ(LevelAt(ra, 4.9), 1);
+  EXPECT_EQ(LevelAt(ra, 5.0), 0) << "then the second";
+}
+
+// The rule this replaced coarsened only after a trigger-free period, so triggers coming a little
+// more often than that period refined one step each and never let go (s2 nx: some flights drifted
+// to 0.1 m, others did not). Steps that expire keep the level at the number of recent triggers.
+TEST(ResolutionAdapterTest, TriggersComingAsOftenAsTheLifetimeDoNotRatchetTheMapFiner) {
+  ResolutionAdapter ra;  // step_lifetime 3 s, min_refine_interval 2 s
+  ra.Select(kStart, kFarGoal);
+  int finest = 0;
+  for (int k = 0; k <= 600; ++k) {
+    const double t = 0.1 * k;
+    if (k % 29 == 0) ra.OnCollisionTrigger(t);  // every 2.9 s
+    finest = std::max(finest, LevelAt(ra, t));
+  }
+  EXPECT_EQ(finest, 2) << "two steps live at most: each trigger's, and the one before it";
+  EXPECT_GE(ra.level(), 1);
+}
+
+TEST(ResolutionAdapterTest, ATriggerHeldBackByTheIntervalDoesNotExtendAStep) {
+  ResolutionAdapter ra;  // min_refine_interval 2 s
+  ra.Select(kStart, kFarGoal);
+  ra.OnCollisionTrigger(0.0);
+  ra.OnCollisionTrigger(1.0);
+  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
+  EXPECT_EQ(LevelAt(ra, 3.0), 0) << "the step of t = 0 expires; the held-back trigger added nothing";
+}
+
+TEST(ResolutionAdapterTest, HighEciKeepsRefiningWhileItLasts) {
+  ResolutionAdapter ra;
+  ra.Select(kStart, kFarGoal);
+  for (int k = 0; k <= 40; ++k) {
+    ra.ObserveEci(0.1 * k, 0.8);
+    ra.Select(kStart, kFarGoal);
+  }
+  EXPECT_EQ(ra.level(), 2) << "refinements at 0, 2 and 4 s; the first expired at 3 s";
+}
+
+TEST(ResolutionAdapterTest, WithNoStepLiveAFailedLevelGetsAnotherTryAfterTheLifetime) {
   ResolutionAdapter ra;
   ra.Select(kStart, kFarGoal);
   ra.ReportPlanningOutcome(0, false);
   ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
-  for (int k = 0; k <= 30; ++k) ra.ObserveEci(0.1 * k, 0.0);
-  EXPECT_EQ(ra.Select(kStart, kFarGoal).level, 0);
+  EXPECT_EQ(LevelAt(ra, 2.9), 1);
+  EXPECT_EQ(LevelAt(ra, 3.0), 0) << "3 s without a refinement or coarsening";
+}
+
+// s3 seed 2 on nx: plans failing at 0.4 m took the map down to 0.1 m level by level; when the
+// refinement step under them expired, picking the coarsest level not known to fail jumped straight
+// to 0.5 m, beside the wall, into an emergency stop. Coarsening goes one level at a time.
+TEST(ResolutionAdapterTest, ExpiryCoarsensOneLevelAtATimePastLevelsThatFailed) {
+  ResolutionAdapter ra;
+  ra.Select(kStart, kFarGoal);
+  ra.OnCollisionTrigger(0.0);
+  ASSERT_EQ(ra.Select(kStart, kFarGoal).level, 1);
+  for (int l = 1; l <= 3; ++l) {
+    ra.ReportPlanningOutcome(l, false);
+    ASSERT_EQ(ra.Select(kStart, kFarGoal).level, l + 1);
+  }
+  EXPECT_EQ(LevelAt(ra, 3.0), 3) << "the step expires: one level coarser than 4, not back to 0";
+  EXPECT_EQ(LevelAt(ra, 5.9), 3);
+  EXPECT_EQ(LevelAt(ra, 6.0), 2) << "then one more each 3 s without a refinement";
+  EXPECT_EQ(LevelAt(ra, 9.0), 1);
+  EXPECT_EQ(LevelAt(ra, 12.0), 0);
 }
 
 TEST(ResolutionAdapterTest, ShortHopGoesFinerUntilStartAndGoalAreInDifferentCells) {
@@ -246,10 +232,12 @@ TEST(ResolutionAdapterTest, RefusesBadOptions) {
   EXPECT_THROW(ResolutionAdapter({.ladder = {0.1, 0.2}}), std::invalid_argument) << "ascending";
   EXPECT_THROW(ResolutionAdapter({.ladder = {}}), std::invalid_argument);
   EXPECT_THROW(ResolutionAdapter({.score_threshold = 1.5}), std::invalid_argument);
-  EXPECT_THROW(ResolutionAdapter({.coarsen_after = 0.0}), std::invalid_argument);
-  EXPECT_THROW(ResolutionAdapter({.quiet_period = 0.0}), std::invalid_argument);
+  EXPECT_THROW(ResolutionAdapter({.high_eci = 1.5}), std::invalid_argument);
+  EXPECT_THROW(ResolutionAdapter({.step_lifetime = 0.0}), std::invalid_argument);
+  EXPECT_THROW(ResolutionAdapter({.min_refine_interval = -1.0}), std::invalid_argument);
   ResolutionAdapter ra;
   EXPECT_THROW(ra.ReportPlanningOutcome(6, true), std::out_of_range);
+  EXPECT_THROW(ra.ObserveEci(std::nan(""), 0.5), std::domain_error);
 }
 
 }  // namespace
