@@ -66,6 +66,10 @@ struct NavStackOptions {
   double escape_window_s = 0.15;
   /// A collision predicted sooner than this triggers an emergency stop, not only a replan.
   double emergency_horizon_s = 0.6;
+  /// After an emergency stop no plan is made until the vehicle is slower than this, m/s
+  /// (Ego-Planner's EMERGENCY_STOP state waits for odom speed < 0.1 before GEN_NEW_TRAJ): a plan
+  /// started from the braking vehicle's velocity keeps it moving towards the wall it stopped for.
+  double stop_speed = 0.1;
   /// Relative deadline of a triggered (sporadic) planning job, s.
   double triggered_plan_deadline_s = 0.1;
   /// Plan from the measured state instead of the reference when tracking error exceeds this, m.

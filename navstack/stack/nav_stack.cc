@@ -203,7 +203,11 @@ JobOutput NavStack::CollisionJob() {
     if (trajectory_ != traj) return;  // a newer plan landed meanwhile
     const double now = executor_->now();
     AddEvent("collision_predicted", (hit.unobserved ? "unobserved space in " : "in ") + std::to_string(hit.t_hit - now) + " s");
-    if (hit.t_hit - now < options_.emergency_horizon_s) Stop("emergency_stop");
+    if (hit.t_hit - now < options_.emergency_horizon_s) {
+      Stop("emergency_stop");
+      emergency_stopped_ = true;
+      emergency_stop_t_ = now;
+    }
     if (strategy_) strategy_->OnCollisionTrigger(now);
     RequestReplan("collision");
   };
@@ -232,6 +236,14 @@ JobOutput NavStack::PlanningJob() {
   JobOutput out;
   const double t = executor_->now();
   const std::string trigger = rates_.f_plan > 0 ? "timer" : std::exchange(pending_trigger_, {});
+  // Braking after an emergency stop: plan once the vehicle has (nearly) come to rest; the retry
+  // while stopped (OnFrame) asks again.
+  if (emergency_stopped_ && state_.v_WB.norm() >= options_.stop_speed) {
+    out.commit = [this] {
+      if (rates_.f_plan == 0 && pending_trigger_.empty()) pending_trigger_ = std::exchange(next_trigger_, {});
+    };
+    return out;
+  }
   // Continue the current reference from where the vehicle will be when this plan lands; start
   // from the measured state when there is no reference to continue or it has drifted away.
   const double t_start = t + plan_latency_estimate_;
@@ -297,9 +309,11 @@ JobOutput NavStack::PlanningJob() {
     }
     failed_plans_in_row_ = 0;
     if (failsafe_) return;  // hovering until the overload clears
+    if (emergency_stopped_ && t < emergency_stop_t_) return;  // planned from before the stop
     previous_trajectory_ = stopped_ || scanning_ ? nullptr : trajectory_;
     trajectory_ = result->trajectory;
     stopped_ = false;
+    emergency_stopped_ = false;
     scanning_ = false;
     last_search_path_ = result->search_path;
     ++replans_;

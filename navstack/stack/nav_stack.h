@@ -92,6 +92,8 @@ class NavStack final : public Navigator {
   std::shared_ptr<const Trajectory> previous_trajectory_;
   TrajectorySample hold_;              ///< reference while no trajectory exists or after a stop
   bool stopped_ = false;               ///< emergency stop active until the next plan lands
+  bool emergency_stopped_ = false;     ///< stopped for a predicted collision: no plan while braking
+  double emergency_stop_t_ = 0;        ///< when; plans started before it are not adopted
   bool scanning_ = false;              ///< turning on the spot at hold_ until the next plan lands
   double scan_t0_ = 0;                 ///< when the scan began (hold_.yaw is the yaw then)
   bool scan_reset_done_ = false;       ///< this scan has asked for the map reset

@@ -279,6 +279,73 @@ TEST(NavStackTest, AMapUpdateChecksTheTrajectoryAgainstTheNewMap) {
   EXPECT_EQ(ex.Triggered(TaskId::kCollision), 1) << "the same frame is mapped once";
 }
 
+// Flying the planned trajectory at time t, a wall fills the view 1 m ahead: the collision check
+// stops the vehicle (emergency_stop). Returns the state it was in.
+VehicleState StopInFrontOfAWall(NavStack* stack, ScriptedExecutor* ex, const NavStackOptions& o, double t) {
+  ex->AdvanceTo(t);
+  const TrajectorySample on = stack->trajectory()->Sample(t);
+  VehicleState moving;
+  moving.p_WB = on.p;
+  moving.v_WB = on.v;
+  stack->OnState(moving);
+  stack->OnFrame(ViewFrom(o, t, on.p, 0.0, 1.0f));
+  ex->Run(TaskId::kPerception);
+  ex->Run(TaskId::kCollision);
+  return moving;
+}
+
+TEST(NavStackTest, AfterAnEmergencyStopItPlansOnlyOnceTheVehicleHasSlowedDown) {
+  // Ego-Planner's EMERGENCY_STOP: no new trajectory until odom speed < 0.1 m/s. A plan started
+  // from the braking vehicle's velocity would carry it on towards the wall (a sampled training
+  // flight in the canyon stopped five times in 0.3 s that way and hit the wall).
+  ScriptedExecutor ex;
+  NavStackOptions o = OpenVolume();
+  o.rates.f_plan = 0;
+  NavStack stack(o, &ex, Hovering());
+  LookAhead(&stack, &ex, o);
+  ex.Run(TaskId::kPlanning);
+  ASSERT_NE(stack.trajectory(), nullptr);
+  stack.TakeEvents();
+  VehicleState braking = StopInFrontOfAWall(&stack, &ex, o, 1.0);
+  ASSERT_GT(braking.v_WB.norm(), 1.0);
+  ASSERT_TRUE(HasEvent(stack.TakeEvents(), "emergency_stop"));
+  const TrajectorySample hold = stack.Reference(1.1);
+  EXPECT_TRUE(hold.p.isApprox(braking.p_WB));
+
+  braking.v_WB = braking.v_WB.normalized() * 0.5;
+  stack.OnState(braking);
+  ex.Run(TaskId::kPlanning);
+  std::vector<NavEvent> events = stack.TakeEvents();
+  EXPECT_FALSE(HasEvent(events, "replan")) << "no plan while braking";
+  EXPECT_FALSE(HasEvent(events, "plan_failed")) << "not even tried";
+  EXPECT_TRUE(stack.Reference(1.2).p.isApprox(hold.p)) << "still holding where it stopped";
+
+  braking.v_WB = braking.v_WB.normalized() * 0.05;
+  stack.OnState(braking);
+  ex.Run(TaskId::kPlanning);
+  events = stack.TakeEvents();
+  EXPECT_TRUE(HasEvent(events, "replan") || HasEvent(events, "plan_failed")) << "slow: plans again";
+}
+
+TEST(NavStackTest, APlanStartedBeforeAnEmergencyStopIsNotAdoptedAfterIt) {
+  ScriptedExecutor ex;
+  NavStackOptions o = OpenVolume();
+  o.rates.f_plan = 0;
+  NavStack stack(o, &ex, Hovering());
+  LookAhead(&stack, &ex, o);
+  ex.Run(TaskId::kPlanning);
+  ASSERT_NE(stack.trajectory(), nullptr);
+  ex.AdvanceTo(0.9);
+  JobOutput before = ex.Start(TaskId::kPlanning);  // planned on the map without the wall
+  ASSERT_TRUE(before.commit);
+  StopInFrontOfAWall(&stack, &ex, o, 1.0);
+  stack.TakeEvents();
+  const auto stopped_on = stack.trajectory();
+  before.commit();
+  EXPECT_TRUE(stack.trajectory() == stopped_on) << "the old plan does not end the stop";
+  EXPECT_FALSE(HasEvent(stack.TakeEvents(), "replan"));
+}
+
 TEST(NavStackTest, RatesFromTheStrategyReachTheExecutor) {
   ScriptedExecutor ex;
   NavStack stack(OpenVolume(), &ex, Hovering());
