@@ -103,6 +103,21 @@ bool HasEvent(const std::vector<NavEvent>& events, const std::string& kind, cons
   return false;
 }
 
+// Triggered planning (as E-Navi plans) in the open volume, having looked ahead and planned once.
+struct FlyingStack {
+  FlyingStack() {
+    LookAhead(&stack, &ex, o);
+    ex.Run(TaskId::kPlanning);
+  }
+  ScriptedExecutor ex;
+  NavStackOptions o = [] {
+    NavStackOptions triggered = OpenVolume();
+    triggered.rates.f_plan = 0;
+    return triggered;
+  }();
+  NavStack stack{o, &ex, Hovering()};
+};
+
 TEST(NavStackTest, StartsItsRatesAndHoldsAtTheStartUntilAPlanLands) {
   ScriptedExecutor ex;
   NavStackOptions o = OpenVolume();
@@ -256,13 +271,11 @@ TEST(NavStackTest, AScanResetDistanceOfZeroKeepsTheMap) {
 }
 
 TEST(NavStackTest, AMapUpdateChecksTheTrajectoryAgainstTheNewMap) {
-  ScriptedExecutor ex;
-  NavStackOptions o = OpenVolume();
-  o.rates.f_plan = 0;
-  NavStack stack(o, &ex, Hovering());
-  LookAhead(&stack, &ex, o);
-  ex.Run(TaskId::kPlanning);
-  ASSERT_NE(stack.trajectory(), nullptr);
+  FlyingStack f;
+  ASSERT_NE(f.stack.trajectory(), nullptr);
+  ScriptedExecutor& ex = f.ex;
+  const NavStackOptions& o = f.o;
+  NavStack& stack = f.stack;
   ex.triggers.clear();
   auto frame = std::make_shared<DepthFrame>();
   frame->t = 0.1;
@@ -298,13 +311,11 @@ TEST(NavStackTest, AfterAnEmergencyStopItPlansOnlyOnceTheVehicleHasSlowedDown) {
   // Ego-Planner's EMERGENCY_STOP: no new trajectory until odom speed < 0.1 m/s. A plan started
   // from the braking vehicle's velocity would carry it on towards the wall (a sampled training
   // flight in the canyon stopped five times in 0.3 s that way and hit the wall).
-  ScriptedExecutor ex;
-  NavStackOptions o = OpenVolume();
-  o.rates.f_plan = 0;
-  NavStack stack(o, &ex, Hovering());
-  LookAhead(&stack, &ex, o);
-  ex.Run(TaskId::kPlanning);
-  ASSERT_NE(stack.trajectory(), nullptr);
+  FlyingStack f;
+  ASSERT_NE(f.stack.trajectory(), nullptr);
+  ScriptedExecutor& ex = f.ex;
+  const NavStackOptions& o = f.o;
+  NavStack& stack = f.stack;
   stack.TakeEvents();
   VehicleState braking = StopInFrontOfAWall(&stack, &ex, o, 1.0);
   ASSERT_GT(braking.v_WB.norm(), 1.0);
@@ -328,13 +339,11 @@ TEST(NavStackTest, AfterAnEmergencyStopItPlansOnlyOnceTheVehicleHasSlowedDown) {
 }
 
 TEST(NavStackTest, APlanStartedBeforeAnEmergencyStopIsNotAdoptedAfterIt) {
-  ScriptedExecutor ex;
-  NavStackOptions o = OpenVolume();
-  o.rates.f_plan = 0;
-  NavStack stack(o, &ex, Hovering());
-  LookAhead(&stack, &ex, o);
-  ex.Run(TaskId::kPlanning);
-  ASSERT_NE(stack.trajectory(), nullptr);
+  FlyingStack f;
+  ASSERT_NE(f.stack.trajectory(), nullptr);
+  ScriptedExecutor& ex = f.ex;
+  const NavStackOptions& o = f.o;
+  NavStack& stack = f.stack;
   ex.AdvanceTo(0.9);
   JobOutput before = ex.Start(TaskId::kPlanning);  // planned on the map without the wall
   ASSERT_TRUE(before.commit);
