@@ -125,6 +125,11 @@ void NavStack::RequestReplan(const char* why) {
   executor_->Trigger(TaskId::kPlanning, options_.triggered_plan_deadline_s);
 }
 
+void NavStack::PromoteNextTrigger() {
+  // A planning job finished: the trigger that asked for the next one now names it.
+  if (rates_.f_plan == 0 && pending_trigger_.empty()) pending_trigger_ = std::exchange(next_trigger_, {});
+}
+
 JobOutput NavStack::PerceptionJob() {
   JobOutput out;
   const DepthFramePtr frame = latest_frame_;
@@ -239,9 +244,7 @@ JobOutput NavStack::PlanningJob() {
   // Braking after an emergency stop: plan once the vehicle has (nearly) come to rest; the retry
   // while stopped (OnFrame) asks again.
   if (emergency_stopped_ && state_.v_WB.norm() >= options_.stop_speed) {
-    out.commit = [this] {
-      if (rates_.f_plan == 0 && pending_trigger_.empty()) pending_trigger_ = std::exchange(next_trigger_, {});
-    };
+    out.commit = [this] { PromoteNextTrigger(); };
     return out;
   }
   // Continue the current reference from where the vehicle will be when this plan lands; start
@@ -285,7 +288,7 @@ JobOutput NavStack::PlanningJob() {
     score.straight_length = (result->goal_used_W - start.p).norm();
   }
   out.commit = [this, result, t, score, trigger] {
-    if (rates_.f_plan == 0 && pending_trigger_.empty()) pending_trigger_ = std::exchange(next_trigger_, {});
+    PromoteNextTrigger();
     if (strategy_) strategy_->OnPlanned(executor_->now(), result->ok(), score);
     // Latency = board time from start to finish; the next plan aims that far ahead.
     const double latency = executor_->now() - t;

@@ -78,6 +78,7 @@ class NavStack final : public Navigator {
   bool Hovering(double t) const;
   void AddEvent(std::string kind, std::string detail = {});
   void RequestReplan(const char* why);
+  void PromoteNextTrigger();
 
   NavStackOptions options_;
   TaskExecutor* executor_;
