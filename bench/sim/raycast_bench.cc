@@ -234,7 +234,8 @@ nlohmann::json ToJson(const RaycastBenchResult& r) {
         {"native_ray8", r.embree.native_ray8},
         {"native_ray16", r.embree.native_ray16},
         {"ray_stream", r.embree.ray_stream},
-        {"tasking", r.embree.tasking}}},
+        {"tasking", r.embree.tasking},
+        {"ray_kernels", r.embree.ray_kernels}}},
       {"modes", modes},
   };
 }

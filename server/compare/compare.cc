@@ -72,6 +72,9 @@ std::string ProvenanceMeaning(const std::string& name) {
            "the re-pricing, not only the code's";
   if (name == "calibration_id") return "the reference costs were fitted by another calibration";
   if (name == "policy_sha256") return "E-Navi flew another policy";
+  if (name == "ray_kernels")
+    return "flown on hosts with other Embree ray kernels: depth images, and so flights, can differ with no "
+           "change of code";
   return "";
 }
 

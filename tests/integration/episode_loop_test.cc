@@ -11,6 +11,7 @@
 
 #include "api/episode.h"
 #include "tests/integration/loop_test_util.h"
+#include "workers/sim/embree_scene.h"
 #include "workers/sim/episode.h"
 #include "worlds/resolve.h"
 
@@ -60,6 +61,8 @@ TEST(EpisodeDeterminismTest, SameSpecTwiceGivesIdenticalJsonIncludingTimeSeries)
   ASSERT_GT(first.replans, 10) << Describe(first);
   EXPECT_EQ(a, b) << "a regenerated world and a prepared one flew differently";
   EXPECT_EQ(b, c) << "two episodes in one prepared world flew differently";
+  // Identical on every host of one class of ray kernels; the result says which class it was.
+  EXPECT_EQ(first.notes.at("provenance.ray_kernels"), sim::RayKernels());
 }
 
 TEST(EpisodeDeterminismTest, BaselineFliesTheSameFlightOnTheDenseMapAsOnTheOctree) {

@@ -43,11 +43,20 @@ void ThrowIfEmbreeError(RTCDevice device, const char* call) {
   throw std::runtime_error(std::string("Embree error in ") + call + ": " + message);
 }
 
+std::string RayKernels() {
+  // GCC's checks include the OS's YMM state (XGETBV), as Embree's own does.
+  const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                    __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
+                    __builtin_cpu_supports("lzcnt");
+  return avx2 ? "avx2" : "sse-avx";
+}
+
 // ---------------------------------------------------------------------------------------------
 // EmbreeDevice
 
 EmbreeDevice::EmbreeDevice() : impl_(std::make_unique<Impl>()) {
-  impl_->device = rtcNewDevice("verbose=0");
+  const std::string config = std::string("verbose=0,max_isa=") + kEmbreeMaxIsa;
+  impl_->device = rtcNewDevice(config.c_str());
   if (impl_->device == nullptr) {
     throw std::runtime_error(std::string("Embree error in rtcNewDevice: ") +
                              ErrorName(rtcGetDeviceError(nullptr)));
@@ -81,6 +90,7 @@ EmbreeDeviceInfo EmbreeDevice::Info() const {
     case 2: info.tasking = "ppl"; break;
     default: info.tasking = "unknown"; break;
   }
+  info.ray_kernels = RayKernels();
   ThrowIfEmbreeError(d, "rtcGetDeviceProperty");
   return info;
 }

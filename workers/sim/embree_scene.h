@@ -20,7 +20,23 @@ struct EmbreeDeviceInfo {
   bool native_ray16 = false;
   bool ray_stream = false;
   std::string tasking;       ///< "internal", "tbb" or "ppl"
+  std::string ray_kernels;   ///< RayKernels()
 };
+
+/// Embree picks its ray kernels for the widest SIMD instruction set of the host, and kernels of
+/// different widths traverse differently built BVHs, so a ray that grazes an edge can report
+/// another hit and a flight can take another path (measured: s2 seed 1 on tx2, E-Navi, flies
+/// 30.86 s with the SSE2, SSE4.2 or AVX kernels and 32.92 s with the AVX2 ones, glibc's FMA
+/// variants of libm masked or not). The device is therefore capped at AVX2 (Debian's Embree
+/// 3.13.5 also carries AVX-512 kernels), so that every host with AVX2, AVX-512 ones included,
+/// runs the same kernels; a host without AVX2 runs the narrower ones.
+inline constexpr const char* kEmbreeMaxIsa = "avx2";
+
+/// The kernels this host runs under that cap: "avx2", or "sse-avx" when the CPU lacks one of the
+/// features Embree's AVX2 kernels need (AVX2, FMA3, BMI1, BMI2, LZCNT, with the OS saving YMM).
+/// Results of hosts with different kernels are not comparable bit for bit; episodes record it
+/// (provenance.ray_kernels).
+std::string RayKernels();
 
 /// The process-wide Embree device. Created on first use (thread-safe), never destroyed before
 /// the scenes that use it (Embree reference-counts the device from each scene). Embree errors

@@ -4,6 +4,7 @@
 
 #include "api/provenance.h"
 #include "navstack/runtime/cost_model.h"
+#include "workers/sim/embree_scene.h"
 
 namespace enavi::sim {
 
@@ -42,6 +43,7 @@ std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spe
   bytes.append("revision " + std::to_string(navstack::kCostModelRevision));
   note("cost_model_sha256") = api::Sha256Hex(bytes).substr(0, 16);
   note("calibration_id") = reference.calibration_id;
+  note("ray_kernels") = RayKernels();
   return notes;
 }
 

@@ -1,8 +1,9 @@
 #pragma once
 // Provenance notes of one episode (`provenance.*` in EpisodeResult::notes): the enavi build, the
 // policy file's sha256 (methods that fly a policy), the cost model's coefficient digest and the
-// calibration id of its reference costs. They name the inputs, not the host, so the same build
-// gives the same notes (and the same result.json) on any machine.
+// calibration id of its reference costs, and the one property of the host that changes a flight:
+// the class of Embree's ray kernels (RayKernels). The same build gives the same notes (and the
+// same result.json) on every host of one kernel class.
 
 #include <map>
 #include <string>

@@ -105,6 +105,19 @@ TEST(CompareTest, ProvenanceThatDiffersIsNamedWithWhatItMeans) {
   EXPECT_EQ(CompareJson(r)["provenance"][0]["cells"], 2);
 }
 
+TEST(CompareTest, RunsFromHostsWithOtherRayKernelsAreNamed) {
+  auto on = [](nlohmann::json job, const std::string& kernels) {
+    for (auto& r : job) r["notes"]["provenance.ray_kernels"] = kernels;
+    return job;
+  };
+  const auto a = on(Job("a", {"tx2"}, 2), "avx2");
+  const CompareReport r = Compare(a, on(Job("b", {"tx2"}, 2), "sse-avx"), {});
+  ASSERT_EQ(r.provenance.size(), 1u);
+  EXPECT_EQ(r.provenance[0].name, "ray_kernels");
+  EXPECT_NE(r.provenance[0].meaning.find("no change of code"), std::string::npos) << r.provenance[0].meaning;
+  EXPECT_TRUE(Compare(a, a, {}).provenance.empty());
+}
+
 TEST(CompareTest, BetterIsAnImprovementAndUnjudgedMetricsOnlyChange) {
   const auto a = Job("a", {"tx2"}, 2, 1.0);
   const auto b = Job("b", {"tx2"}, 2);

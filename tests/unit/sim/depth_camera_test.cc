@@ -3,11 +3,15 @@
 #include "workers/sim/depth_camera.h"
 
 #include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
 #include <thread>
 
 #include <gtest/gtest.h>
 
 #include "tests/unit/sim/mesh_builders.h"
+#include "workers/sim/embree_scene.h"
 
 namespace enavi::sim {
 namespace {
@@ -185,6 +189,26 @@ DepthImage RenderWall(double distance, const DepthNoise& noise, std::uint64_t se
   DepthCamera(CameraIntrinsics::Default(), noise).Render(EmbreeScene(mesh), CameraLookingAlongX(),
                                                          &image, seed);
   return image;
+}
+
+// The kernel class decides the flight (embree_scene.h), so it is read from CPUID by the compiler's
+// builtins; the kernel's view of the same flags (/proc/cpuinfo) must agree.
+TEST(EmbreeDeviceTest, RayKernelsNameTheClassTheCpuFlagsGive) {
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  std::set<std::string> flags;
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("flags", 0) != 0) continue;
+    std::istringstream words(line.substr(line.find(':') + 1));
+    for (std::string w; words >> w;) flags.insert(w);
+    break;
+  }
+  if (flags.empty()) GTEST_SKIP() << "no flags line in /proc/cpuinfo on this host";
+  // /proc/cpuinfo calls LZCNT "abm" on both vendors.
+  const bool avx2 = flags.count("avx2") && flags.count("fma") && flags.count("bmi1") &&
+                    flags.count("bmi2") && flags.count("abm");
+  EXPECT_EQ(RayKernels(), avx2 ? "avx2" : "sse-avx");
+  EXPECT_EQ(EmbreeDevice::Get().Info().ray_kernels, RayKernels());
 }
 
 TEST(DepthNoiseTest, SameSeedSameImageDifferentSeedDifferentImage) {
