@@ -1,9 +1,12 @@
-# enavi_add_test(<name> SOURCES a.cc [b.cc] LIBS enavi::x [...] [LABELS unit] [LOCK name] [SERIAL])
+# enavi_add_test(<name> SOURCES a.cc [b.cc] LIBS enavi::x [...] [LABELS unit] [LOCK name] [SERIAL]
+#                [COST seconds])
 # One line per test binary; every TEST in it is registered with CTest. LOCK serialises the tests
 # that share a host resource (cgroups, CPU-share measurements) under `ctest -j`; SERIAL runs each
-# of them with no other test at all (measurements that need every host CPU).
+# of them with no other test at all (measurements that need every host CPU). COST: about how long
+# its longest test takes; CTest starts costlier tests first when it has no timings of its own (a
+# fresh checkout, as in CI), so that long tests holding a LOCK do not run last with a core idle.
 function(enavi_add_test name)
-  cmake_parse_arguments(ARG "SERIAL" "LOCK" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "SERIAL" "LOCK;COST" "SOURCES;LIBS;LABELS" ${ARGN})
   if(NOT ARG_SOURCES)
     set(ARG_SOURCES ${name}.cc)
   endif()
@@ -35,6 +38,9 @@ function(enavi_add_test name)
   endif()
   if(ARG_SERIAL)
     list(APPEND props RUN_SERIAL TRUE)
+  endif()
+  if(ARG_COST)
+    list(APPEND props COST ${ARG_COST})
   endif()
   gtest_discover_tests(${name} PROPERTIES ${props} DISCOVERY_TIMEOUT 60)
 endfunction()
