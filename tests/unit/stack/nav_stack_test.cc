@@ -104,6 +104,7 @@ bool HasEvent(const std::vector<NavEvent>& events, const std::string& kind, cons
 }
 
 // Triggered planning (as E-Navi plans) in the open volume, having looked ahead and planned once.
+// Members in this order: the tests bind them as `auto& [ex, o, stack] = f`.
 struct FlyingStack {
   FlyingStack() {
     LookAhead(&stack, &ex, o);
@@ -272,10 +273,8 @@ TEST(NavStackTest, AScanResetDistanceOfZeroKeepsTheMap) {
 
 TEST(NavStackTest, AMapUpdateChecksTheTrajectoryAgainstTheNewMap) {
   FlyingStack f;
-  ASSERT_NE(f.stack.trajectory(), nullptr);
-  ScriptedExecutor& ex = f.ex;
-  const NavStackOptions& o = f.o;
-  NavStack& stack = f.stack;
+  auto& [ex, o, stack] = f;
+  ASSERT_NE(stack.trajectory(), nullptr);
   ex.triggers.clear();
   auto frame = std::make_shared<DepthFrame>();
   frame->t = 0.1;
@@ -312,10 +311,8 @@ TEST(NavStackTest, AfterAnEmergencyStopItPlansOnlyOnceTheVehicleHasSlowedDown) {
   // from the braking vehicle's velocity would carry it on towards the wall (a sampled training
   // flight in the canyon stopped five times in 0.3 s that way and hit the wall).
   FlyingStack f;
-  ASSERT_NE(f.stack.trajectory(), nullptr);
-  ScriptedExecutor& ex = f.ex;
-  const NavStackOptions& o = f.o;
-  NavStack& stack = f.stack;
+  auto& [ex, o, stack] = f;
+  ASSERT_NE(stack.trajectory(), nullptr);
   stack.TakeEvents();
   VehicleState braking = StopInFrontOfAWall(&stack, &ex, o, 1.0);
   ASSERT_GT(braking.v_WB.norm(), 1.0);
@@ -340,10 +337,8 @@ TEST(NavStackTest, AfterAnEmergencyStopItPlansOnlyOnceTheVehicleHasSlowedDown) {
 
 TEST(NavStackTest, APlanStartedBeforeAnEmergencyStopIsNotAdoptedAfterIt) {
   FlyingStack f;
-  ASSERT_NE(f.stack.trajectory(), nullptr);
-  ScriptedExecutor& ex = f.ex;
-  const NavStackOptions& o = f.o;
-  NavStack& stack = f.stack;
+  auto& [ex, o, stack] = f;
+  ASSERT_NE(stack.trajectory(), nullptr);
   ex.AdvanceTo(0.9);
   JobOutput before = ex.Start(TaskId::kPlanning);  // planned on the map without the wall
   ASSERT_TRUE(before.commit);
