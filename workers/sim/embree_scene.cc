@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 
 #include "workers/sim/embree_impl.h"
@@ -44,11 +45,13 @@ void ThrowIfEmbreeError(RTCDevice device, const char* call) {
 }
 
 std::string RayKernels() {
-  // GCC's checks include the OS's YMM state (XGETBV), as Embree's own does.
+  // The features of Embree's AVX2 target, the cap's level. GCC's checks include the OS's YMM
+  // state (XGETBV), as Embree's own does.
+  static_assert(std::string_view(kEmbreeMaxIsa) == "avx2", "RayKernels checks the AVX2 features");
   const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
                     __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
                     __builtin_cpu_supports("lzcnt");
-  return avx2 ? "avx2" : "sse-avx";
+  return avx2 ? kEmbreeMaxIsa : "sse-avx";
 }
 
 // ---------------------------------------------------------------------------------------------
