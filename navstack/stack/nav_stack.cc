@@ -287,7 +287,7 @@ JobOutput NavStack::PlanningJob() {
     score.path_length = result->path_length;
     score.straight_length = (result->goal_used_W - start.p).norm();
   }
-  out.commit = [this, result, t, score, trigger] {
+  out.commit = [this, result, t, score, trigger, v_max = planner.v_max] {
     PromoteNextTrigger();
     if (strategy_) strategy_->OnPlanned(executor_->now(), result->ok(), score);
     // Latency = board time from start to finish; the next plan aims that far ahead.
@@ -315,6 +315,7 @@ JobOutput NavStack::PlanningJob() {
     if (emergency_stopped_ && t < emergency_stop_t_) return;  // planned from before the stop
     previous_trajectory_ = stopped_ || scanning_ ? nullptr : trajectory_;
     trajectory_ = result->trajectory;
+    plan_speed_cap_ = v_max;
     stopped_ = false;
     emergency_stopped_ = false;
     scanning_ = false;
@@ -415,6 +416,10 @@ JobOutput NavStack::AdapterJob() {
     r.resolution = decision->resolution;
     SetRates(r);
     speed_limit_ = decision->v_limit;
+    // The limit binds plans made from now on. A plan made for more speed is replaced at once, or
+    // the vehicle flies it on at its old speed towards the obstacle that set the limit.
+    if (trajectory_ && !stopped_ && !scanning_ && plan_speed_cap_ > speed_limit_ && state_.v_WB.norm() > speed_limit_)
+      RequestReplan("speed_limit");
     if (decision->fallback) AddEvent("constraint_fallback");
     if (decision->scaled) AddEvent("period_scaling");
     if (decision->failsafe && !failsafe_) {

@@ -117,6 +117,7 @@ class NavStack final : public Navigator {
   double eci_ = 0, d_eci_ = 0;
   double d_ahead_ = std::numeric_limits<double>::infinity();      ///< EciResult::d_ahead, latest frame
   double speed_limit_ = std::numeric_limits<double>::infinity();  ///< StrategyDecision::v_limit
+  double plan_speed_cap_ = std::numeric_limits<double>::infinity();  ///< v_max of the plan being flown
   double straight_length_ = 0;
   double flown_ = 0;
   Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();

@@ -63,7 +63,8 @@ struct StrategyDecision {
   bool fallback = false;        ///< nothing satisfied C1-C4
   bool failsafe = false;        ///< persistent overload: hover
   bool recovered = false;       ///< left the fail-safe this epoch
-  /// Speed limit for new plans, m/s, when no action satisfies the reaction constraint: the
+  /// Speed limit for plans, m/s (the stack replaces a faster plan being flown), when no action
+  /// satisfies the reaction constraint: the
   /// largest speed at which the chosen rates still stop the vehicle before the nearest obstacle
   /// ahead (reaction_constraint.h, SafeSpeed), at least 0.3 m/s. +inf otherwise.
   double v_limit = std::numeric_limits<double>::infinity();

@@ -13,6 +13,9 @@
 
 #include <gtest/gtest.h>
 
+#include "navstack/adapt/action_grid.h"
+#include "navstack/rl/policy_io.h"
+
 namespace enavi::navstack {
 namespace {
 
@@ -70,11 +73,12 @@ VehicleState Hovering() {
 
 // A frame from a level camera at p_W looking along yaw (camera z forward, x right, y down), every
 // pixel at `depth` m (0: nothing in view, so the stack maps the view cone free up to its mapping
-// range).
+// range), taken at velocity v_W.
 DepthFramePtr ViewFrom(const NavStackOptions& o, double t, const Eigen::Vector3d& p_W, double yaw = 0.0,
-                       float depth = 0.0f) {
+                       float depth = 0.0f, const Eigen::Vector3d& v_W = Eigen::Vector3d::Zero()) {
   auto frame = std::make_shared<DepthFrame>();
   frame->t = t;
+  frame->v_W = v_W;
   frame->image = DepthImage(o.camera.width, o.camera.height);
   std::fill(frame->image.data.begin(), frame->image.data.end(), depth);
   const Eigen::Vector3d forward(std::cos(yaw), std::sin(yaw), 0.0);
@@ -348,6 +352,63 @@ TEST(NavStackTest, APlanStartedBeforeAnEmergencyStopIsNotAdoptedAfterIt) {
   before.commit();
   EXPECT_TRUE(stack.trajectory() == stopped_on) << "the old plan does not end the stop";
   EXPECT_FALSE(HasEvent(stack.TakeEvents(), "replan"));
+}
+
+double MaxSpeedBetween(const Trajectory& trajectory, double t0, double t1) {
+  double v = 0;
+  for (double t = t0; t <= t1; t += 0.01) v = std::max(v, trajectory.Sample(t).v.norm());
+  return v;
+}
+
+TEST(NavStackTest, ASpeedLimitBelowThePlansSpeedReplacesThePlanWithASlowerOne) {
+  // E-Navi (an untrained policy: the limit does not depend on the choice) flying its first plan
+  // sees a wall 0.6 m ahead, nearer than it can brake from its speed at any rate: the strategy
+  // limits the speed of new plans. The plan being flown was made for more speed, so the stack
+  // replans at once rather than flying it on towards the wall.
+  ScriptedExecutor ex;
+  NavStackOptions o = OpenVolume();
+  o.rates.f_plan = 0;
+  StrategyOptions strategy;
+  strategy.policy = std::make_shared<const rl::PolicyFile>(rl::MakeFrequencyPolicy(ActionGrid(), 7));
+  o.strategy = strategy;
+  NavStack stack(o, &ex, Hovering());
+  LookAhead(&stack, &ex, o);
+  ex.Run(TaskId::kPlanning);
+  ASSERT_NE(stack.trajectory(), nullptr);
+  const auto first = stack.trajectory();
+  const double t = 1.5;
+  ex.AdvanceTo(t);
+  const TrajectorySample on = first->Sample(t);
+  ASSERT_GT(on.v.norm(), 1.0) << "the test needs a vehicle that cannot stop within 0.6 m";
+  VehicleState moving;
+  moving.p_WB = on.p;
+  moving.v_WB = on.v;
+  stack.OnState(moving);
+  ex.Run(TaskId::kAdapter);  // the wall is not in view yet: no limit
+  ex.triggers.clear();
+  stack.TakeEvents();
+  ex.Run(TaskId::kPlanning);  // a plan at the options' speed
+  ASSERT_TRUE(HasEvent(stack.TakeEvents(), "replan"));
+  ex.Run(TaskId::kAdapter);
+  EXPECT_EQ(ex.Triggered(TaskId::kPlanning), 0) << "without a limit the plan stays";
+
+  stack.OnFrame(ViewFrom(o, t, on.p, 0.0, 0.6f, on.v));
+  ex.Run(TaskId::kEci);  // only the eci job: the map stays open, so planning can succeed
+  ex.Run(TaskId::kAdapter);
+  ASSERT_EQ(ex.Triggered(TaskId::kPlanning), 1) << "a limit below the plan's speed asks for a plan";
+  ex.Run(TaskId::kPlanning);
+  const std::vector<NavEvent> events = stack.TakeEvents();
+  ASSERT_TRUE(HasEvent(events, "replan", "speed_limit"));
+  const double v_planned = MaxSpeedBetween(*first, t, t + 3.0);
+  // The new plan brakes from the flown speed (about 1.9 m/s) within 2 s: the planner times its
+  // path at the limit and fits the start velocity in (bspline.cc, BsplineFromPath).
+  const double v_limited = MaxSpeedBetween(*stack.trajectory(), t + 2.0, t + 4.0);
+  EXPECT_GT(v_planned, 1.0);
+  EXPECT_LT(v_limited, 0.5) << "once braked, the new plan flies at the limit (at least 0.3 m/s)";
+
+  ex.triggers.clear();
+  ex.Run(TaskId::kAdapter);
+  EXPECT_EQ(ex.Triggered(TaskId::kPlanning), 0) << "a plan made within the limit is kept";
 }
 
 TEST(NavStackTest, RatesFromTheStrategyReachTheExecutor) {
