@@ -150,7 +150,10 @@ Transition EnvCore::Reset(std::uint64_t seed) {
   spec.overrides = config_.overrides;
   // Sampled decisions are the ones the hook takes.
   spec.overrides["strategy.explore"] = 1;
-  worlds::WorldRequest request{spec.world, spec.seed, spec.world_params, std::nullopt, std::nullopt};
+  worlds::WorldRequest request;
+  request.world = spec.world;
+  request.seed = spec.seed;
+  request.params = spec.world_params;
   std::shared_ptr<const sim::PreparedWorld> world = sim::PrepareWorld(worlds::ResolveWorld(request));
 
   hook_ = std::make_unique<Hook>();

@@ -360,7 +360,7 @@ double MaxSpeedBetween(const Trajectory& trajectory, double t0, double t1) {
   return v;
 }
 
-TEST(NavStackTest, ASpeedLimitBelowThePlansSpeedReplacesThePlanWithASlowerOne) {
+TEST(NavStackTest, ASpeedLimitReplacesAFasterPlanAndItsLiftingThePlanMadeUnderIt) {
   // E-Navi (an untrained policy: the limit does not depend on the choice) flying its first plan
   // sees a wall 0.6 m ahead, nearer than it can brake from its speed at any rate: the strategy
   // limits the speed of new plans. The plan being flown was made for more speed, so the stack
@@ -409,6 +409,20 @@ TEST(NavStackTest, ASpeedLimitBelowThePlansSpeedReplacesThePlanWithASlowerOne) {
   ex.triggers.clear();
   ex.Run(TaskId::kAdapter);
   EXPECT_EQ(ex.Triggered(TaskId::kPlanning), 0) << "a plan made within the limit is kept";
+
+  // The wall goes out of view: the limit is lifted, and the plan made under it is replaced by
+  // one at the options' speed rather than crawled along until something else asks for a plan.
+  ex.AdvanceTo(t + 0.2);
+  stack.OnFrame(ViewFrom(o, t + 0.2, on.p, 0.0, 0.0f, on.v));
+  ex.Run(TaskId::kEci);
+  ex.Run(TaskId::kAdapter);
+  ASSERT_EQ(ex.Triggered(TaskId::kPlanning), 1) << "no limit any more: a plan at full speed";
+  ex.Run(TaskId::kPlanning);
+  ASSERT_TRUE(HasEvent(stack.TakeEvents(), "replan", "speed_limit_lifted"));
+  EXPECT_GT(MaxSpeedBetween(*stack.trajectory(), t + 0.2, t + 4.0), 1.0);
+  ex.triggers.clear();
+  ex.Run(TaskId::kAdapter);
+  EXPECT_EQ(ex.Triggered(TaskId::kPlanning), 0) << "and that plan is kept";
 }
 
 TEST(NavStackTest, RatesFromTheStrategyReachTheExecutor) {
