@@ -1,5 +1,6 @@
 // E-Navi in the closed loop: the Strategy Controller's tasks run on the board, adapt the rates
 // and the resolution, and the same episode twice gives the same result; policy files are checked.
+#include <cmath>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -116,6 +117,39 @@ TEST(EnaviLoopTest, TheFlightThatOnceGotBoxedInReachesTheGoal) {
   const api::EpisodeResult r = sim::RunEpisode(spec);
   EXPECT_TRUE(r.success) << Describe(r);
   EXPECT_FALSE(r.collided) << Describe(r);
+}
+
+// The reaction constraint's speed limit in flight: E-Navi with the shipped policy on s3 seed 2,
+// tx2, 2.1 s in, at 2.16 m/s towards the hall's first obstacles, with no rate quick enough to
+// stop in time (constraint_fallback). The limit bound only the next plan, and the vehicle flew
+// on at 1.76-1.87 m/s; now the plan being flown is replaced at once, and the plan made under the
+// limit is replaced again once the limit is lifted.
+TEST(EnaviLoopTest, ASpeedLimitSlowsTheVehicleAtOnceAndItsLiftingLetsItSpeedUpAgain) {
+  api::EpisodeSpec spec = Spec("s3", 2);
+  spec.board = "tx2";
+  spec.method = "enavi";  // the shipped policy
+  const api::EpisodeResult r = sim::RunEpisode(spec);
+  ASSERT_TRUE(r.success) << Describe(r);
+  double t_fallback = -1;
+  for (const api::EpisodeEvent& e : r.events) {
+    if (e.kind == "constraint_fallback") {
+      t_fallback = e.t;
+      break;
+    }
+  }
+  ASSERT_GE(t_fallback, 0.0) << "this flight no longer meets the limit; pick another: " << Describe(r);
+  EXPECT_TRUE(r.replans_by_trigger.contains("speed_limit")) << Describe(r);
+  EXPECT_TRUE(r.replans_by_trigger.contains("speed_limit_lifted")) << Describe(r);
+  double slowest = 1e9, fastest_after = 0;
+  for (std::size_t i = 0; i < r.series.size(); ++i) {
+    const double t = r.series.t[i];
+    const api::Vec3& v = r.series.velocity[i];
+    const double speed = std::hypot(v[0], v[1], v[2]);
+    if (t >= t_fallback && t <= t_fallback + 1.0) slowest = std::min(slowest, speed);
+    if (t > t_fallback + 1.0 && t <= t_fallback + 3.0) fastest_after = std::max(fastest_after, speed);
+  }
+  EXPECT_LT(slowest, 0.5) << "braked towards the limit (at least 0.3 m/s) within 1 s";
+  EXPECT_GT(fastest_after, 1.5) << "back at speed within 2 s more, not crawling at the old limit";
 }
 
 TEST(EnaviLoopTest, ExploringEpisodeRecordsARolloutWithRewards) {
