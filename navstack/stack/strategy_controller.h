@@ -64,9 +64,9 @@ struct StrategyDecision {
   bool failsafe = false;        ///< persistent overload: hover
   bool recovered = false;       ///< left the fail-safe this epoch
   /// Speed limit for plans, m/s (the stack replaces a faster plan being flown), when no action
-  /// satisfies the reaction constraint: the
-  /// largest speed at which the chosen rates still stop the vehicle before the nearest obstacle
-  /// ahead (reaction_constraint.h, SafeSpeed), at least 0.3 m/s. +inf otherwise.
+  /// satisfies the reaction constraint: the largest speed at which the chosen rates still stop
+  /// the vehicle before the nearest obstacle ahead (reaction_constraint.h, SafeSpeed), at least
+  /// 0.3 m/s. +inf otherwise.
   double v_limit = std::numeric_limits<double>::infinity();
   bool reaction_infeasible = false;  ///< no action could react in time at the current speed
   WorkCounts work;              ///< the decision's own work (network multiply-adds)
