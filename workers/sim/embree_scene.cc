@@ -1,5 +1,7 @@
 #include "workers/sim/embree_scene.h"
 
+#include <cpuid.h>
+
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -48,9 +50,12 @@ std::string RayKernels() {
   // The features of Embree's AVX2 target, the cap's level. GCC's checks include the OS's YMM
   // state (XGETBV), as Embree's own does.
   static_assert(std::string_view(kEmbreeMaxIsa) == "avx2", "RayKernels checks the AVX2 features");
+  // Clang's __builtin_cpu_supports has no "lzcnt": that bit is read from CPUID directly
+  // (leaf 0x80000001, ECX bit 5).
+  unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+  const bool lzcnt = __get_cpuid(0x80000001u, &eax, &ebx, &ecx, &edx) && (ecx & bit_LZCNT) != 0;
   const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-                    __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
-                    __builtin_cpu_supports("lzcnt");
+                    __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") && lzcnt;
   return avx2 ? kEmbreeMaxIsa : "sse-avx";
 }
 
