@@ -32,6 +32,14 @@ api::EpisodeSpec EnaviSpec(const std::string& policy) {
   return spec;
 }
 
+// E-Navi with the shipped policy on tx2.
+api::EpisodeSpec ShippedPolicyOnTx2(const std::string& world, std::uint64_t seed) {
+  api::EpisodeSpec spec = Spec(world, seed);
+  spec.board = "tx2";
+  spec.method = "enavi";
+  return spec;
+}
+
 TEST(EnaviLoopTest, StrategyTasksRunOnTheBoardAndAdaptTheConfiguration) {
   const TempDir dir;
   const api::EpisodeResult r = sim::RunEpisode(EnaviSpec(WritePolicy(dir)));
@@ -111,10 +119,7 @@ TEST(EnaviLoopTest, AVehicleWhosePlansKeepFailingTurnsOnTheSpot) {
 // none of tx2 s3 seeds 400-480 times out without it either. So the reset itself is covered by
 // NavStackTest's scan tests, and this keeps the flight from getting stuck again.
 TEST(EnaviLoopTest, TheFlightThatOnceGotBoxedInReachesTheGoal) {
-  api::EpisodeSpec spec = Spec("s3", 445);
-  spec.board = "tx2";
-  spec.method = "enavi";  // the shipped policy
-  const api::EpisodeResult r = sim::RunEpisode(spec);
+  const api::EpisodeResult r = sim::RunEpisode(ShippedPolicyOnTx2("s3", 445));
   EXPECT_TRUE(r.success) << Describe(r);
   EXPECT_FALSE(r.collided) << Describe(r);
 }
@@ -125,10 +130,7 @@ TEST(EnaviLoopTest, TheFlightThatOnceGotBoxedInReachesTheGoal) {
 // on at 1.76-1.87 m/s; now the plan being flown is replaced at once, and the plan made under the
 // limit is replaced again once the limit is lifted.
 TEST(EnaviLoopTest, ASpeedLimitSlowsTheVehicleAtOnceAndItsLiftingLetsItSpeedUpAgain) {
-  api::EpisodeSpec spec = Spec("s3", 2);
-  spec.board = "tx2";
-  spec.method = "enavi";  // the shipped policy
-  const api::EpisodeResult r = sim::RunEpisode(spec);
+  const api::EpisodeResult r = sim::RunEpisode(ShippedPolicyOnTx2("s3", 2));
   ASSERT_TRUE(r.success) << Describe(r);
   double t_fallback = -1;
   for (const api::EpisodeEvent& e : r.events) {
