@@ -17,8 +17,6 @@ Eigen::Matrix3d Hat(const Eigen::Vector3d& w) {
   return m;
 }
 
-Eigen::Vector3d Vee(const Eigen::Matrix3d& m) { return {m(2, 1), m(0, 2), m(1, 0)}; }
-
 constexpr ArgumentCheck kOptions("GeometricControllerOptions");
 constexpr ArgumentCheck kVehicle("VehicleParams");
 
@@ -143,10 +141,18 @@ ControlOutput GeometricController::Compute(const VehicleState& state,
     out.w_WD_D = Eigen::Vector3d(w_x, w_y, w_z);
   }
 
-  // Attitude errors (paper eqs. 10, 11) and torque (paper eq. 16 with zero angular
-  // acceleration feed-forward), gains per body axis.
+  // Attitude error: the rotation from the desired attitude to the body's as 2 sin(angle / 2)
+  // times its axis (the quaternion's vector part, on the hemisphere w >= 0), not the paper's
+  // eq. 10, whose sin(angle) magnitude shrinks past 90 deg and vanishes at 180: a yaw error near
+  // 180 deg then left the tilt uncorrected too, and a vehicle in s2 drifted off a smooth
+  // reference into a wall at 5 m/s. The two agree to first order, so the gains are unchanged.
+  // PX4's attitude controller uses the same error (mc_att_control, AttitudeControl.cpp, after
+  // Brescianini, Hehn, D'Andrea, "Nonlinear quadrocopter attitude control", ETH Zurich 2013).
+  // Torque: paper eq. 16 with zero angular acceleration feed-forward, gains per body axis.
   const Eigen::Matrix3d R_BD = R_WB.transpose() * out.R_WD;
-  out.e_R = 0.5 * Vee(out.R_WD.transpose() * R_WB - R_WB.transpose() * out.R_WD);
+  Eigen::Quaterniond q_DB(R_BD.transpose());
+  if (q_DB.w() < 0.0) q_DB.coeffs() = -q_DB.coeffs();
+  out.e_R = 2.0 * q_DB.vec();
   const Eigen::Vector3d w_ref_B = R_BD * out.w_WD_D;
   out.e_w_B = w_B - w_ref_B;
   out.wrench.torque_B = -o.k_attitude.cwiseProduct(out.e_R) - o.k_rate.cwiseProduct(out.e_w_B) +

@@ -247,7 +247,9 @@ TEST(ClosedLoopTest, YawStepIsTrackedWhileHoldingPosition) {
     Measured(name + "_overshoot_deg", overshoot);
     Measured(name + "_max_position_error_m", pos.max);
     EXPECT_LT(settle_time, 3.0) << "yaw step " << yaw_ref_deg << " deg within 2 deg by 3 s";
-    EXPECT_LT(overshoot, 2.0);
+    // The half-turn starts at nearly full attitude-error torque (2 sin(85 deg)), so it arrives
+    // faster and overshoots a little more than the quarter turn.
+    EXPECT_LT(overshoot, std::abs(yaw_ref_deg) > 150.0 ? 3.0 : 2.0);
     EXPECT_LT(pos.max, 0.03) << "yaw must not disturb the position much";
     EXPECT_LT(std::abs(WrapAngle(YawOf(trace.back().state.q_WB) - yaw_ref)) * kDeg, 0.5);
   }
@@ -290,6 +292,29 @@ TEST(ClosedLoopTest, RecoversFromSixtyDegreeRollWithSmallAltitudeLoss) {
   Measured("roll60_max_altitude_loss_m", altitude_loss);
   EXPECT_LT(level_time, 1.0);
   EXPECT_LT(altitude_loss, 0.5);
+  EXPECT_LT(PositionError(trace.back()), 0.05);
+}
+
+TEST(ClosedLoopTest, AYawErrorNearHalfATurnStillLevelsTheVehicle) {
+  // Rolled 30 deg and facing 178 deg away from the reference yaw: the whole rotation error is
+  // near 180 deg, where the paper's error (sin of the angle) all but vanishes, tilt included,
+  // and the vehicle drifted off. The quaternion error keeps correcting both.
+  const VehicleParams vehicle;
+  Controller controller(vehicle);
+  QuadrotorModel model(vehicle);
+  const Eigen::Vector3d p_ref(0, 0, 5);
+  model.ResetAt(p_ref, Eigen::Quaterniond(Eigen::AngleAxisd(178.0 / kDeg, Eigen::Vector3d::UnitZ()) *
+                                          Eigen::AngleAxisd(30.0 / kDeg, Eigen::Vector3d::UnitX())));
+  const auto trace = Fly(&controller, &model, [&](double) { return Hold(p_ref); }, 6.0);
+  double level_time = 0.0;
+  for (const auto& s : trace)
+    if (TiltDegOf(s.state.q_WB) > 5.0) level_time = s.t;
+  const ErrorStats pos = PositionErrorStats(trace, 0.0, 6.0);
+  Measured("yaw178_roll30_time_to_level_5deg_s", level_time);
+  Measured("yaw178_roll30_max_position_error_m", pos.max);
+  EXPECT_LT(level_time, 1.5);
+  EXPECT_LT(pos.max, 1.0);
+  EXPECT_LT(std::abs(WrapAngle(YawOf(trace.back().state.q_WB))) * kDeg, 2.0) << "and turned to the reference yaw";
   EXPECT_LT(PositionError(trace.back()), 0.05);
 }
 
