@@ -204,16 +204,22 @@ JobOutput NavStack::CollisionJob() {
   const ObservedSpaceRule observed = ObservedRule(state_.p_WB);
   const CollisionCheckResult hit = PredictHit(*map_, *traj, t, &observed, &out.work);
   if (!hit.collides) return out;
-  out.commit = [this, traj, hit] {
+  // As Ego-Planner's safety check (ego_replan_fsm.cpp, checkCollisionCallback): replan at once,
+  // inside this job and on the map that found the hit (planFromCurrentTraj); stop only when that
+  // fails and the hit is near. A plan made on a map that changed while it was made is replaced
+  // here, not answered by a stop (s2 nx on the emulated clock: five stops in 2.2 s).
+  std::shared_ptr<const PlanAttempt> attempt = MakePlan(t, &out.work);
+  out.commit = [this, traj, hit, attempt] {
     if (trajectory_ != traj) return;  // a newer plan landed meanwhile
     const double now = executor_->now();
     AddEvent("collision_predicted", (hit.unobserved ? "unobserved space in " : "in ") + std::to_string(hit.t_hit - now) + " s");
+    if (strategy_) strategy_->OnCollisionTrigger(now);
+    if (Land(*attempt, "collision")) return;
     if (hit.t_hit - now < options_.emergency_horizon_s) {
       Stop("emergency_stop");
       emergency_stopped_ = true;
       emergency_stop_t_ = now;
     }
-    if (strategy_) strategy_->OnCollisionTrigger(now);
     RequestReplan("collision");
   };
   return out;
@@ -247,6 +253,17 @@ JobOutput NavStack::PlanningJob() {
     out.commit = [this] { PromoteNextTrigger(); };
     return out;
   }
+  std::shared_ptr<const PlanAttempt> attempt = MakePlan(t, &out.work);
+  out.commit = [this, attempt, trigger] {
+    PromoteNextTrigger();
+    Land(*attempt, trigger);
+  };
+  return out;
+}
+
+std::shared_ptr<const NavStack::PlanAttempt> NavStack::MakePlan(double t, WorkCounts* work) {
+  auto attempt = std::make_shared<PlanAttempt>();
+  attempt->t = t;
   // Continue the current reference from where the vehicle will be when this plan lands; start
   // from the measured state when there is no reference to continue or it has drifted away.
   const double t_start = t + plan_latency_estimate_;
@@ -264,16 +281,15 @@ JobOutput NavStack::PlanningJob() {
   request.goal_W = options_.goal;
   request.flight_bounds_W = options_.flight_bounds;
   request.seed = PlanSeed(options_.seed, plan_calls_++);
-  VoxelGrid grid = map_->ExtractGrid(PlanningVolume(start.p, options_.goal, options_.flight_bounds, options_.planner), &out.work);
+  VoxelGrid grid = map_->ExtractGrid(PlanningVolume(start.p, options_.goal, options_.flight_bounds, options_.planner), work);
   // The Resolution Adapter scores the path against the map's obstacle density (paper Sec. V.A):
   // what was seen, before unobserved space near the vehicle is blocked.
-  PathScoreInputs score;
   if (strategy_) {
-    for (const CellState c : grid.cells) score.occupied_cells += c == CellState::kOccupied;
-    score.total_cells = static_cast<double>(grid.cells.size());
-    out.work.Add(WorkUnit::kGridCell, static_cast<std::int64_t>(grid.cells.size()));
+    for (const CellState c : grid.cells) attempt->score.occupied_cells += c == CellState::kOccupied;
+    attempt->score.total_cells = static_cast<double>(grid.cells.size());
+    work->Add(WorkUnit::kGridCell, static_cast<std::int64_t>(grid.cells.size()));
   }
-  BlockUnobserved(ObservedRule(start.p), &grid, &out.work);
+  BlockUnobserved(ObservedRule(start.p), &grid, work);
   request.grid = std::make_shared<const VoxelGrid>(std::move(grid));
   // The planner measures clearance to occupied cell centres (minus half a cell); the collision
   // check to whole cells. At a coarse resolution a cell's corner is up to (sqrt(3) - 1) / 2 of a
@@ -281,49 +297,52 @@ JobOutput NavStack::PlanningJob() {
   PlannerOptions planner = options_.planner;
   planner.robot_radius += 0.5 * (std::sqrt(3.0) - 1.0) * map_->resolution();
   planner.v_max = std::min(planner.v_max, speed_limit_);  // E-Navi: the reaction constraint's limit
-  auto result = std::make_shared<PlanResult>(Plan(request, planner));
-  out.work += result->work;
-  if (strategy_ && result->ok()) {
-    score.path_length = result->path_length;
-    score.straight_length = (result->goal_used_W - start.p).norm();
+  attempt->v_max = planner.v_max;
+  attempt->result = Plan(request, planner);
+  *work += attempt->result.work;
+  if (strategy_ && attempt->result.ok()) {
+    attempt->score.path_length = attempt->result.path_length;
+    attempt->score.straight_length = (attempt->result.goal_used_W - start.p).norm();
   }
-  out.commit = [this, result, t, score, trigger, v_max = planner.v_max] {
-    PromoteNextTrigger();
-    if (strategy_) strategy_->OnPlanned(executor_->now(), result->ok(), score);
-    // Latency = board time from start to finish; the next plan aims that far ahead.
-    const double latency = executor_->now() - t;
-    plan_latency_estimate_ = std::clamp(0.7 * plan_latency_estimate_ + 0.3 * 1.2 * latency, 0.02, 0.5);
-    if (!result->ok()) {
-      ++plan_failures_;
-      AddEvent("plan_failed", std::string(ToString(result->status)) + ": " + result->message);
-      if (++failed_plans_in_row_ >= options_.scan_after_failures && !scanning_ && !failsafe_ &&
-          Hovering(executor_->now()))
-        Scan();
-      // A full turn has shown everything within the mapping range and no plan was found: what
-      // blocks the way is beyond it, where the vehicle cannot look again from here.
-      const double full_turn_s = 2.0 * std::numbers::pi / options_.scan_yaw_rate;
-      if (scanning_ && !scan_reset_done_ && options_.scan_reset_distance > 0 &&
-          executor_->now() - scan_t0_ >= full_turn_s) {
-        scan_reset_done_ = true;
-        map_reset_pending_ = true;
-        AddEvent("map_reset", std::to_string(options_.scan_reset_distance));
-      }
-      return;
+  return attempt;
+}
+
+bool NavStack::Land(const PlanAttempt& attempt, const std::string& trigger) {
+  const PlanResult& result = attempt.result;
+  if (strategy_) strategy_->OnPlanned(executor_->now(), result.ok(), attempt.score);
+  // Latency = board time from start to finish; the next plan aims that far ahead.
+  const double latency = executor_->now() - attempt.t;
+  plan_latency_estimate_ = std::clamp(0.7 * plan_latency_estimate_ + 0.3 * 1.2 * latency, 0.02, 0.5);
+  if (!result.ok()) {
+    ++plan_failures_;
+    AddEvent("plan_failed", std::string(ToString(result.status)) + ": " + result.message);
+    if (++failed_plans_in_row_ >= options_.scan_after_failures && !scanning_ && !failsafe_ &&
+        Hovering(executor_->now()))
+      Scan();
+    // A full turn has shown everything within the mapping range and no plan was found: what
+    // blocks the way is beyond it, where the vehicle cannot look again from here.
+    const double full_turn_s = 2.0 * std::numbers::pi / options_.scan_yaw_rate;
+    if (scanning_ && !scan_reset_done_ && options_.scan_reset_distance > 0 &&
+        executor_->now() - scan_t0_ >= full_turn_s) {
+      scan_reset_done_ = true;
+      map_reset_pending_ = true;
+      AddEvent("map_reset", std::to_string(options_.scan_reset_distance));
     }
-    failed_plans_in_row_ = 0;
-    if (failsafe_) return;  // hovering until the overload clears
-    if (emergency_stopped_ && t < emergency_stop_t_) return;  // planned from before the stop
-    previous_trajectory_ = stopped_ || scanning_ ? nullptr : trajectory_;
-    trajectory_ = result->trajectory;
-    plan_speed_cap_ = v_max;
-    stopped_ = false;
-    emergency_stopped_ = false;
-    scanning_ = false;
-    last_search_path_ = result->search_path;
-    ++replans_;
-    AddEvent("replan", trigger);
-  };
-  return out;
+    return false;
+  }
+  failed_plans_in_row_ = 0;
+  if (failsafe_) return false;  // hovering until the overload clears
+  if (emergency_stopped_ && attempt.t < emergency_stop_t_) return false;  // planned from before the stop
+  previous_trajectory_ = stopped_ || scanning_ ? nullptr : trajectory_;
+  trajectory_ = result.trajectory;
+  plan_speed_cap_ = attempt.v_max;
+  stopped_ = false;
+  emergency_stopped_ = false;
+  scanning_ = false;
+  last_search_path_ = result.search_path;
+  ++replans_;
+  AddEvent("replan", trigger);
+  return true;
 }
 
 TaskWcets NavStack::RecentWcets() const {

@@ -58,6 +58,18 @@ class NavStack final : public Navigator {
  private:
   JobOutput PerceptionJob();
   JobOutput PlanningJob();
+  /// A plan made at board time t from the current reference (or state), map and speed limit.
+  struct PlanAttempt {
+    PlanResult result;
+    PathScoreInputs score;  ///< for the Resolution Adapter (E-Navi)
+    double t = 0;           ///< when planning began
+    double v_max = 0;       ///< the speed it was made for
+  };
+  std::shared_ptr<const PlanAttempt> MakePlan(double t, WorkCounts* work);
+  /// Adopts a finished plan (or books its failure) at the job's finish; false if not adopted.
+  bool Land(const PlanAttempt& attempt, const std::string& trigger);
+  /// Checks the remaining trajectory; on a hit it replans inside the job (Ego-Planner's safety
+  /// check) and stops only when that plan fails with the hit near.
   JobOutput CollisionJob();
   /// First hit of `traj` from t on against `map`, looking past a hit right at the vehicle when the
   /// trajectory is escaping inflated space (see CollisionJob).

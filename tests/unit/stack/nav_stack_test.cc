@@ -354,6 +354,47 @@ TEST(NavStackTest, APlanStartedBeforeAnEmergencyStopIsNotAdoptedAfterIt) {
   EXPECT_FALSE(HasEvent(stack.TakeEvents(), "replan"));
 }
 
+TEST(NavStackTest, AHitTheCheckCanPlanAroundIsReplannedInsideTheCheckWithoutAStop) {
+  // Ego-Planner's safety check replans inside its callback and stops only when that fails: a
+  // plan made on a map that changed while it was made is replaced, not answered by a stop.
+  FlyingStack f;
+  auto& [ex, o, stack] = f;
+  ASSERT_NE(stack.trajectory(), nullptr);
+  const double t = 1.0;
+  ex.AdvanceTo(t);
+  const TrajectorySample on = stack.trajectory()->Sample(t);
+  VehicleState moving;
+  moving.p_WB = on.p;
+  moving.v_WB = on.v;
+  stack.OnState(moving);
+  // A post in the middle of the view, 1.3 m ahead; the rest of the view is open.
+  DepthFramePtr frame = ViewFrom(o, t, on.p);
+  DepthImage& image = std::const_pointer_cast<DepthFrame>(frame)->image;
+  for (int v = 0; v < image.height; ++v)
+    for (int u = 2 * image.width / 5; u < 3 * image.width / 5; ++u) image.data[v * image.width + u] = 1.3f;
+  stack.OnFrame(frame);
+  ex.Run(TaskId::kPerception);
+  const auto flown = stack.trajectory();
+  const VoxelGrid near = stack.map().ExtractGrid(
+      Eigen::AlignedBox3d(on.p - Eigen::Vector3d(1, 3, 1), on.p + Eigen::Vector3d(6, 3, 1)), nullptr);
+  const CollisionCheckResult before = CheckTrajectory(*flown, t, flown->end_time(), near, o.planner.robot_radius, nullptr);
+  ASSERT_TRUE(before.collides) << "the post is on the flown trajectory";
+  ASSERT_LT(before.t_hit - t, o.emergency_horizon_s) << "near enough that the check used to stop";
+  stack.TakeEvents();
+  ex.triggers.clear();
+  ex.Run(TaskId::kCollision);
+  const std::vector<NavEvent> events = stack.TakeEvents();
+  EXPECT_TRUE(HasEvent(events, "collision_predicted"));
+  EXPECT_TRUE(HasEvent(events, "replan", "collision")) << "planned inside the check";
+  EXPECT_FALSE(HasEvent(events, "emergency_stop"));
+  EXPECT_EQ(ex.Triggered(TaskId::kPlanning), 0) << "no planning job needed";
+  ASSERT_NE(stack.trajectory(), flown);
+  EXPECT_GT(stack.Reference(t + 0.1).v.norm(), 0.5) << "flying on, not holding";
+  const auto around = stack.trajectory();
+  EXPECT_FALSE(CheckTrajectory(*around, t, around->end_time(), near, o.planner.robot_radius, nullptr).collides)
+      << "round the post";
+}
+
 double MaxSpeedBetween(const Trajectory& trajectory, double t0, double t1) {
   double v = 0;
   for (double t = t0; t <= t1; t += 0.01) v = std::max(v, trajectory.Sample(t).v.norm());
