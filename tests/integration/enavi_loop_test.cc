@@ -125,33 +125,39 @@ TEST(EnaviLoopTest, TheFlightThatOnceGotBoxedInReachesTheGoal) {
 }
 
 // The reaction constraint's speed limit in flight: E-Navi with the shipped policy on s3 seed 2,
-// tx2, 2.1 s in, at 2.16 m/s towards the hall's first obstacles, with no rate quick enough to
-// stop in time (constraint_fallback). The limit bound only the next plan, and the vehicle flew
-// on at 1.76-1.87 m/s; now the plan being flown is replaced at once, and the plan made under the
-// limit is replaced again once the limit is lifted.
-TEST(EnaviLoopTest, ASpeedLimitSlowsTheVehicleAtOnceAndItsLiftingLetsItSpeedUpAgain) {
+// tx2, 2.0 s in, at 1.84 m/s towards the hall's first obstacles, with no rate quick enough to
+// stop in time (constraint_fallback). The limit once bound only the next plan; now the plan being
+// flown is replaced at once, and the plan made under the limit is replaced again once the limit
+// is lifted, so the vehicle does not crawl on at it. Here the next decision lifts it 0.2 s later:
+// too short for the speed to show the braking (1.84 -> 1.59 m/s with the replan, 1.67 without),
+// so the braking to the limit is checked on the plan itself, in NavStackTest.
+TEST(EnaviLoopTest, ASpeedLimitReplacesThePlanAtOnceAndItsLiftingLetsTheVehicleSpeedUpAgain) {
   const api::EpisodeResult r = sim::RunEpisode(ShippedPolicyOnTx2("s3", 2));
   ASSERT_TRUE(r.success) << Describe(r);
-  double t_fallback = -1;
+  double t_fallback = -1, t_limited = -1, t_lifted = -1;
   for (const api::EpisodeEvent& e : r.events) {
-    if (e.kind == "constraint_fallback") {
-      t_fallback = e.t;
+    if (e.kind == "constraint_fallback" && t_fallback < 0) t_fallback = e.t;
+    if (t_fallback < 0 || e.kind != "replan") continue;
+    if (e.detail == "speed_limit" && t_limited < 0) t_limited = e.t;
+    if (e.detail == "speed_limit_lifted") {
+      t_lifted = e.t;
       break;
     }
   }
   ASSERT_GE(t_fallback, 0.0) << "this flight no longer meets the limit; pick another: " << Describe(r);
-  EXPECT_TRUE(r.replans_by_trigger.contains("speed_limit")) << Describe(r);
-  EXPECT_TRUE(r.replans_by_trigger.contains("speed_limit_lifted")) << Describe(r);
-  double slowest = 1e9, fastest_after = 0;
+  // One planning job after the decision, not the next timer or trigger.
+  EXPECT_GE(t_limited, t_fallback) << "the plan being flown was not replaced under the limit: " << Describe(r);
+  EXPECT_LT(t_limited, t_fallback + 0.05) << Describe(r);
+  ASSERT_GT(t_lifted, t_fallback) << "the plan made under the limit was never replaced: " << Describe(r);
+  double at_limit = 0, fastest_after = 0;
   for (std::size_t i = 0; i < r.series.size(); ++i) {
     const double t = r.series.t[i];
     const api::Vec3& v = r.series.velocity[i];
     const double speed = std::hypot(v[0], v[1], v[2]);
-    if (t >= t_fallback && t <= t_fallback + 1.0) slowest = std::min(slowest, speed);
-    if (t > t_fallback + 1.0 && t <= t_fallback + 3.0) fastest_after = std::max(fastest_after, speed);
+    if (t <= t_fallback) at_limit = speed;
+    if (t > t_lifted && t <= t_lifted + 2.0) fastest_after = std::max(fastest_after, speed);
   }
-  EXPECT_LT(slowest, 0.5) << "braked towards the limit (at least 0.3 m/s) within 1 s";
-  EXPECT_GT(fastest_after, 1.5) << "back at speed within 2 s more, not crawling at the old limit";
+  EXPECT_GT(fastest_after, at_limit - 0.1) << "back at its speed within 2 s of the lifting, not crawling at the limit";
 }
 
 TEST(EnaviLoopTest, ExploringEpisodeRecordsARolloutWithRewards) {
