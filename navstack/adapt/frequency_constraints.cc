@@ -106,6 +106,7 @@ FeasibleSet ComputeFeasibleSet(const ActionGrid& grid, const ConstraintInputs& i
   double cost_safe = std::numeric_limits<double>::infinity();
   double cost_any = std::numeric_limits<double>::infinity();
   double quickest = std::numeric_limits<double>::infinity(), cost_quick = cost_any;
+  double cost_feasible = std::numeric_limits<double>::infinity();
   bool any_reacts = false;
   for (int i = 0; i < grid.size(); ++i) {
     const ConstraintStatus s = CheckUnchecked(inputs, grid.At(i), options, f_per_min, u_total);
@@ -113,6 +114,10 @@ FeasibleSet ComputeFeasibleSet(const ActionGrid& grid, const ConstraintInputs& i
     if (s.AllHold()) {
       out.mask[static_cast<std::size_t>(i)] = 1;
       ++out.num_feasible;
+      if (s.c3_load < cost_feasible) {
+        cost_feasible = s.c3_load;
+        out.least_load_action = i;
+      }
     }
     if (s.c3_load < cost_any) {
       cost_any = s.c3_load;
@@ -135,6 +140,7 @@ FeasibleSet ComputeFeasibleSet(const ActionGrid& grid, const ConstraintInputs& i
     out.fallback_used = true;
     out.fallback_action = best_safe >= 0 ? best_safe : (best_quick >= 0 ? best_quick : best_any);
     out.mask[static_cast<std::size_t>(out.fallback_action)] = 1;
+    out.least_load_action = out.fallback_action;
   }
   return out;
 }

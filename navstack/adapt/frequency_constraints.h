@@ -80,6 +80,9 @@ struct FeasibleSet {
   /// action, so a masked policy must pick it. The caller should record this as an event.
   bool fallback_used = false;
   int fallback_action = -1;        ///< index of the fallback action, or -1
+  /// The action of the mask with the lowest C3 load (ties -> lowest index): what a rule that
+  /// spends the least CPU the constraints allow would run. The fallback action when it was used.
+  int least_load_action = -1;
   /// No action satisfies the reaction constraint: the fallback is the quickest to react, and the
   /// vehicle must slow down (SafeSpeed) to make up the rest.
   bool reaction_infeasible = false;

@@ -7,8 +7,8 @@
 namespace enavi::navstack::rl {
 
 FrequencyAdapter::FrequencyAdapter(PolicyFile policy, const ConstraintOptions& constraints,
-                                   const PolicyStateOptions& state)
-    : policy_(std::move(policy)), constraint_options_(constraints), state_options_(state) {
+                                   const PolicyStateOptions& state, ActionChoice choice)
+    : policy_(std::move(policy)), constraint_options_(constraints), state_options_(state), choice_(choice) {
   if (!policy_.action_grid) {
     throw std::invalid_argument("frequency adapter: the policy has no action grid");
   }
@@ -24,8 +24,25 @@ FrequencyDecision FrequencyAdapter::Decide(const ConstraintInputs& constraints,
                                            const FlightContext& context, ActMode mode, Rng* rng,
                                            WorkCounts* work, RolloutStep* record) {
   FrequencyDecision d;
-  // The state sees which constraints the running configuration satisfies.
+  // The policy state sees which constraints the running configuration satisfies.
   d.current_status = CheckConstraints(constraints, constraints.current, constraint_options_);
+  const FeasibleSet feasible = ComputeFeasibleSet(grid(), constraints, constraint_options_);
+  d.fallback_used = feasible.fallback_used;
+  d.num_feasible = feasible.num_feasible;
+  d.reaction_infeasible = feasible.reaction_infeasible;
+
+  const bool recording = record != nullptr;
+  const std::int64_t mask_macs = kMaskMacsPerAction * grid().size();
+  if (choice_ == ActionChoice::kLeastLoad) {
+    if (recording) {
+      throw std::invalid_argument("frequency adapter: the least-load rule's decisions cannot be recorded for training");
+    }
+    d.action = feasible.least_load_action;
+    d.f = grid().At(d.action);
+    d.macs = mask_macs;
+    if (work != nullptr) work->Add(WorkUnit::kPolicyFlop, d.macs);
+    return d;
+  }
   PolicyStateInputs s;
   s.eci = context.eci;
   s.d_eci = context.d_eci;
@@ -40,13 +57,6 @@ FrequencyDecision FrequencyAdapter::Decide(const ConstraintInputs& constraints,
   s.q_WB = context.q_WB;
   s.p_goal_W = context.p_goal_W;
   BuildPolicyState(s, state_options_, obs_);
-
-  const FeasibleSet feasible = ComputeFeasibleSet(grid(), constraints, constraint_options_);
-  d.fallback_used = feasible.fallback_used;
-  d.num_feasible = feasible.num_feasible;
-  d.reaction_infeasible = feasible.reaction_infeasible;
-
-  const bool recording = record != nullptr;
   PolicyOutput out =
       policy_.net.Act(obs_, feasible.mask, mode, rng, &ws_, /*want_log_prob=*/recording,
                       /*want_value=*/recording);
@@ -66,7 +76,7 @@ FrequencyDecision FrequencyAdapter::Decide(const ConstraintInputs& constraints,
   // The onboard work is the actor's: the critic runs only to fill a training record, off board,
   // so recording a rollout does not change what the decision costs on the board's clock (it did:
   // a collection flight then flew differently from the same spec flown without one).
-  d.macs = policy_.net.MacsPerDecision(/*with_value=*/false) + kMaskMacsPerAction * grid().size();
+  d.macs = policy_.net.MacsPerDecision(/*with_value=*/false) + mask_macs;
   if (work != nullptr) work->Add(WorkUnit::kPolicyFlop, d.macs);
   if (recording) {
     record->obs = obs_;

@@ -28,6 +28,12 @@ struct FlightContext {
   Eigen::Vector3d p_goal_W = Eigen::Vector3d::Zero();
 };
 
+/// What picks among the feasible actions. kLeastLoad is an ablation, not E-Navi: the constraints,
+/// the masks and the Resolution Adapter as they are, with the learned choice replaced by "run the
+/// feasible action with the least C3 load" (FeasibleSet::least_load_action). A policy that does
+/// not beat it has learned nothing the constraints did not already give.
+enum class ActionChoice { kPolicy, kLeastLoad };
+
 /// One decision.
 struct FrequencyDecision {
   TaskFrequencies f;              ///< the chosen grid triple, Hz
@@ -46,12 +52,16 @@ class FrequencyAdapter {
   /// @throws std::invalid_argument when the policy has no action grid or its features are not
   ///   PolicyStateFeatureNames() (e.g. a policy for another build).
   explicit FrequencyAdapter(PolicyFile policy, const ConstraintOptions& constraints = {},
-                            const PolicyStateOptions& state = {});
+                            const PolicyStateOptions& state = {},
+                            ActionChoice choice = ActionChoice::kPolicy);
 
   /// Decides the frequencies for the next epoch. Greedy for flights, kSample (with `rng`) for
   /// training. When `record` is given it receives obs, mask, action, log-prob and value (the
   /// critic then runs too); the caller fills in reward and done. Work: the network's multiply-adds
-  /// plus kMaskMacsPerAction per grid action for the constraint mask, as WorkUnit::kPolicyFlop.
+  /// plus kMaskMacsPerAction per grid action for the constraint mask, as WorkUnit::kPolicyFlop;
+  /// with ActionChoice::kLeastLoad the mask's only (the network does not run).
+  /// @throws std::invalid_argument when `record` is given with ActionChoice::kLeastLoad: the
+  ///   rule's actions are not the policy's, so they cannot train it.
   FrequencyDecision Decide(const ConstraintInputs& constraints, const FlightContext& context,
                            ActMode mode, Rng* rng = nullptr, WorkCounts* work = nullptr,
                            RolloutStep* record = nullptr);
@@ -66,6 +76,7 @@ class FrequencyAdapter {
   PolicyFile policy_;
   ConstraintOptions constraint_options_;
   PolicyStateOptions state_options_;
+  ActionChoice choice_;
   ActorCritic::Workspace ws_;
   Eigen::VectorXd obs_;
 };

@@ -69,6 +69,8 @@ MethodInfo EnaviMethod() {
   m.records_rollouts = true;
   m.tunables = {
       {"strategy.explore", 0, 1, 0, true, "1 samples the policy's actions (training), 0 greedy"},
+      {"strategy.least_load", 0, 1, 0, true,
+       "1 runs the feasible action with the least CPU load instead of the policy's (an ablation: the constraints without the learned choice)"},
       {"strategy.f_adapt", 1.0, 30.0, 5.0, false, "strategy controller decisions per second, Hz"},
       {"resolution.step_lifetime", 0.5, 60.0, ResolutionAdapterOptions{}.step_lifetime, false,
        "each map refinement step expires this long after its trigger (the map goes one level coarser), sim s"},
@@ -85,6 +87,7 @@ MethodInfo EnaviMethod() {
   m.make = [](const NavStackOptions& options, TaskExecutor* executor, const VehicleState& initial) {
     NavStackOptions o = options;
     o.strategy->mode = o.Param("strategy.explore") > 0 ? rl::ActMode::kSample : rl::ActMode::kGreedy;
+    o.strategy->choice = o.Param("strategy.least_load") > 0 ? rl::ActionChoice::kLeastLoad : rl::ActionChoice::kPolicy;
     o.strategy->f_adapt = o.Param("strategy.f_adapt");
     o.strategy->resolution.step_lifetime = o.Param("resolution.step_lifetime");
     o.scan_reset_distance = o.Param("scan.reset_distance");

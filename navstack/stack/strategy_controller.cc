@@ -34,6 +34,11 @@ ConstraintInputs ToConstraints(const StrategyInputs& in) {
 
 rl::PolicyFile RequirePolicy(const StrategyOptions& o) {
   if (!o.policy) throw std::invalid_argument("strategy: E-Navi needs a frequency-adapter policy");
+  if (o.record && o.choice == rl::ActionChoice::kLeastLoad) {
+    throw std::invalid_argument(
+        "strategy.least_load: the rule's decisions are not the policy's; a rollout for training "
+        "cannot be recorded with it");
+  }
   return *o.policy;
 }
 
@@ -41,7 +46,7 @@ rl::PolicyFile RequirePolicy(const StrategyOptions& o) {
 
 StrategyController::StrategyController(const StrategyOptions& options)
     : options_(options),
-      adapter_(RequirePolicy(options), options.constraints),
+      adapter_(RequirePolicy(options), options.constraints, {}, options.choice),
       resolution_(options.resolution),
       overload_(options.overload),
       rng_(options.seed) {}

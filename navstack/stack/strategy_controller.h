@@ -26,6 +26,7 @@ struct StrategyOptions {
   std::shared_ptr<const rl::PolicyFile> policy;  ///< the frequency adapter's network (required)
   double f_adapt = 5.0;                          ///< decisions per second, Hz
   rl::ActMode mode = rl::ActMode::kGreedy;       ///< kSample explores (training rollouts)
+  rl::ActionChoice choice = rl::ActionChoice::kPolicy;  ///< kLeastLoad: the ablation rule
   std::uint64_t seed = 1;                        ///< sampling seed
   bool record = false;                           ///< keep the rollout for training
   ResolutionAdapterOptions resolution;
@@ -74,7 +75,8 @@ struct StrategyDecision {
 
 class StrategyController {
  public:
-  /// @throws std::invalid_argument without a policy or for a policy of another build.
+  /// @throws std::invalid_argument without a policy, for a policy of another build, or when a
+  ///   rollout is to be recorded with ActionChoice::kLeastLoad.
   explicit StrategyController(const StrategyOptions& options);
 
   StrategyDecision Decide(const StrategyInputs& in, const Eigen::Vector3d& goal_W);

@@ -160,6 +160,35 @@ TEST(EnaviLoopTest, ASpeedLimitReplacesThePlanAtOnceAndItsLiftingLetsTheVehicleS
   EXPECT_GT(fastest_after, v_at_fallback - 0.1) << "back at its speed within 2 s of the lifting, not crawling at the limit";
 }
 
+// The least-load rule (strategy.least_load, an ablation) never asks the network: two different
+// policies fly the same flight with it, and the policy itself flies another.
+TEST(EnaviLoopTest, TheLeastLoadRuleFliesTheSameWhateverThePolicyAndRecordsNoRollout) {
+  const TempDir a_dir, b_dir;
+  api::EpisodeSpec a = EnaviSpec(WritePolicy(a_dir, 7));
+  api::EpisodeSpec b = EnaviSpec(WritePolicy(b_dir, 8));
+  const api::EpisodeResult policy_a = sim::RunEpisode(a);
+  a.overrides["strategy.least_load"] = 1;
+  b.overrides["strategy.least_load"] = 1;
+  const api::EpisodeResult rule_a = sim::RunEpisode(a);
+  const api::EpisodeResult rule_b = sim::RunEpisode(b);
+  ASSERT_FALSE(rule_a.collided) << Describe(rule_a);
+  EXPECT_EQ(rule_a.series.f_per, rule_b.series.f_per);
+  EXPECT_EQ(rule_a.series.f_col, rule_b.series.f_col);
+  EXPECT_EQ(rule_a.series.f_dif, rule_b.series.f_dif);
+  EXPECT_EQ(rule_a.series.position, rule_b.series.position);
+  EXPECT_EQ(rule_a.nav_cpu_util_pct, rule_b.nav_cpu_util_pct);
+  EXPECT_NE(rule_a.series.f_dif, policy_a.series.f_dif) << "the policy chose otherwise";
+  navstack::rl::Rollout rollout;
+  sim::EpisodeOptions recording;
+  recording.rollout = &rollout;
+  try {
+    sim::RunEpisode(a, recording);
+    FAIL() << "a rollout recorded with the rule would train the policy on actions it did not take";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("strategy.least_load"), std::string::npos) << e.what();
+  }
+}
+
 TEST(EnaviLoopTest, ExploringEpisodeRecordsARolloutWithRewards) {
   const TempDir dir;
   api::EpisodeSpec spec = EnaviSpec(WritePolicy(dir));

@@ -140,6 +140,29 @@ TEST(FeasibleSetTest, MaskAgreesWithTheCheckerForEveryGridAction) {
   EXPECT_EQ(fs.mask[static_cast<std::size_t>(*grid.Find({5, 5, 5}))], 1);
 }
 
+TEST(FeasibleSetTest, TheLeastLoadActionIsTheCheapestFeasibleOne) {
+  const ActionGrid grid;
+  ConstraintInputs in = Nominal();
+  in.trajectory_duration = 0.1;  // C1: f_per >= 10 Hz, so the grid's cheapest (5, 2, 0) is masked
+  const FeasibleSet fs = ComputeFeasibleSet(grid, in);
+  ASSERT_FALSE(fs.fallback_used);
+  ASSERT_EQ(fs.mask[static_cast<std::size_t>(*grid.Find({5, 2, 0}))], 0);
+  ASSERT_GE(fs.least_load_action, 0);
+  EXPECT_EQ(grid.At(fs.least_load_action), (TaskFrequencies{10, 2, 0}));
+  const double least = CheckConstraints(in, grid.At(fs.least_load_action)).c3_load;
+  for (int i = 0; i < grid.size(); ++i) {
+    if (fs.mask[static_cast<std::size_t>(i)]) {
+      EXPECT_LE(least, CheckConstraints(in, grid.At(i)).c3_load) << "action " << i;
+    }
+  }
+  // Nothing feasible: the least-load action is the fallback, the mask's only action.
+  in.num_cores = 1;
+  in.u_cur = 2.0;
+  const FeasibleSet none = ComputeFeasibleSet(grid, in);
+  ASSERT_TRUE(none.fallback_used);
+  EXPECT_EQ(none.least_load_action, none.fallback_action);
+}
+
 TEST(FeasibleSetTest, FallbackIsTheCheapestActionWhenNothingIsFeasible) {
   // One core already at 2.0: even the cheapest action (1, 0, 0) leaves 1.785 > 1.
   const ActionGrid grid;

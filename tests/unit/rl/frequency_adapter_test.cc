@@ -69,6 +69,33 @@ TEST(FrequencyAdapterTest, RecordingFillsARolloutStep) {
             fa.policy().net.MacsPerDecision(false) + FrequencyAdapter::kMaskMacsPerAction * 98);
 }
 
+TEST(FrequencyAdapterTest, TheLeastLoadRuleRunsTheCheapestFeasibleActionWithoutTheNetwork) {
+  // A budget that masks the dearest actions, so the cheapest is not the only one feasible.
+  ConstraintInputs c = ExampleBoard();
+  c.u_cur = 3.0;
+  const FeasibleSet feasible = ComputeFeasibleSet(ActionGrid(), c);
+  ASSERT_GT(feasible.num_feasible, 1);
+  ASSERT_FALSE(feasible.fallback_used);
+  FrequencyAdapter rule(MakeFrequencyPolicy(ActionGrid(), 2), {}, {}, ActionChoice::kLeastLoad);
+  WorkCounts work;
+  const FrequencyDecision d = rule.Decide(c, ExampleFlight(), ActMode::kGreedy, nullptr, &work);
+  EXPECT_EQ(d.action, feasible.least_load_action);
+  const double load = CheckConstraints(c, d.f).c3_load;
+  for (int i = 0; i < rule.grid().size(); ++i) {
+    if (feasible.mask[static_cast<std::size_t>(i)]) {
+      EXPECT_LE(load, CheckConstraints(c, rule.grid().At(i)).c3_load) << "action " << i;
+    }
+  }
+  // The policy would have chosen otherwise here, so the rule is not the network by chance.
+  FrequencyAdapter policy(MakeFrequencyPolicy(ActionGrid(), 2));
+  EXPECT_NE(policy.Decide(c, ExampleFlight(), ActMode::kGreedy).action, d.action);
+  EXPECT_EQ(d.macs, FrequencyAdapter::kMaskMacsPerAction * 98);
+  EXPECT_EQ(work.Get(WorkUnit::kPolicyFlop), d.macs);
+  RolloutStep step;
+  EXPECT_THROW(rule.Decide(c, ExampleFlight(), ActMode::kGreedy, nullptr, nullptr, &step),
+               std::invalid_argument);
+}
+
 TEST(FrequencyAdapterTest, RefusesPoliciesWithoutGridOrWithOtherFeatures) {
   PolicyFile p = MakeFrequencyPolicy(ActionGrid(), 1);
   p.action_grid.reset();
