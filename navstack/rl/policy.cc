@@ -23,6 +23,29 @@ void CheckMask(std::span<const std::uint8_t> mask, int num_actions) {
   }
 }
 
+void CheckHead(const ActorCriticConfig& c) {
+  if (!c.factored()) return;
+  if (c.head_outputs < 1) throw std::invalid_argument("factored head: head_outputs must be >= 1");
+  if (static_cast<int>(c.action_terms.size()) != c.num_actions) {
+    throw std::invalid_argument("factored head: " + std::to_string(c.action_terms.size()) +
+                                " term lists for " + std::to_string(c.num_actions) + " actions");
+  }
+  for (const std::vector<int>& terms : c.action_terms) {
+    if (terms.empty()) throw std::invalid_argument("factored head: an action has no terms");
+    for (int k : terms) {
+      if (k < 0 || k >= c.head_outputs) {
+        throw std::invalid_argument("factored head: term " + std::to_string(k) + " outside [0, " +
+                                    std::to_string(c.head_outputs) + ")");
+      }
+    }
+  }
+}
+
+const ActorCriticConfig& Checked(const ActorCriticConfig& c) {
+  CheckHead(c);
+  return c;
+}
+
 }  // namespace
 
 void ObservationNormaliser::Update(const Eigen::Ref<const Eigen::MatrixXd>& X) {
@@ -75,10 +98,33 @@ void MaskedLogSoftmax(const Eigen::Ref<const Eigen::VectorXd>& logits,
 }
 
 ActorCritic::ActorCritic(const ActorCriticConfig& config)
-    : config_(config),
-      actor_(LayerSizes(config.obs_dim, config.hidden, config.num_actions)),
+    : config_(Checked(config)),
+      actor_(LayerSizes(config.obs_dim, config.hidden, config.actor_outputs())),
       critic_(LayerSizes(config.obs_dim, config.hidden, 1)),
       normaliser_(config.obs_dim) {}
+
+void ActorCritic::Logits(const Eigen::Ref<const Eigen::MatrixXd>& head, Eigen::MatrixXd* logits) const {
+  if (!config_.factored()) {
+    *logits = head;
+    return;
+  }
+  logits->setZero(num_actions(), head.cols());
+  for (int a = 0; a < num_actions(); ++a) {
+    for (int k : config_.action_terms[static_cast<std::size_t>(a)]) logits->row(a) += head.row(k);
+  }
+}
+
+void ActorCritic::HeadGradient(const Eigen::Ref<const Eigen::MatrixXd>& d_logits,
+                               Eigen::MatrixXd* d_head) const {
+  if (!config_.factored()) {
+    *d_head = d_logits;
+    return;
+  }
+  d_head->setZero(config_.head_outputs, d_logits.cols());
+  for (int a = 0; a < num_actions(); ++a) {
+    for (int k : config_.action_terms[static_cast<std::size_t>(a)]) d_head->row(k) += d_logits.row(a);
+  }
+}
 
 void ActorCritic::InitializeWeights(Rng* rng) {
   actor_.InitOrthogonal(rng, 0.01);
@@ -88,6 +134,7 @@ void ActorCritic::InitializeWeights(Rng* rng) {
 ActorCritic::Workspace ActorCritic::MakeWorkspace() const {
   Workspace ws;
   ws.obs.resize(obs_dim());
+  ws.head.resize(config_.actor_outputs());
   ws.logits.resize(num_actions());
   ws.log_probs.resize(num_actions());
   ws.value.resize(1);
@@ -105,7 +152,16 @@ PolicyOutput ActorCritic::Act(const Eigen::Ref<const Eigen::VectorXd>& obs,
   }
   CheckMask(mask, num_actions());
   normaliser_.Normalise(obs, ws->obs);
-  actor_.Forward(ws->obs, &ws->actor, ws->logits);
+  if (config_.factored()) {
+    actor_.Forward(ws->obs, &ws->actor, ws->head);
+    for (int a = 0; a < num_actions(); ++a) {
+      double z = 0.0;
+      for (int k : config_.action_terms[static_cast<std::size_t>(a)]) z += ws->head[k];
+      ws->logits[a] = z;
+    }
+  } else {
+    actor_.Forward(ws->obs, &ws->actor, ws->logits);
+  }
 
   PolicyOutput out;
   if (mode == ActMode::kGreedy) {
@@ -144,7 +200,9 @@ PolicyOutput ActorCritic::Act(const Eigen::Ref<const Eigen::VectorXd>& obs,
 }
 
 std::int64_t ActorCritic::MacsPerDecision(bool with_value) const {
-  return actor_.MacsPerSample() + (with_value ? critic_.MacsPerSample() : 0);
+  std::int64_t head_sums = 0;
+  for (const std::vector<int>& terms : config_.action_terms) head_sums += static_cast<std::int64_t>(terms.size());
+  return actor_.MacsPerSample() + head_sums + (with_value ? critic_.MacsPerSample() : 0);
 }
 
 }  // namespace enavi::navstack::rl

@@ -3,6 +3,14 @@
 // networks, each two fully connected hidden layers of 150 tanh units), with a masked categorical
 // over a discrete action set: infeasible actions get logit -inf before the softmax, so they have
 // probability exactly zero and are never chosen.
+//
+// Two heads. Joint: one actor output per action, the output is the action's logit. Factored: the
+// actions are tuples of levels (E-Navi's (f_per, f_col, f_dif)), the actor outputs one logit per
+// level of each component, and an action's logit is the sum of its levels' logits; the mask still
+// acts on whole actions (the constraints couple the components). Why factored: what a level costs
+// (a perception rate's CPU) is then learned from every sample that used the level. With 98 joint
+// logits a 12-flight batch of ~1,700 decisions shows each triple ~17 times; the 4 perception
+// levels ~400 times each. (Action branching: Tavakoli et al., AAAI 2018.)
 
 #include <cstdint>
 #include <span>
@@ -39,6 +47,13 @@ struct ActorCriticConfig {
   int obs_dim = 1;
   int num_actions = 1;
   std::vector<int> hidden = {150, 150};  ///< paper: two layers of 150 tanh units
+  /// Factored head: action_terms[a] lists the actor outputs summed into action a's logit, each in
+  /// [0, head_outputs). Empty: the joint head (num_actions outputs, output a is a's logit).
+  std::vector<std::vector<int>> action_terms;
+  int head_outputs = 0;  ///< actor outputs of a factored head, >= 1
+
+  bool factored() const { return !action_terms.empty(); }
+  int actor_outputs() const { return factored() ? head_outputs : num_actions; }
 };
 
 enum class ActMode {
@@ -60,7 +75,8 @@ void MaskedLogSoftmax(const Eigen::Ref<const Eigen::VectorXd>& logits,
 
 class ActorCritic {
  public:
-  /// Zero weights, identity normaliser. @throws std::invalid_argument for sizes < 1.
+  /// Zero weights, identity normaliser. @throws std::invalid_argument for sizes < 1, or a
+  ///   factored head whose terms are not one list per action of indices in [0, head_outputs).
   explicit ActorCritic(const ActorCriticConfig& config = {});
 
   /// Orthogonal initialisation: actor output gain 0.01 (near-uniform initial policy), critic 1.
@@ -80,6 +96,7 @@ class ActorCritic {
   /// Scratch for Act(); one per thread.
   struct Workspace {
     Eigen::VectorXd obs;
+    Eigen::VectorXd head;  ///< actor outputs (the logits themselves for a joint head)
     Eigen::VectorXd logits;
     Eigen::VectorXd log_probs;
     Eigen::VectorXd value;
@@ -97,8 +114,14 @@ class ActorCritic {
                    ActMode mode, Rng* rng, Workspace* ws, bool want_log_prob = true,
                    bool want_value = true) const;
 
-  /// Multiply-adds of one decision: the actor pass, plus the critic pass when `with_value`.
+  /// Multiply-adds of one decision: the actor pass (and a factored head's sums), plus the critic
+  /// pass when `with_value`.
   std::int64_t MacsPerDecision(bool with_value = false) const;
+
+  /// Action logits from the actor's outputs, one sample per column (the identity for a joint head).
+  void Logits(const Eigen::Ref<const Eigen::MatrixXd>& head, Eigen::MatrixXd* logits) const;
+  /// dLoss/d(actor outputs) from dLoss/d(logits): the transpose of Logits().
+  void HeadGradient(const Eigen::Ref<const Eigen::MatrixXd>& d_logits, Eigen::MatrixXd* d_head) const;
 
  private:
   ActorCriticConfig config_;

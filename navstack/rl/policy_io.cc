@@ -1,9 +1,11 @@
 #include "navstack/rl/policy_io.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
+#include <vector>
 
 #include "api/atomic_file.h"
 #include "api/base64.h"
@@ -150,6 +152,29 @@ void MlpFromJson(const json& j, const std::string& field, const JsonReader& r, M
   }
 }
 
+constexpr const char* kJointHead = "masked_categorical_logits";
+constexpr const char* kFactoredHead = "factored_masked_categorical_logits";
+
+// The factored head over a grid: the levels of each frequency, ascending, f_per's first.
+void FactorHead(const ActionGrid& grid, ActorCriticConfig* config) {
+  using Component = double TaskFrequencies::*;
+  const Component components[] = {&TaskFrequencies::f_per, &TaskFrequencies::f_col, &TaskFrequencies::f_dif};
+  config->action_terms.assign(static_cast<std::size_t>(grid.size()), {});
+  int offset = 0;
+  for (const Component c : components) {
+    std::vector<double> levels;
+    for (const TaskFrequencies& f : grid.actions()) levels.push_back(f.*c);
+    std::sort(levels.begin(), levels.end());
+    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+    for (int a = 0; a < grid.size(); ++a) {
+      const auto level = std::lower_bound(levels.begin(), levels.end(), grid.At(a).*c) - levels.begin();
+      config->action_terms[static_cast<std::size_t>(a)].push_back(offset + static_cast<int>(level));
+    }
+    offset += static_cast<int>(levels.size());
+  }
+  config->head_outputs = offset;
+}
+
 void CheckConsistent(const PolicyFile& p) {
   if (static_cast<int>(p.feature_names.size()) != p.net.obs_dim()) {
     throw std::logic_error("PolicyFile: " + std::to_string(p.feature_names.size()) +
@@ -159,14 +184,22 @@ void CheckConsistent(const PolicyFile& p) {
     throw std::logic_error("PolicyFile: action grid has " + std::to_string(p.action_grid->size()) +
                            " actions, the network " + std::to_string(p.net.num_actions()));
   }
+  if (p.net.config().factored()) {
+    ActorCriticConfig expected;
+    if (p.action_grid) FactorHead(*p.action_grid, &expected);
+    if (expected.action_terms != p.net.config().action_terms) {
+      throw std::logic_error("PolicyFile: a factored head must be the action grid's (f_per, f_col, f_dif) levels");
+    }
+  }
 }
 
 }  // namespace
 
-PolicyFile MakeFrequencyPolicy(const ActionGrid& grid, std::uint64_t seed,
+PolicyFile MakeFrequencyPolicy(const ActionGrid& grid, std::uint64_t seed, PolicyHead head,
                                const std::vector<int>& hidden) {
-  PolicyFile p{ActorCritic({kPolicyStateDim, grid.size(), hidden}), PolicyStateFeatureNames(), grid,
-               json::object()};
+  ActorCriticConfig config{kPolicyStateDim, grid.size(), hidden};
+  if (head == PolicyHead::kFactored) FactorHead(grid, &config);
+  PolicyFile p{ActorCritic(config), PolicyStateFeatureNames(), grid, json::object()};
   Rng rng(seed);
   p.net.InitializeWeights(&rng);
   return p;
@@ -182,7 +215,7 @@ json PolicyToJson(const PolicyFile& p, WeightPrecision precision) {
                        {"num_actions", net.num_actions()},
                        {"hidden", net.config().hidden},
                        {"activation", "tanh"},
-                       {"actor_output", "masked_categorical_logits"},
+                       {"actor_output", net.config().factored() ? kFactoredHead : kJointHead},
                        {"critic_output", "state_value"}};
   const ObservationNormaliser& norm = net.normaliser();
   j["observation"] = {{"features", p.feature_names},
@@ -255,31 +288,8 @@ PolicyFile PolicyFromJson(const json& j, const std::string& source) {
       r.String(r.Field(arch, "architecture", "activation"), "architecture.activation");
   if (activation != "tanh") r.Fail("architecture.activation", "only \"tanh\" is supported");
 
-  // Observation layout and normalisation.
-  const json& obs = r.Object(r.Field(j, "", "observation"), "observation");
-  const json& features = r.Array(r.Field(obs, "observation", "features"), "observation.features");
-  if (static_cast<int>(features.size()) != config.obs_dim) {
-    r.Fail("observation.features", "expected " + std::to_string(config.obs_dim) +
-                                       " names (obs_dim), got " + std::to_string(features.size()));
-  }
-  PolicyFile p{ActorCritic(config), {}, std::nullopt, json::object()};
-  for (std::size_t i = 0; i < features.size(); ++i) {
-    p.feature_names.push_back(r.String(features[i], JsonReader::Index("observation.features", i)));
-  }
-  const std::string nf = "observation.normaliser";
-  const json& nj = r.Object(r.Field(obs, "observation", "normaliser"), nf);
-  ObservationNormaliser& norm = p.net.normaliser();
-  norm.mean = r.Vector(r.Field(nj, nf, "mean"), nf + ".mean", config.obs_dim);
-  norm.var = r.Vector(r.Field(nj, nf, "var"), nf + ".var", config.obs_dim);
-  if ((norm.var.array() < 0.0).any()) r.Fail(nf + ".var", "variances must be >= 0");
-  norm.count = r.Number(r.Field(nj, nf, "count"), nf + ".count");
-  if (norm.count < 0.0) r.Fail(nf + ".count", "must be >= 0");
-  norm.clip = r.Number(r.Field(nj, nf, "clip"), nf + ".clip");
-  if (!(norm.clip > 0.0)) r.Fail(nf + ".clip", "must be > 0");
-  norm.epsilon = r.Number(r.Field(nj, nf, "epsilon"), nf + ".epsilon");
-  if (!(norm.epsilon > 0.0)) r.Fail(nf + ".epsilon", "must be > 0");
-
   // Action grid (optional: null for generic policies).
+  std::optional<ActionGrid> action_grid;
   const json& grid = r.Field(j, "", "action_grid");
   if (!grid.is_null()) {
     r.Object(grid, "action_grid");
@@ -301,8 +311,43 @@ PolicyFile PolicyFromJson(const json& j, const std::string& source) {
       const Eigen::VectorXd f = r.Vector(actions[i], JsonReader::Index("action_grid.actions", i), 3);
       triples.push_back({f[0], f[1], f[2]});
     }
-    p.action_grid = ActionGrid::FromTriples(std::move(triples), source + ": action_grid.actions");
+    action_grid = ActionGrid::FromTriples(std::move(triples), source + ": action_grid.actions");
   }
+
+  // The head: joint, or factored over the grid's levels (so the grid must be there).
+  const json* head = arch.contains("actor_output") || version != 1 ? &r.Field(arch, "architecture", "actor_output") : nullptr;
+  const std::string head_name = head ? r.String(*head, "architecture.actor_output") : kJointHead;
+  if (head_name == kFactoredHead) {
+    if (!action_grid) r.Fail("architecture.actor_output", "a factored head needs the action_grid");
+    FactorHead(*action_grid, &config);
+  } else if (head_name != kJointHead) {
+    r.Fail("architecture.actor_output", "expected \"" + std::string(kJointHead) + "\" or \"" +
+                                            kFactoredHead + "\", got \"" + head_name + "\"");
+  }
+
+  // Observation layout and normalisation.
+  const json& obs = r.Object(r.Field(j, "", "observation"), "observation");
+  const json& features = r.Array(r.Field(obs, "observation", "features"), "observation.features");
+  if (static_cast<int>(features.size()) != config.obs_dim) {
+    r.Fail("observation.features", "expected " + std::to_string(config.obs_dim) +
+                                       " names (obs_dim), got " + std::to_string(features.size()));
+  }
+  PolicyFile p{ActorCritic(config), {}, std::move(action_grid), json::object()};
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    p.feature_names.push_back(r.String(features[i], JsonReader::Index("observation.features", i)));
+  }
+  const std::string nf = "observation.normaliser";
+  const json& nj = r.Object(r.Field(obs, "observation", "normaliser"), nf);
+  ObservationNormaliser& norm = p.net.normaliser();
+  norm.mean = r.Vector(r.Field(nj, nf, "mean"), nf + ".mean", config.obs_dim);
+  norm.var = r.Vector(r.Field(nj, nf, "var"), nf + ".var", config.obs_dim);
+  if ((norm.var.array() < 0.0).any()) r.Fail(nf + ".var", "variances must be >= 0");
+  norm.count = r.Number(r.Field(nj, nf, "count"), nf + ".count");
+  if (norm.count < 0.0) r.Fail(nf + ".count", "must be >= 0");
+  norm.clip = r.Number(r.Field(nj, nf, "clip"), nf + ".clip");
+  if (!(norm.clip > 0.0)) r.Fail(nf + ".clip", "must be > 0");
+  norm.epsilon = r.Number(r.Field(nj, nf, "epsilon"), nf + ".epsilon");
+  if (!(norm.epsilon > 0.0)) r.Fail(nf + ".epsilon", "must be > 0");
 
   if (version == 1) {
     MlpFromJson(r.Field(j, "", "actor"), "actor", r, &p.net.actor());

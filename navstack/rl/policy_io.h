@@ -8,6 +8,9 @@
 //     "architecture": {"obs_dim": 16, "num_actions": 189, "hidden": [150, 150],
 //                      "activation": "tanh", "actor_output": "masked_categorical_logits",
 //                      "critic_output": "state_value"},
+//       (actor_output "factored_masked_categorical_logits": one output per level of f_per, f_col
+//        and f_dif, in that order and each ascending, as the action grid's triples use them; an
+//        action's logit is the sum of its three levels' (policy.h); it needs the action grid)
 //     "observation": {"features": ["eci", ...],
 //                     "normaliser": {"mean": [...], "var": [...], "count": n, "clip": 5, "epsilon": 1e-8}},
 //     "action_grid": {"order": ["f_per", "f_col", "f_dif"], "unit": "Hz",
@@ -61,9 +64,13 @@ struct PolicyFile {
   nlohmann::json metadata = nlohmann::json::object();
 };
 
-/// A freshly initialised E-Navi frequency policy: PolicyStateFeatureNames() inputs, one output per
-/// grid action, orthogonal weights from `seed`.
+/// The actor's head (policy.h): one logit per action, or one per level of each frequency.
+enum class PolicyHead { kJoint, kFactored };
+
+/// A freshly initialised E-Navi frequency policy: PolicyStateFeatureNames() inputs, the head's
+/// outputs, orthogonal weights from `seed`.
 PolicyFile MakeFrequencyPolicy(const ActionGrid& grid, std::uint64_t seed,
+                               PolicyHead head = PolicyHead::kJoint,
                                const std::vector<int>& hidden = {150, 150});
 
 /// The policy as a version 2 document with its weights packed at `precision`.

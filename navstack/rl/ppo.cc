@@ -217,8 +217,9 @@ PpoLossTerms ComputePpoLoss(const ActorCritic& net, const PpoBatch& batch, const
   if (n == 0) throw std::logic_error("ComputePpoLoss: empty batch");
   const int num_actions = net.num_actions();
   Mlp::BatchCache actor_cache, critic_cache;
-  Eigen::MatrixXd logits, values;
-  net.actor().ForwardBatch(batch.obs, &actor_cache, &logits);
+  Eigen::MatrixXd head, logits, values;
+  net.actor().ForwardBatch(batch.obs, &actor_cache, &head);
+  net.Logits(head, &logits);
   net.critic().ForwardBatch(batch.obs, &critic_cache, &values);
 
   const double inv_n = 1.0 / n;
@@ -274,7 +275,9 @@ PpoLossTerms ComputePpoLoss(const ActorCritic& net, const PpoBatch& batch, const
   if (grads != nullptr) {
     grads->actor = Eigen::VectorXd::Zero(net.actor().num_params());
     grads->critic = Eigen::VectorXd::Zero(net.critic().num_params());
-    net.actor().BackwardBatch(actor_cache, d_logits, grads->actor);
+    Eigen::MatrixXd d_head;
+    net.HeadGradient(d_logits, &d_head);
+    net.actor().BackwardBatch(actor_cache, d_head, grads->actor);
     net.critic().BackwardBatch(critic_cache, d_values, grads->critic);
   }
   return terms;

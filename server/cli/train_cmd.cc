@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <map>
 #include <memory>
 
 #include <spdlog/spdlog.h>
@@ -36,6 +37,12 @@ void RegisterTrainCommand(CLI::App& app) {
   cmd->add_option("--work-dir", *work, "checkpoint, learning curve (CSV, PNG) and episode files (default: OUT.train)");
   cmd->add_option("--init", o->init_policy, "start from this policy instead of a fresh network");
   cmd->add_flag("--resume", o->resume, "continue from the work dir's checkpoint");
+  const std::map<std::string, navstack::rl::PolicyHead> heads = {{"joint", navstack::rl::PolicyHead::kJoint},
+                                                                 {"factored", navstack::rl::PolicyHead::kFactored}};
+  CLI::Option* head = cmd->add_option("--head", o->head,
+                                      "a fresh policy's head: joint (one logit per action; default) or factored "
+                                      "(one per frequency level, summed per action)")
+                          ->transform(CLI::CheckedTransformer(heads, CLI::ignore_case));
   cmd->add_option("--learning-rate", o->ppo.learning_rate, "Adam step size")->capture_default_str();
   cmd->add_option("--entropy-coef", o->ppo.entropy_coef, "entropy bonus weight")->capture_default_str();
   cmd->add_option("--target-kl", o->ppo.target_kl,
@@ -50,7 +57,10 @@ void RegisterTrainCommand(CLI::App& app) {
                   "evaluation world seeds (each scenario once per seed, boards in turn; outside training's 100-499)")
       ->delimiter(',')
       ->capture_default_str();
-  cmd->callback([o, out, work, verbose] {
+  cmd->callback([o, out, work, verbose, head] {
+    if (head->count() > 0 && (o->resume || !o->init_policy.empty())) {
+      throw CLI::ValidationError("--head", "shapes a fresh policy; --init and --resume keep their policy's head");
+    }
     if (!*verbose) spdlog::set_level(spdlog::level::warn);
     o->out = *out;
     o->work_dir = *work;

@@ -243,7 +243,7 @@ TrainResult Train(const TrainOptions& options) {
       if (!fs::exists(checkpoint)) throw std::invalid_argument("--resume: no checkpoint at " + checkpoint.string());
       return rl::PpoTrainer::LoadCheckpoint(checkpoint.string());
     }
-    rl::PolicyFile init = options.init_policy.empty() ? rl::MakeFrequencyPolicy(navstack::ActionGrid(), options.seed)
+    rl::PolicyFile init = options.init_policy.empty() ? rl::MakeFrequencyPolicy(navstack::ActionGrid(), options.seed, options.head)
                                                       : rl::LoadFrequencyPolicy(options.init_policy);
     return rl::PpoTrainer(std::move(init), options.ppo, options.seed);
   }();

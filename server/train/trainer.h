@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "api/episode.h"
+#include "navstack/rl/policy_io.h"
 #include "navstack/rl/ppo.h"
 
 namespace enavi::train {
@@ -39,6 +40,8 @@ struct TrainOptions {
   std::filesystem::path out = "policy.json";
   std::filesystem::path work_dir;  ///< default: <out>.train
   std::string init_policy;         ///< start from this policy instead of a fresh one
+  /// A fresh policy's head (policy.h): one logit per action, or per frequency level.
+  navstack::rl::PolicyHead head = navstack::rl::PolicyHead::kJoint;
   bool resume = false;             ///< continue from <work_dir>/checkpoint.json
   navstack::rl::PpoOptions ppo;
   bool progress = true;            ///< progress line on stderr

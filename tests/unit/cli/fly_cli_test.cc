@@ -125,6 +125,15 @@ TEST(EpisodeCliInputTest, SpecFileThatIsNotAnObjectOrHasUnknownFieldsIsRefused) 
   ExpectRefused(Episode(dir, "--spec-file " + typo), {typo.c_str(), "bord", "unknown field", "board"}, "misspelt field");
 }
 
+TEST(TrainCliInputTest, AnUnknownHeadOrAHeadForAPolicyThatHasOneIsRefused) {
+  TempDir dir;
+  const std::string out = " --out " + (dir.path() / "p.json").string();
+  ExpectRefused(Enavi(dir, "train --head wide" + out), {"--head", "wide", "factored"}, "unknown head");
+  ExpectRefused(Enavi(dir, "train --head factored --init some.json" + out), {"--head", "--init"},
+                "--head with --init");
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "p.json.train")) << "refused before any work";
+}
+
 TEST(FlyCliInputTest, NegativeSeedOrTimeoutIsRefused) {
   TempDir dir;
   ExpectRefused(Fly(dir, "--world empty --seed -3"), {"--seed"}, "negative seed");

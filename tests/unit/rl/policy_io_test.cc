@@ -324,6 +324,38 @@ TEST(PolicyIoTest, PolicyForAnotherObservationLayoutIsRefused) {
   ExpectRefused("no_grid", [](json& j) { j["action_grid"] = nullptr; }, "action_grid");
 }
 
+// The factored head (one output per level of f_per, f_col, f_dif) is rebuilt from the grid on load.
+TEST(PolicyIoTest, FactoredHeadRoundTripsAndIsRebuiltFromTheGrid) {
+  PolicyFile p = MakeFrequencyPolicy(ActionGrid(), 31, PolicyHead::kFactored);
+  ASSERT_TRUE(p.net.config().factored());
+  EXPECT_EQ(p.net.actor().output_size(), 4 + 5 + 7) << "the default grid's levels";
+  Rng rng(3);
+  p.net.actor().InitOrthogonal(&rng, 3.0);  // spread logits, so the greedy choice means something
+  const json doc = PolicyToJson(p, WeightPrecision::kFloat64);
+  EXPECT_EQ(doc["architecture"]["actor_output"], "factored_masked_categorical_logits");
+  const PolicyFile q = FrequencyPolicyFromText(doc.dump(), "factored");
+  EXPECT_EQ(q.net.config().action_terms, p.net.config().action_terms);
+  EXPECT_TRUE(q.net.actor().params() == p.net.actor().params());
+  ActorCritic::Workspace wp = p.net.MakeWorkspace(), wq = q.net.MakeWorkspace();
+  const std::vector<std::uint8_t> all(98, 1);
+  for (int k = 0; k < 20; ++k) {
+    Eigen::VectorXd obs(kPolicyStateDim);
+    for (int i = 0; i < kPolicyStateDim; ++i) obs[i] = rng.Normal();
+    const PolicyOutput a = p.net.Act(obs, all, ActMode::kGreedy, nullptr, &wp);
+    const PolicyOutput b = q.net.Act(obs, all, ActMode::kGreedy, nullptr, &wq);
+    EXPECT_EQ(a.action, b.action);
+    EXPECT_EQ(a.log_prob, b.log_prob);
+  }
+  ExpectRefused("factored_no_grid", [](json& j) { j["action_grid"] = nullptr; }, "architecture.actor_output", doc);
+  ExpectRefused("head_unknown", [](json& j) { j["architecture"]["actor_output"] = "gaussian"; },
+                "architecture.actor_output");
+  ExpectRefused("head_missing", [](json& j) { j["architecture"].erase("actor_output"); },
+                "architecture.actor_output");
+  // A joint file's weights under a factored header no longer fit.
+  ExpectRefused("head_swapped", [](json& j) { j["architecture"]["actor_output"] = "factored_masked_categorical_logits"; },
+                "parameters.count");
+}
+
 TEST(PolicyIoTest, GenericPolicyWithoutGridRoundTrips) {
   PolicyFile p{ActorCritic({3, 5, {4}}), {"a", "b", "c"}, std::nullopt, json::object()};
   Rng rng(1);

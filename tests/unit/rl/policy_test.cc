@@ -179,6 +179,51 @@ TEST(ActorCriticTest, PaperArchitectureCostsAreAsDocumented) {
   EXPECT_EQ(net.MacsPerDecision(true), 2 * (16 * 150 + 150 * 150) + 150 * 189 + 150);
 }
 
+// Factored head: 6 actions = 2 x 3 levels; an action's logit is the sum of its levels' outputs.
+TEST(ActorCriticTest, FactoredLogitsAreSumsOfLevelOutputsAndTheGradientIsTheTranspose) {
+  ActorCriticConfig config{4, 6, {8}};
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 3; ++j) config.action_terms.push_back({i, 2 + j});
+  }
+  config.head_outputs = 5;
+  ActorCritic net(config);
+  Rng rng(9);
+  net.actor().InitOrthogonal(&rng, 3.0);
+  const Eigen::VectorXd obs = RandomObs(4, &rng);
+  Eigen::MatrixXd head, logits;
+  Mlp::BatchCache cache;
+  net.actor().ForwardBatch(net.normaliser().NormaliseBatch(obs), &cache, &head);
+  net.Logits(head, &logits);
+  ASSERT_EQ(logits.rows(), 6);
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 3; ++j) EXPECT_DOUBLE_EQ(logits(3 * i + j, 0), head(i, 0) + head(2 + j, 0));
+  }
+  // Act() composes the same logits: greedy picks their argmax, log-probs are their softmax.
+  ActorCritic::Workspace ws = net.MakeWorkspace();
+  const std::vector<std::uint8_t> all(6, 1);
+  const PolicyOutput out = net.Act(obs, all, ActMode::kGreedy, nullptr, &ws);
+  Eigen::Index best = 0;
+  logits.col(0).maxCoeff(&best);
+  EXPECT_EQ(out.action, best);
+  Eigen::VectorXd lp(6);
+  MaskedLogSoftmax(logits.col(0), all, lp);
+  EXPECT_NEAR(out.log_prob, lp[best], 1e-12);
+  // <d_logits, Logits(h)> = <HeadGradient(d_logits), h> for any h, d_logits.
+  const Eigen::MatrixXd h = Eigen::MatrixXd::Random(5, 3), d = Eigen::MatrixXd::Random(6, 3);
+  Eigen::MatrixXd lh, dh;
+  net.Logits(h, &lh);
+  net.HeadGradient(d, &dh);
+  EXPECT_NEAR((d.array() * lh.array()).sum(), (dh.array() * h.array()).sum(), 1e-12);
+  EXPECT_EQ(net.MacsPerDecision(false), 4 * 8 + 8 * 5 + 6 * 2) << "the actor plus one add per term";
+  // Terms must name actor outputs, one list per action.
+  ActorCriticConfig bad = config;
+  bad.action_terms[2] = {0, 5};
+  EXPECT_THROW(ActorCritic{bad}, std::invalid_argument);
+  bad = config;
+  bad.action_terms.pop_back();
+  EXPECT_THROW(ActorCritic{bad}, std::invalid_argument);
+}
+
 TEST(ObservationNormaliserTest, MergedStatisticsEqualThoseOfTheWholeData) {
   Rng rng(4);
   Eigen::MatrixXd X(3, 50);

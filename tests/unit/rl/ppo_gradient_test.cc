@@ -22,12 +22,13 @@ PpoBatch MakeBatch(const ActorCritic& net, int n, std::uint64_t seed) {
   b.old_log_probs.resize(n);
   b.advantages.resize(n);
   b.returns.resize(n);
-  Eigen::MatrixXd logits;
+  Eigen::MatrixXd head, logits;
   Mlp::BatchCache cache;
   for (int i = 0; i < n; ++i) {
     for (int k = 0; k < net.obs_dim(); ++k) b.obs(k, i) = rng.Normal();
   }
-  net.actor().ForwardBatch(b.obs, &cache, &logits);
+  net.actor().ForwardBatch(b.obs, &cache, &head);
+  net.Logits(head, &logits);
   const double offsets[] = {-0.5, -0.05, 0.05, 0.5};  // ratios 1.65, 1.05, 0.95, 0.61
   Eigen::VectorXd lp(net.num_actions());
   for (int i = 0; i < n; ++i) {
@@ -125,6 +126,23 @@ TEST(PpoGradientTest, SmallNetworkEveryParameterMatchesFiniteDifferences) {
   net.actor().InitOrthogonal(&rng, 1.0);
   net.critic().InitOrthogonal(&rng, 1.0);
   const PpoBatch batch = MakeBatch(net, 16, 3);
+  CheckAllBlocks(&net, batch, LossOptions(), /*samples=*/0);
+}
+
+// A factored head: 6 actions = 2 levels of one component x 3 of another, each action's logit the
+// sum of its two levels' outputs (5 actor outputs).
+TEST(PpoGradientTest, FactoredHeadEveryParameterMatchesFiniteDifferences) {
+  ActorCriticConfig config{5, 6, {7, 6}};
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 3; ++j) config.action_terms.push_back({i, 2 + j});
+  }
+  config.head_outputs = 5;
+  ActorCritic net(config);
+  ASSERT_EQ(net.actor().output_size(), 5);
+  Rng rng(23);
+  net.actor().InitOrthogonal(&rng, 1.0);
+  net.critic().InitOrthogonal(&rng, 1.0);
+  const PpoBatch batch = MakeBatch(net, 16, 5);
   CheckAllBlocks(&net, batch, LossOptions(), /*samples=*/0);
 }
 
