@@ -477,6 +477,22 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
     if (!list.IsSequence()) ctx.Fail(list, "episode_overrides", "expected a list");
     for (const auto& item : list) job.episode_overrides.push_back(Override(ctx, item, job.methods));
   }
+  // A rollout records the policy's own decisions; E-Navi's least-load rule (an ablation) makes
+  // none, so every episode of such a job would fail on its worker.
+  if (job.collect) {
+    const auto rule = [](const std::map<std::string, double>& o) {
+      const auto it = o.find("strategy.least_load");
+      return it != o.end() && it->second != 0.0;
+    };
+    const std::string reason = "a collection job records the policy's decisions; the least-load rule takes them instead";
+    if (rule(job.overrides)) ctx.Fail(root["overrides"], "overrides.strategy.least_load", reason);
+    for (std::size_t i = 0; i < job.episode_overrides.size(); ++i) {
+      if (rule(job.episode_overrides[i].overrides)) {
+        ctx.Fail(root["episode_overrides"][i], "episode_overrides[" + std::to_string(i) + "].overrides.strategy.least_load",
+                 reason);
+      }
+    }
+  }
 
   // Each factor is bounded above, so the product cannot overflow before this check.
   const std::size_t size = job.MatrixSize();

@@ -11,7 +11,8 @@ const std::string kHashRef = "sha256:" + std::string(64, 'c');
 // A catalog of the registry's shape: E-Navi with its sampling switch.
 JobSpecOptions Options() {
   JobSpecOptions o;
-  o.catalog.methods = {{"baseline", "", {}}, {"enavi", "", {{"strategy.explore", 0, 1, true}}}};
+  o.catalog.methods = {{"baseline", "", {}},
+                       {"enavi", "", {{"strategy.explore", 0, 1, true}, {"strategy.least_load", 0, 1, true}}}};
   o.catalog.boards = {"pi4b", "tx2"};
   o.catalog.scenarios = {"s1", "s2", "empty"};
   o.catalog.clocks = {"virtual", "emulated"};
@@ -56,6 +57,22 @@ TEST(JobSpecCollectTest, ExplicitEpisodeListExpandsInOrder) {
   EXPECT_EQ(episodes[1].board, "pi4b");
   EXPECT_EQ(episodes[1].seed, 7u);
   EXPECT_EQ(episodes[1].overrides.at("strategy.explore"), 0.0);
+}
+
+TEST(JobSpecCollectTest, ACollectionJobCannotFlyTheLeastLoadRule) {
+  const std::string job = "boards: [tx2]\nscenarios: [empty]\nseeds: 1\nmethods: [enavi]\ncollect: rollouts\n"
+                          "policy: \"" + kHashRef + "\"\n";
+  EXPECT_NE(Error(job + "overrides: {strategy.least_load: 1}\n")
+                .find("job.yaml:7: overrides.strategy.least_load: a collection job records the policy's decisions"),
+            std::string::npos);
+  EXPECT_NE(Error(job + "episode_overrides:\n  - match: {seed: 1}\n    overrides: {strategy.least_load: 1}\n")
+                .find("episode_overrides[0].overrides.strategy.least_load"),
+            std::string::npos);
+  // Off, or in a job that collects nothing, it is an ordinary tunable.
+  EXPECT_NO_THROW(Parse(job + "overrides: {strategy.least_load: 0}\n"));
+  const JobSpec ablation = Parse("boards: [tx2]\nscenarios: [empty]\nseeds: 1\nmethods: [enavi]\n"
+                                 "overrides: {strategy.least_load: 1}\n");
+  EXPECT_EQ(ExpandJob(ablation).at(0).overrides.at("strategy.least_load"), 1.0);
 }
 
 TEST(JobSpecCollectTest, BadCollectionSpecsNameLineAndField) {
