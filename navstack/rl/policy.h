@@ -49,7 +49,7 @@ struct ActorCriticConfig {
   std::vector<int> hidden = {150, 150};  ///< paper: two layers of 150 tanh units
   /// Factored head: action_terms[a] lists the actor outputs summed into action a's logit, each in
   /// [0, head_outputs). Empty: the joint head (num_actions outputs, output a is a's logit).
-  std::vector<std::vector<int>> action_terms;
+  std::vector<std::vector<int>> action_terms = {};
   int head_outputs = 0;  ///< actor outputs of a factored head, >= 1
 
   bool factored() const { return !action_terms.empty(); }
