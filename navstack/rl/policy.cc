@@ -103,14 +103,14 @@ ActorCritic::ActorCritic(const ActorCriticConfig& config)
       critic_(LayerSizes(config.obs_dim, config.hidden, 1)),
       normaliser_(config.obs_dim) {}
 
-void ActorCritic::Logits(const Eigen::Ref<const Eigen::MatrixXd>& head, Eigen::MatrixXd* logits) const {
+void ActorCritic::Logits(const Eigen::Ref<const Eigen::MatrixXd>& head, Eigen::Ref<Eigen::MatrixXd> logits) const {
   if (!config_.factored()) {
-    *logits = head;
+    logits = head;
     return;
   }
-  logits->setZero(num_actions(), head.cols());
+  logits.setZero();
   for (int a = 0; a < num_actions(); ++a) {
-    for (int k : config_.action_terms[static_cast<std::size_t>(a)]) logits->row(a) += head.row(k);
+    for (int k : config_.action_terms[static_cast<std::size_t>(a)]) logits.row(a) += head.row(k);
   }
 }
 
@@ -154,11 +154,7 @@ PolicyOutput ActorCritic::Act(const Eigen::Ref<const Eigen::VectorXd>& obs,
   normaliser_.Normalise(obs, ws->obs);
   if (config_.factored()) {
     actor_.Forward(ws->obs, &ws->actor, ws->head);
-    for (int a = 0; a < num_actions(); ++a) {
-      double z = 0.0;
-      for (int k : config_.action_terms[static_cast<std::size_t>(a)]) z += ws->head[k];
-      ws->logits[a] = z;
-    }
+    Logits(ws->head, ws->logits);
   } else {
     actor_.Forward(ws->obs, &ws->actor, ws->logits);
   }

@@ -118,8 +118,9 @@ class ActorCritic {
   /// pass when `with_value`.
   std::int64_t MacsPerDecision(bool with_value = false) const;
 
-  /// Action logits from the actor's outputs, one sample per column (the identity for a joint head).
-  void Logits(const Eigen::Ref<const Eigen::MatrixXd>& head, Eigen::MatrixXd* logits) const;
+  /// Action logits from the actor's outputs, one sample per column (the identity for a joint
+  /// head). @pre logits is num_actions() x head.cols(); it is written, never resized.
+  void Logits(const Eigen::Ref<const Eigen::MatrixXd>& head, Eigen::Ref<Eigen::MatrixXd> logits) const;
   /// dLoss/d(actor outputs) from dLoss/d(logits): the transpose of Logits().
   void HeadGradient(const Eigen::Ref<const Eigen::MatrixXd>& d_logits, Eigen::MatrixXd* d_head) const;
 

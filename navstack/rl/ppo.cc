@@ -219,7 +219,8 @@ PpoLossTerms ComputePpoLoss(const ActorCritic& net, const PpoBatch& batch, const
   Mlp::BatchCache actor_cache, critic_cache;
   Eigen::MatrixXd head, logits, values;
   net.actor().ForwardBatch(batch.obs, &actor_cache, &head);
-  net.Logits(head, &logits);
+  logits.resize(num_actions, n);
+  net.Logits(head, logits);
   net.critic().ForwardBatch(batch.obs, &critic_cache, &values);
 
   const double inv_n = 1.0 / n;

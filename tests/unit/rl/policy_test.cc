@@ -190,10 +190,10 @@ TEST(ActorCriticTest, FactoredLogitsAreSumsOfLevelOutputsAndTheGradientIsTheTran
   Rng rng(9);
   net.actor().InitOrthogonal(&rng, 3.0);
   const Eigen::VectorXd obs = RandomObs(4, &rng);
-  Eigen::MatrixXd head, logits;
+  Eigen::MatrixXd head, logits(6, 1);
   Mlp::BatchCache cache;
   net.actor().ForwardBatch(net.normaliser().NormaliseBatch(obs), &cache, &head);
-  net.Logits(head, &logits);
+  net.Logits(head, logits);
   ASSERT_EQ(logits.rows(), 6);
   for (int i = 0; i < 2; ++i) {
     for (int j = 0; j < 3; ++j) EXPECT_DOUBLE_EQ(logits(3 * i + j, 0), head(i, 0) + head(2 + j, 0));
@@ -210,8 +210,8 @@ TEST(ActorCriticTest, FactoredLogitsAreSumsOfLevelOutputsAndTheGradientIsTheTran
   EXPECT_NEAR(out.log_prob, lp[best], 1e-12);
   // <d_logits, Logits(h)> = <HeadGradient(d_logits), h> for any h, d_logits.
   const Eigen::MatrixXd h = Eigen::MatrixXd::Random(5, 3), d = Eigen::MatrixXd::Random(6, 3);
-  Eigen::MatrixXd lh, dh;
-  net.Logits(h, &lh);
+  Eigen::MatrixXd lh(6, 3), dh;
+  net.Logits(h, lh);
   net.HeadGradient(d, &dh);
   EXPECT_NEAR((d.array() * lh.array()).sum(), (dh.array() * h.array()).sum(), 1e-12);
   EXPECT_EQ(net.MacsPerDecision(false), 4 * 8 + 8 * 5 + 6 * 2) << "the actor plus one add per term";

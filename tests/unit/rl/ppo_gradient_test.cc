@@ -22,13 +22,13 @@ PpoBatch MakeBatch(const ActorCritic& net, int n, std::uint64_t seed) {
   b.old_log_probs.resize(n);
   b.advantages.resize(n);
   b.returns.resize(n);
-  Eigen::MatrixXd head, logits;
+  Eigen::MatrixXd head, logits(net.num_actions(), n);
   Mlp::BatchCache cache;
   for (int i = 0; i < n; ++i) {
     for (int k = 0; k < net.obs_dim(); ++k) b.obs(k, i) = rng.Normal();
   }
   net.actor().ForwardBatch(b.obs, &cache, &head);
-  net.Logits(head, &logits);
+  net.Logits(head, logits);
   const double offsets[] = {-0.5, -0.05, 0.05, 0.5};  // ratios 1.65, 1.05, 0.95, 0.61
   Eigen::VectorXd lp(net.num_actions());
   for (int i = 0; i < n; ++i) {
