@@ -327,8 +327,9 @@ std::vector<std::uint64_t> Seeds(const Context& ctx, const YAML::Node& n) {
   return seeds;
 }
 
-EpisodeOverride Override(const Context& ctx, const YAML::Node& n, const std::vector<std::string>& job_methods) {
-  const std::string f = "episode_overrides";
+EpisodeOverride Override(const Context& ctx, const YAML::Node& n, std::size_t index,
+                         const std::vector<std::string>& job_methods) {
+  const std::string f = "episode_overrides[" + std::to_string(index) + "]";
   if (!n.IsMap()) ctx.Fail(n, f, "expected a map with match: and settings");
   CheckKeys(ctx, n, f, {"match", "timeout_s", "dilation", "policy", "overrides", "world_params"});
   EpisodeOverride o;
@@ -475,7 +476,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   if (root["labels"]) job.labels = Labels(ctx, root["labels"]);
   if (const YAML::Node list = root["episode_overrides"]) {
     if (!list.IsSequence()) ctx.Fail(list, "episode_overrides", "expected a list");
-    for (const auto& item : list) job.episode_overrides.push_back(Override(ctx, item, job.methods));
+    for (std::size_t i = 0; i < list.size(); ++i) job.episode_overrides.push_back(Override(ctx, list[i], i, job.methods));
   }
   // A rollout records the policy's own decisions; E-Navi's least-load rule (an ablation) makes
   // none, so every episode of such a job would fail on its worker.

@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 
 #include "navstack/methods/registry.h"
+#include "server/cli/cli_values.h"
 #include "server/cli/commands.h"
 #include "server/cli/farm_flags.h"
 #include "server/cli/registry_help.h"
@@ -34,6 +35,7 @@ struct EvalFlags {
   bool dashboard = false;
   std::string http = "127.0.0.1:0";
   std::string preset;  ///< "paper" or empty
+  std::vector<std::string> overrides;  ///< --set items
 };
 
 // --preset paper: the paper's HIL matrix (5 boards x S1-S5 x E-Navi and the baseline, 3 seeds
@@ -57,8 +59,29 @@ void ApplyPreset(EvalFlags* f, const CLI::App& sub) {
   }
 }
 
+// --set NAME=VALUE: a tunable of every listed method; METHOD:NAME=VALUE: of one of --methods.
+// The job spec checks names and ranges against each method's tunables.
+void ApplyOverrides(EvalFlags* f) {
+  server::EvalOptions& o = f->options;
+  for (const auto& [key, text] : ParseNameValues("--set", f->overrides)) {
+    const double value = ParseNumber("--set", key, text);
+    const std::size_t colon = key.find(':');
+    if (colon == std::string::npos) {
+      o.overrides[key] = value;
+      continue;
+    }
+    const std::string method = key.substr(0, colon);
+    if (std::find(o.methods.begin(), o.methods.end(), method) == o.methods.end()) {
+      throw std::invalid_argument("--set " + key + ": method '" + method + "' is not among --methods (" +
+                                 JoinNames(o.methods, ",") + ")");
+    }
+    o.method_overrides[method][key.substr(colon + 1)] = value;
+  }
+}
+
 void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
   ApplyPreset(&f, sub);
+  ApplyOverrides(&f);
   RequireEpisodeUnlessEpisodeCmd(root, f.options.episode_command);
   StopSignals signals;
   SetupLogging(f.verbose);
@@ -76,6 +99,8 @@ void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
     if (f.json) {
       std::cout << report.results.dump(2) << "\n";
     } else {
+      // A table flown with overrides says so: the method names alone would not.
+      if (!f.overrides.empty()) std::cout << "with --set " << JoinNames(f.overrides, " --set ") << "\n";
       std::cout << server::PaperTable(report.results) << "\n" << server::EciRangeTable(report.results);
       if (f.preset == "paper") std::cout << server::PaperComparison(report.results);
     }
@@ -141,6 +166,9 @@ void RegisterEvalCommand(CLI::App& app) {
                   "each board fits this host when its episode starts")
       ->capture_default_str();
   AddSpeedProbeOption(sub, &o.speed_probe);
+  sub->add_option("--set", f->overrides,
+                  "override a tunable, NAME=VALUE for every listed method or METHOD:NAME=VALUE for one "
+                  "(repeatable; `enavi fly --help` lists each method's tunables)");
   sub->add_option("--db", f->db, "keep the results in this SQLite database (default: temporary)");
   sub->add_option("--workers", o.workers, "local worker processes")->capture_default_str();
   sub->add_option("--slots", o.slots, "episodes per worker at once")->capture_default_str();

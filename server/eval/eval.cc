@@ -1,5 +1,6 @@
 #include "server/eval/eval.h"
 
+#include <charconv>
 #include <sstream>
 #include <thread>
 
@@ -22,6 +23,17 @@ std::string YamlList(const std::vector<std::string>& items) {
   return out + "]";
 }
 
+// A YAML flow map of tunables; the shortest text that reads back as the same double.
+std::string YamlNumbers(const std::map<std::string, double>& values) {
+  std::string out = "{";
+  for (const auto& [name, value] : values) {
+    char number[32];
+    const auto end = std::to_chars(number, number + sizeof number, value).ptr;
+    out += (out.size() > 1 ? ", " : "") + std::string("\"") + name + "\": " + std::string(number, end);
+  }
+  return out + "}";
+}
+
 }  // namespace
 
 std::string EvalJobYaml(const EvalOptions& o) {
@@ -36,6 +48,13 @@ std::string EvalJobYaml(const EvalOptions& o) {
   if (o.clock == "emulated") y << "dilation: \"" << o.dilation << "\"\n";
   // Also when asked for on the virtual clock, so that the job's check refuses it by name.
   if (o.clock == "emulated" || o.speed_probe != "check") y << "speed_probe: \"" << o.speed_probe << "\"\n";
+  if (!o.overrides.empty()) y << "overrides: " << YamlNumbers(o.overrides) << "\n";
+  if (!o.method_overrides.empty()) {
+    y << "episode_overrides:\n";
+    for (const auto& [method, values] : o.method_overrides) {
+      y << "  - {match: {method: [\"" << method << "\"]}, overrides: " << YamlNumbers(values) << "}\n";
+    }
+  }
   return y.str();
 }
 

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -33,6 +34,11 @@ struct EvalOptions {
   /// the host when its episode starts); not written into a virtual-clock job.
   std::string dilation = "auto";
   std::string speed_probe = "check";  ///< emulated clock: api::kSpeedProbeModes
+  /// `--set NAME=VALUE`: a tunable of every listed method (the job's `overrides`).
+  std::map<std::string, double> overrides;
+  /// `--set METHOD:NAME=VALUE`: a tunable of one method (an `episode_overrides` entry matching
+  /// it), e.g. {"enavi": {"strategy.least_load": 1}} for an ablation beside the other methods.
+  std::map<std::string, std::map<std::string, double>> method_overrides;
   std::filesystem::path db;      ///< empty: a temporary database, removed afterwards
   int workers = 2;
   int slots = 1;                 ///< per worker

@@ -156,6 +156,45 @@ void ExpectRefused(const fs::path& dir, const std::vector<std::string>& args, co
   EXPECT_NE(ReadText(o.stderr_file).find(message), std::string::npos) << ReadText(o.stderr_file);
 }
 
+// `enavi eval --set`: NAME=VALUE reaches every method's episodes, METHOD:NAME=VALUE one method's
+// (the fake episode's knobs pass as `--unchecked-overrides`); the table says what was set.
+TEST_F(FarmFixture, EvalSetOverridesReachTheEpisodesTheyName) {
+  const fs::path db = dir_ / "set.db";
+  worker::SpawnOptions o;
+  o.argv = {EnaviBinary().string(), "eval", "--boards", "tx2", "--scenarios", "s1", "--methods",
+            "baseline,enavi", "--set", "fake.sleep_s=0.1", "--set", "enavi:fake.crash_attempts=1",
+            "--unchecked-overrides", "fake.", "--db", db.string(), "--episode-cmd", EpisodeCommand(),
+            "--domain", std::to_string(domain_)};
+  o.stdout_file = dir_ / "set.out";
+  o.stderr_file = dir_ / "set.log";
+  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
+  const auto status = eval.Wait(std::chrono::seconds(180));
+  ASSERT_TRUE(status.has_value()) << "enavi eval --set did not finish";
+  EXPECT_TRUE(status->ok()) << status->Describe() << "\n" << ReadText(dir_ / "set.log");
+  EXPECT_NE(ReadText(dir_ / "set.out").find("with --set fake.sleep_s=0.1 --set enavi:fake.crash_attempts=1"),
+            std::string::npos)
+      << ReadText(dir_ / "set.out");
+  server::Store store(db);
+  const auto jobs = store.ListJobs(0);
+  ASSERT_EQ(jobs.size(), 1u);
+  const auto episodes = store.Episodes(jobs[0].id);
+  ASSERT_EQ(episodes.size(), 2u);
+  for (const auto& e : episodes) {
+    EXPECT_EQ(e.spec.overrides.at("fake.sleep_s"), 0.1) << e.spec.method;
+    EXPECT_EQ(e.spec.overrides.count("fake.crash_attempts"), e.spec.method == "enavi" ? 1u : 0u) << e.spec.method;
+    EXPECT_EQ(e.attempts, e.spec.method == "enavi" ? 2 : 1) << e.spec.method << ": one crash, then done";
+  }
+}
+
+TEST_F(FarmFixture, EvalSetRefusesAMethodNotFlownAndATunableNotAllTake) {
+  ExpectRefused(dir_, {"eval", "--set", "fixed:planner.v_max=1"},
+                "--set fixed:planner.v_max: method 'fixed' is not among --methods (baseline,enavi)");
+  ExpectRefused(dir_, {"eval", "--set", "strategy.least_load=1"},
+                "overrides.strategy.least_load: not a tunable of method baseline");
+  ExpectRefused(dir_, {"eval", "--set", "enavi:strategy.least_load=on"},
+                "--set enavi:strategy.least_load: 'on' is not a number");
+}
+
 TEST_F(FarmFixture, EvalPresetPaperRefusesAnotherMatrix) {
   ExpectRefused(dir_, {"eval", "--preset", "paper", "--boards", "x86"},
                 "--preset paper fixes the boards and scenarios; drop --boards");

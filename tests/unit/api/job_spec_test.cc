@@ -276,7 +276,7 @@ seeds: 1
 episode_overrides:
   - match: {boards: tx2}
 )")
-                .rfind("job.yaml:6: episode_overrides.match.boards: unknown key", 0),
+                .rfind("job.yaml:6: episode_overrides[0].match.boards: unknown key", 0),
             0u);
 }
 
