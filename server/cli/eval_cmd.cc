@@ -36,6 +36,7 @@ struct EvalFlags {
   std::string http = "127.0.0.1:0";
   std::string preset;  ///< "paper" or empty
   std::vector<std::string> overrides;  ///< --set items
+  std::vector<std::string> labels;     ///< --label items
 };
 
 // --preset paper: the paper's HIL matrix (5 boards x S1-S5 x E-Navi and the baseline, 3 seeds
@@ -82,6 +83,7 @@ void ApplyOverrides(EvalFlags* f) {
 void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
   ApplyPreset(&f, sub);
   ApplyOverrides(&f);
+  f.options.labels = ParseNameValues("--label", f.labels);
   RequireEpisodeUnlessEpisodeCmd(root, f.options.episode_command);
   StopSignals signals;
   SetupLogging(f.verbose);
@@ -169,6 +171,9 @@ void RegisterEvalCommand(CLI::App& app) {
   sub->add_option("--set", f->overrides,
                   "override a tunable, NAME=VALUE for every listed method or METHOD:NAME=VALUE for one "
                   "(repeatable; `enavi fly --help` lists each method's tunables)");
+  sub->add_option("--policy", o.policy, "E-Navi's frequency-adapter policy file (default: the shipped one)");
+  sub->add_option("--label", f->labels,
+                  "tag the job, KEY=VALUE (repeatable): the dashboard and `enavi compare` tell jobs apart by them");
   sub->add_option("--db", f->db, "keep the results in this SQLite database (default: temporary)");
   sub->add_option("--workers", o.workers, "local worker processes")->capture_default_str();
   sub->add_option("--slots", o.slots, "episodes per worker at once")->capture_default_str();

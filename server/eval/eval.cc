@@ -3,6 +3,7 @@
 #include <charconv>
 #include <sstream>
 #include <thread>
+#include <type_traits>
 
 #include <spdlog/spdlog.h>
 
@@ -15,21 +16,39 @@
 namespace enavi::server {
 namespace {
 
+// A double-quoted YAML scalar: whatever a flag holds (a path, a label) reads back unchanged.
+std::string YamlString(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (static_cast<unsigned char>(c) < 0x20) {
+      static constexpr char kHex[] = "0123456789ABCDEF";
+      out += {'\\', 'x', kHex[(c >> 4) & 0xF], kHex[c & 0xF]};
+      continue;
+    }
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
 std::string YamlList(const std::vector<std::string>& items) {
   std::string out = "[";
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    out += (i ? ", " : "") + std::string("\"") + items[i] + "\"";
-  }
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", " : "") + YamlString(items[i]);
   return out + "]";
 }
 
-// A YAML flow map of tunables; the shortest text that reads back as the same double.
-std::string YamlNumbers(const std::map<std::string, double>& values) {
+// A YAML flow map; numbers as the shortest text that reads back as the same double.
+template <typename Value>
+std::string YamlMap(const std::map<std::string, Value>& values) {
   std::string out = "{";
   for (const auto& [name, value] : values) {
-    char number[32];
-    const auto end = std::to_chars(number, number + sizeof number, value).ptr;
-    out += (out.size() > 1 ? ", " : "") + std::string("\"") + name + "\": " + std::string(number, end);
+    out += (out.size() > 1 ? ", " : "") + YamlString(name) + ": ";
+    if constexpr (std::is_same_v<Value, double>) {
+      char number[32];
+      out.append(number, std::to_chars(number, number + sizeof number, value).ptr);
+    } else {
+      out += YamlString(value);
+    }
   }
   return out + "}";
 }
@@ -43,16 +62,18 @@ std::string EvalJobYaml(const EvalOptions& o) {
     << "scenarios: " << YamlList(o.scenarios) << "\n"
     << "methods: " << YamlList(o.methods) << "\n"
     << "seeds: " << o.seeds << "\n"
-    << "clock: \"" << o.clock << "\"\n"
-    << "cost: \"" << o.cost << "\"\n";
-  if (o.clock == "emulated") y << "dilation: \"" << o.dilation << "\"\n";
+    << "clock: " << YamlString(o.clock) << "\n"
+    << "cost: " << YamlString(o.cost) << "\n";
+  if (o.clock == "emulated") y << "dilation: " << YamlString(o.dilation) << "\n";
   // Also when asked for on the virtual clock, so that the job's check refuses it by name.
-  if (o.clock == "emulated" || o.speed_probe != "check") y << "speed_probe: \"" << o.speed_probe << "\"\n";
-  if (!o.overrides.empty()) y << "overrides: " << YamlNumbers(o.overrides) << "\n";
+  if (o.clock == "emulated" || o.speed_probe != "check") y << "speed_probe: " << YamlString(o.speed_probe) << "\n";
+  if (!o.policy.empty()) y << "policy: " << YamlString(o.policy) << "\n";
+  if (!o.labels.empty()) y << "labels: " << YamlMap(o.labels) << "\n";
+  if (!o.overrides.empty()) y << "overrides: " << YamlMap(o.overrides) << "\n";
   if (!o.method_overrides.empty()) {
     y << "episode_overrides:\n";
     for (const auto& [method, values] : o.method_overrides) {
-      y << "  - {match: {method: [\"" << method << "\"]}, overrides: " << YamlNumbers(values) << "}\n";
+      y << "  - {match: {method: [" << YamlString(method) << "]}, overrides: " << YamlMap(values) << "}\n";
     }
   }
   return y.str();

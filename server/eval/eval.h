@@ -34,6 +34,8 @@ struct EvalOptions {
   /// the host when its episode starts); not written into a virtual-clock job.
   std::string dilation = "auto";
   std::string speed_probe = "check";  ///< emulated clock: api::kSpeedProbeModes
+  std::string policy;  ///< E-Navi's policy file (under an allowed root); empty: the shipped one
+  std::map<std::string, std::string> labels;  ///< the job's labels (dashboard, `enavi compare`)
   /// `--set NAME=VALUE`: a tunable of every listed method (the job's `overrides`).
   std::map<std::string, double> overrides;
   /// `--set METHOD:NAME=VALUE`: a tunable of one method (an `episode_overrides` entry matching

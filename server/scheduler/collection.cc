@@ -1,6 +1,7 @@
 #include "server/scheduler/collection.h"
 
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -22,11 +23,14 @@ std::optional<CollectionInfo> PrepareCollection(Store* store, const api::JobSpec
                                                 std::vector<api::EpisodeSpec>* episodes) {
   const std::string prefix = api::kPolicyHashPrefix;
   if (!job.collect) {
+    std::set<std::string> checked;
     for (const auto& e : *episodes) {
       if (api::IsPolicyHashRef(e.policy)) {
         throw std::invalid_argument("policy: " + e.policy +
                                     ": a policy by hash is for collection jobs (collect: rollouts)");
       }
+      // Loaded once here, or a bad file fails every episode that flies it, each after its retries.
+      if (!e.policy.empty() && checked.insert(e.policy).second) navstack::rl::LoadFrequencyPolicy(e.policy);
     }
     return std::nullopt;
   }

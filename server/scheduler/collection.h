@@ -17,6 +17,7 @@ std::string StorePolicy(Store* store, const std::string& text, const std::string
 
 /// For a collection job: stores its policy (a file, or a hash already stored), points every
 /// episode at "sha256:HASH" and returns what the store records. Nullopt for other jobs.
+/// Any other job's policy files are loaded once, so a bad one is refused at submit.
 /// @throws std::invalid_argument for an unknown policy hash, a bad policy file, or a policy hash
 ///   in a job that does not collect (only collection jobs fly policies by hash).
 std::optional<CollectionInfo> PrepareCollection(Store* store, const api::JobSpec& job,

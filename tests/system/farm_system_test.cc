@@ -195,6 +195,13 @@ TEST_F(FarmFixture, EvalSetRefusesAMethodNotFlownAndATunableNotAllTake) {
                 "--set enavi:strategy.least_load: 'on' is not a number");
 }
 
+// A policy file that does not load is refused at submit, before any episode flies it.
+TEST_F(FarmFixture, EvalRefusesAPolicyThatDoesNotLoadByName) {
+  std::ofstream(dir_ / "policy.json") << "{}";
+  ExpectRefused(dir_, {"eval", "--policy", (dir_ / "policy.json").string(), "--world-root", dir_.string()},
+                "policy file '" + (dir_ / "policy.json").string() + "': format: missing");
+}
+
 TEST_F(FarmFixture, EvalPresetPaperRefusesAnotherMatrix) {
   ExpectRefused(dir_, {"eval", "--preset", "paper", "--boards", "x86"},
                 "--preset paper fixes the boards and scenarios; drop --boards");

@@ -1,6 +1,11 @@
 // `enavi eval`'s flags become a job spec, checked and expanded like a submitted one.
 #include "server/eval/eval.h"
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
 #include <gtest/gtest.h>
 
 namespace enavi::server {
@@ -40,6 +45,32 @@ TEST(EvalJobYamlTest, OverridesReachTheEpisodesTheyName) {
       EXPECT_EQ(e.overrides.count("strategy.least_load"), 0u);
     }
   }
+}
+
+// Flag values that YAML would read otherwise (quotes, backslashes, control characters, a
+// colon) come back unchanged: the policy path and the labels.
+TEST(EvalJobYamlTest, PolicyAndLabelsComeBackAsGiven) {
+  const std::filesystem::path root = std::filesystem::temp_directory_path() / ("eval_job_test-" + std::to_string(getpid()));
+  std::filesystem::create_directories(root);
+  const std::filesystem::path policy = root / "odd \"name\": \\ #1.json";
+  std::ofstream(policy) << "{}";
+  api::JobSpecOptions options = Options();
+  options.allowed_roots = {root};
+  EvalOptions o;
+  o.methods = {"enavi"};
+  o.policy = policy.string();
+  o.labels = {{"variant", "enavi:least_load"}, {"branch", "main"}};
+  const api::JobSpec job = api::ParseJobSpec(EvalJobYaml(o), "enavi eval flags", options);
+  EXPECT_EQ(job.policy, std::filesystem::weakly_canonical(policy).string());
+  EXPECT_EQ(job.labels, o.labels);
+  o.labels = {{"note", "a\tb"}};
+  try {
+    api::ParseJobSpec(EvalJobYaml(o), "enavi eval flags", options);
+    FAIL() << "a label with a tab was accepted";
+  } catch (const api::JobSpecError& e) {
+    EXPECT_NE(std::string(e.what()).find("labels.note"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(root);
 }
 
 // A tunable one of the methods lacks is refused by the job's check, naming the field.
