@@ -88,19 +88,32 @@ episode_overrides:
   EXPECT_TRUE(Process("w1").running()) << "crashing episodes must not take the worker down";
 }
 
+// Runs `enavi eval ARGS...` with the fake episode on this test's domain, which must succeed;
+// returns its stdout (the table). Its stderr is in DIR/NAME.log.
+std::string EvalOutput(const fs::path& dir, const std::string& name, std::vector<std::string> args,
+                       int domain, std::chrono::seconds limit) {
+  worker::SpawnOptions o;
+  o.argv = {EnaviBinary().string(), "eval"};
+  o.argv.insert(o.argv.end(), args.begin(), args.end());
+  o.argv.insert(o.argv.end(), {"--episode-cmd", EpisodeCommand(), "--domain", std::to_string(domain)});
+  o.stdout_file = dir / (name + ".out");
+  o.stderr_file = dir / (name + ".log");
+  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
+  const auto status = eval.Wait(limit);
+  if (!status) {
+    ADD_FAILURE() << "enavi eval (" << name << ") did not finish";
+    return "";
+  }
+  EXPECT_TRUE(status->ok()) << status->Describe() << "\n" << ReadText(o.stderr_file);
+  return ReadText(o.stdout_file);
+}
+
 TEST_F(FarmFixture, EvalStoresEveryResultAndPrintsThePaperTable) {
   const fs::path db = dir_ / "eval.db";
-  worker::SpawnOptions o;
-  o.argv = {EnaviBinary().string(), "eval", "--boards", "tx2", "--scenarios", "s1", "--methods",
-            "enavi,baseline", "--seeds", "2", "--db", db.string(), "--workers", "2",
-            "--episode-cmd", EpisodeCommand(), "--domain", std::to_string(domain_)};
-  o.stdout_file = dir_ / "eval.out";
-  o.stderr_file = dir_ / "eval.log";
-  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
-  const auto status = eval.Wait(std::chrono::seconds(180));
-  ASSERT_TRUE(status.has_value()) << "enavi eval did not finish";
-  EXPECT_TRUE(status->ok()) << status->Describe() << "\n" << ReadText(dir_ / "eval.log");
-  const std::string table = ReadText(dir_ / "eval.out");
+  const std::string table = EvalOutput(dir_, "eval",
+                                       {"--boards", "tx2", "--scenarios", "s1", "--methods", "enavi,baseline",
+                                        "--seeds", "2", "--db", db.string(), "--workers", "2"},
+                                       domain_, std::chrono::seconds(180));
   EXPECT_NE(table.find("tx2    baseline"), std::string::npos) << table;
   EXPECT_NE(table.find("tx2    enavi"), std::string::npos) << table;
   EXPECT_NE(table.find("E-Navi vs baseline"), std::string::npos) << table;
@@ -114,17 +127,10 @@ TEST_F(FarmFixture, EvalStoresEveryResultAndPrintsThePaperTable) {
 
 TEST_F(FarmFixture, EvalPresetPaperRunsThePapersMatrixAndPrintsOursBesideIt) {
   const fs::path db = dir_ / "paper.db";
-  worker::SpawnOptions o;
-  o.argv = {EnaviBinary().string(), "eval", "--preset", "paper", "--seeds", "1", "--db", db.string(),
-            "--workers", "2", "--slots", "2", "--episode-cmd", EpisodeCommand(), "--domain",
-            std::to_string(domain_)};
-  o.stdout_file = dir_ / "paper.out";
-  o.stderr_file = dir_ / "paper.log";
-  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
-  const auto status = eval.Wait(std::chrono::seconds(240));
-  ASSERT_TRUE(status.has_value()) << "enavi eval --preset paper did not finish";
-  EXPECT_TRUE(status->ok()) << status->Describe() << "\n" << ReadText(dir_ / "paper.log");
-  const std::string out = ReadText(dir_ / "paper.out");
+  const std::string out = EvalOutput(dir_, "paper",
+                                     {"--preset", "paper", "--seeds", "1", "--db", db.string(), "--workers", "2",
+                                      "--slots", "2"},
+                                     domain_, std::chrono::seconds(240));
   for (const char* title : {"nav cpu % of one core: ours beside the paper's HIL table",
                             "flight time s: ours beside the paper's HIL table", "path m: ours beside the paper's HIL table"}) {
     EXPECT_NE(out.find(title), std::string::npos) << out;
@@ -160,20 +166,12 @@ void ExpectRefused(const fs::path& dir, const std::vector<std::string>& args, co
 // (the fake episode's knobs pass as `--unchecked-overrides`); the table says what was set.
 TEST_F(FarmFixture, EvalSetOverridesReachTheEpisodesTheyName) {
   const fs::path db = dir_ / "set.db";
-  worker::SpawnOptions o;
-  o.argv = {EnaviBinary().string(), "eval", "--boards", "tx2", "--scenarios", "s1", "--methods",
-            "baseline,enavi", "--set", "fake.sleep_s=0.1", "--set", "enavi:fake.crash_attempts=1",
-            "--unchecked-overrides", "fake.", "--db", db.string(), "--episode-cmd", EpisodeCommand(),
-            "--domain", std::to_string(domain_)};
-  o.stdout_file = dir_ / "set.out";
-  o.stderr_file = dir_ / "set.log";
-  worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
-  const auto status = eval.Wait(std::chrono::seconds(180));
-  ASSERT_TRUE(status.has_value()) << "enavi eval --set did not finish";
-  EXPECT_TRUE(status->ok()) << status->Describe() << "\n" << ReadText(dir_ / "set.log");
-  EXPECT_NE(ReadText(dir_ / "set.out").find("with --set fake.sleep_s=0.1 --set enavi:fake.crash_attempts=1"),
-            std::string::npos)
-      << ReadText(dir_ / "set.out");
+  const std::string table = EvalOutput(dir_, "set",
+                                       {"--boards", "tx2", "--scenarios", "s1", "--methods", "baseline,enavi", "--set",
+                                        "fake.sleep_s=0.1", "--set", "enavi:fake.crash_attempts=1",
+                                        "--unchecked-overrides", "fake.", "--db", db.string()},
+                                       domain_, std::chrono::seconds(180));
+  EXPECT_NE(table.find("with --set fake.sleep_s=0.1 --set enavi:fake.crash_attempts=1"), std::string::npos) << table;
   server::Store store(db);
   const auto jobs = store.ListJobs(0);
   ASSERT_EQ(jobs.size(), 1u);
