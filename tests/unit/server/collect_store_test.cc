@@ -1,13 +1,17 @@
 // Collection jobs in the store: one rollout per done episode, written with its result (a re-run
 // attempt that finishes first wins, a late duplicate is ignored), stale-policy rollouts refused by
-// hash, and the tables added to a database created before them.
+// hash, and the tables added to a database created before them. Other jobs' policy files are
+// loaded at submit.
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 
 #include <gtest/gtest.h>
 
+#include "navstack/rl/policy_io.h"
 #include "navstack/rl/rollout.h"
+#include "server/scheduler/collection.h"
 #include "server/store/sqlite.h"
 #include "server/store/store.h"
 
@@ -121,6 +125,27 @@ TEST_F(CollectStoreTest, StaleOrMissingRolloutIsRefusedAndTheEpisodeRunsAgain) {
   EXPECT_EQ(out.at(0).ack, api::AckStatus::kStored);
   EXPECT_EQ(store_->Rollouts(job).size(), 1u);
   EXPECT_EQ(store_->ActivePolicies().size(), 0u) << "the job is done";
+}
+
+// A job that flies a policy file (not a collection) has the file loaded once at submit: a file
+// that does not load is refused naming it and the field, before any episode flies it.
+TEST_F(CollectStoreTest, AJobsPolicyFileThatDoesNotLoadIsRefusedAtSubmit) {
+  const fs::path good = dir_ / "policy.json", bad = dir_ / "bad.json";
+  navstack::rl::SavePolicyFile(good.string(), navstack::rl::MakeFrequencyPolicy(navstack::ActionGrid(), 1));
+  std::ofstream(bad) << "{}";
+  api::JobSpec job;
+  std::vector<api::EpisodeSpec> episodes(2);
+  episodes[0].method = episodes[1].method = "enavi";
+  episodes[0].policy = episodes[1].policy = good.string();
+  EXPECT_EQ(PrepareCollection(store_.get(), job, &episodes), std::nullopt);
+  EXPECT_EQ(episodes[1].policy, good.string()) << "a job that does not collect flies the file itself";
+  episodes[1].policy = bad.string();
+  try {
+    PrepareCollection(store_.get(), job, &episodes);
+    FAIL() << "a policy file that does not load was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "policy file '" + bad.string() + "': format: missing");
+  }
 }
 
 TEST_F(CollectStoreTest, DatabaseFromBeforeCollectionGainsTheTables) {
