@@ -81,4 +81,8 @@ class YamlReader {
   Thrower thrower_;
 };
 
+/// The writers' side: `text` as a double-quoted YAML scalar (quote and backslash escaped, control
+/// characters as \xHH), which any YAML reader reads back as exactly `text`.
+std::string YamlQuoted(const std::string& text);
+
 }  // namespace enavi::api

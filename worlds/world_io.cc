@@ -341,29 +341,13 @@ std::string Num(double v) { return FormatFixed(detmath::Quantize(v), kWorldFileD
 
 std::string Vec(const Eigen::Vector3d& v) { return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]"; }
 
-std::string Quote(const std::string& s) {
-  static const char* kHex = "0123456789abcdef";
-  std::string out = "\"";
-  for (unsigned char ch : s) {
-    if (ch == '"' || ch == '\\') {
-      out += '\\';
-      out += static_cast<char>(ch);
-    } else if (ch < 0x20 || ch == 0x7f) {
-      out += "\\x";
-      out += kHex[ch >> 4];
-      out += kHex[ch & 15];
-    } else {
-      out += static_cast<char>(ch);
-    }
-  }
-  return out + "\"";
-}
+using api::YamlQuoted;
 
 std::string Key(const std::string& s) {
   const bool plain = !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
   });
-  return plain ? s : Quote(s);
+  return plain ? s : YamlQuoted(s);
 }
 
 }  // namespace
@@ -408,15 +392,15 @@ World LoadWorldFile(const std::filesystem::path& path, const WorldFileOptions& o
 std::string WorldToYaml(const World& world) {
   std::string out;
   out += "format: " + std::string(kWorldFormat) + "\n";
-  out += "name: " + Quote(world.metadata.name) + "\n";
+  out += "name: " + YamlQuoted(world.metadata.name) + "\n";
   out += "metadata:\n";
-  out += "  scenario: " + Quote(world.metadata.scenario) + "\n";
+  out += "  scenario: " + YamlQuoted(world.metadata.scenario) + "\n";
   out += "  seed: " + std::to_string(world.metadata.seed) + "\n";
   out += "  generator_version: " + std::to_string(world.metadata.generator_version) + "\n";
   out += "  params: {";
   bool first = true;
   for (const auto& [k, v] : world.metadata.params) {
-    out += (first ? "" : ", ") + Key(k) + ": " + Quote(v);
+    out += (first ? "" : ", ") + Key(k) + ": " + YamlQuoted(v);
     first = false;
   }
   out += "}\n";
@@ -445,10 +429,10 @@ std::string WorldToYaml(const World& world) {
         throw std::invalid_argument("a mesh with no file of its own (imported from SDF) cannot be written to a "
                                     "world file; `enavi world convert` writes it as an OBJ first");
       }
-      *out += "  - mesh: {file: " + Quote(m.path) + ", position: " + Vec(m.position) + ", yaw: " + Num(m.yaw) +
+      *out += "  - mesh: {file: " + YamlQuoted(m.path) + ", position: " + Vec(m.position) + ", yaw: " + Num(m.yaw) +
               ", scale: " + Num(m.scale);
-      if (!m.units.empty()) *out += ", units: " + Quote(m.units);
-      if (m.up) *out += std::string(", up: ") + Quote(UpAxisName(*m.up));
+      if (!m.units.empty()) *out += ", units: " + YamlQuoted(m.units);
+      if (m.up) *out += std::string(", up: ") + YamlQuoted(UpAxisName(*m.up));
       if (m.recenter) *out += ", recenter: true";
       *out += "}\n";
     }

@@ -7,6 +7,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "api/yaml_read.h"
 #include "server/eval/local_farm.h"
 #include "server/http/http_api.h"
 #include "server/eval/tables.h"
@@ -16,24 +17,12 @@
 namespace enavi::server {
 namespace {
 
-// A double-quoted YAML scalar: whatever a flag holds (a path, a label) reads back unchanged.
-std::string YamlString(const std::string& text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    if (static_cast<unsigned char>(c) < 0x20) {
-      static constexpr char kHex[] = "0123456789ABCDEF";
-      out += {'\\', 'x', kHex[(c >> 4) & 0xF], kHex[c & 0xF]};
-      continue;
-    }
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
-}
+// Flag values are quoted, so a path or label reads back as given.
+using api::YamlQuoted;
 
 std::string YamlList(const std::vector<std::string>& items) {
   std::string out = "[";
-  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", " : "") + YamlString(items[i]);
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", " : "") + YamlQuoted(items[i]);
   return out + "]";
 }
 
@@ -42,12 +31,12 @@ template <typename Value>
 std::string YamlMap(const std::map<std::string, Value>& values) {
   std::string out = "{";
   for (const auto& [name, value] : values) {
-    out += (out.size() > 1 ? ", " : "") + YamlString(name) + ": ";
+    out += (out.size() > 1 ? ", " : "") + YamlQuoted(name) + ": ";
     if constexpr (std::is_same_v<Value, double>) {
       char number[32];
       out.append(number, std::to_chars(number, number + sizeof number, value).ptr);
     } else {
-      out += YamlString(value);
+      out += YamlQuoted(value);
     }
   }
   return out + "}";
@@ -62,18 +51,18 @@ std::string EvalJobYaml(const EvalOptions& o) {
     << "scenarios: " << YamlList(o.scenarios) << "\n"
     << "methods: " << YamlList(o.methods) << "\n"
     << "seeds: " << o.seeds << "\n"
-    << "clock: " << YamlString(o.clock) << "\n"
-    << "cost: " << YamlString(o.cost) << "\n";
-  if (o.clock == "emulated") y << "dilation: " << YamlString(o.dilation) << "\n";
+    << "clock: " << YamlQuoted(o.clock) << "\n"
+    << "cost: " << YamlQuoted(o.cost) << "\n";
+  if (o.clock == "emulated") y << "dilation: " << YamlQuoted(o.dilation) << "\n";
   // Also when asked for on the virtual clock, so that the job's check refuses it by name.
-  if (o.clock == "emulated" || o.speed_probe != "check") y << "speed_probe: " << YamlString(o.speed_probe) << "\n";
-  if (!o.policy.empty()) y << "policy: " << YamlString(o.policy) << "\n";
+  if (o.clock == "emulated" || o.speed_probe != "check") y << "speed_probe: " << YamlQuoted(o.speed_probe) << "\n";
+  if (!o.policy.empty()) y << "policy: " << YamlQuoted(o.policy) << "\n";
   if (!o.labels.empty()) y << "labels: " << YamlMap(o.labels) << "\n";
   if (!o.overrides.empty()) y << "overrides: " << YamlMap(o.overrides) << "\n";
   if (!o.method_overrides.empty()) {
     y << "episode_overrides:\n";
     for (const auto& [method, values] : o.method_overrides) {
-      y << "  - {match: {method: [" << YamlString(method) << "]}, overrides: " << YamlMap(values) << "}\n";
+      y << "  - {match: {method: [" << YamlQuoted(method) << "]}, overrides: " << YamlMap(values) << "}\n";
     }
   }
   return y.str();

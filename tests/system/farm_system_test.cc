@@ -88,8 +88,8 @@ episode_overrides:
   EXPECT_TRUE(Process("w1").running()) << "crashing episodes must not take the worker down";
 }
 
-// Runs `enavi eval ARGS...` with the fake episode on this test's domain, which must succeed;
-// returns its stdout (the table). Its stderr is in DIR/NAME.log.
+// Runs `enavi eval ARGS...` with the fake episode on this test's domain. It must succeed.
+// Returns its stdout, the table. Its stderr is in DIR/NAME.log.
 std::string EvalOutput(const fs::path& dir, const std::string& name, std::vector<std::string> args,
                        int domain, std::chrono::seconds limit) {
   worker::SpawnOptions o;
@@ -162,16 +162,17 @@ void ExpectRefused(const fs::path& dir, const std::vector<std::string>& args, co
   EXPECT_NE(ReadText(o.stderr_file).find(message), std::string::npos) << ReadText(o.stderr_file);
 }
 
-// `enavi eval --set`: NAME=VALUE reaches every method's episodes, METHOD:NAME=VALUE one method's
-// (the fake episode's knobs pass as `--unchecked-overrides`); the table says what was set.
+// `enavi eval --set`: NAME=VALUE reaches every method's episodes, METHOD:NAME=VALUE one method's.
+// The fake episode's knobs pass as `--unchecked-overrides`. The table's first line names both.
 TEST_F(FarmFixture, EvalSetOverridesReachTheEpisodesTheyName) {
   const fs::path db = dir_ / "set.db";
-  const std::string table = EvalOutput(dir_, "set",
-                                       {"--boards", "tx2", "--scenarios", "s1", "--methods", "baseline,enavi", "--set",
-                                        "fake.sleep_s=0.1", "--set", "enavi:fake.crash_attempts=1",
-                                        "--unchecked-overrides", "fake.", "--db", db.string()},
-                                       domain_, std::chrono::seconds(180));
-  EXPECT_NE(table.find("with --set fake.sleep_s=0.1 --set enavi:fake.crash_attempts=1"), std::string::npos) << table;
+  const std::string every = "fake.sleep_s=0.1", enavi_only = "enavi:fake.crash_attempts=1";
+  const std::vector<std::string> args = {"--boards", "tx2", "--scenarios", "s1", "--methods", "baseline,enavi",
+                                         "--set", every, "--set", enavi_only, "--unchecked-overrides", "fake.",
+                                         "--db", db.string()};
+  const std::string table = EvalOutput(dir_, "set", args, domain_, std::chrono::seconds(180));
+  const std::string header = "with --set " + every + " --set " + enavi_only;
+  EXPECT_EQ(table.rfind(header, 0), 0u) << table;
   server::Store store(db);
   const auto jobs = store.ListJobs(0);
   ASSERT_EQ(jobs.size(), 1u);
