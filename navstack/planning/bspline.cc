@@ -45,12 +45,15 @@ class Polyline {
 };
 
 // Trapezoidal (or triangular, or decelerate-only) speed profile along a path of length L from
-// speed v_s to rest: s(t) for t in [0, T].
+// speed v_s to rest: s(t) for t in [0, T]. A start above the peak speed (a plan under a speed
+// limit below the flown speed) first brakes to the peak at `accel`: timing the path as if it
+// started at the peak would put the knots behind a curve that must keep v_s, and the fit would
+// fly back to them.
 class SpeedProfile {
  public:
   SpeedProfile(double length, double v_start, double v_peak, double accel) : L_(length) {
     if (L_ <= 0.0) return;
-    v_s_ = std::clamp(v_start, 0.0, v_peak);
+    v_s_ = std::max(0.0, v_start);
     a_ = accel;
     if (v_s_ * v_s_ / (2.0 * a_) >= L_) {
       // Too fast to stop at a: decelerate uniformly so that the path ends at rest.
@@ -61,12 +64,13 @@ class SpeedProfile {
       t3_ = 2.0 * L_ / v_s_;
     } else {
       v_c_ = std::min(v_peak, std::sqrt((2.0 * a_ * L_ + v_s_ * v_s_) / 2.0));
-      a_dec_ = a_;
+      if (v_s_ > v_c_) a_ = -accel;  // brake to the peak first
+      a_dec_ = accel;
       const double d1 = (v_c_ * v_c_ - v_s_ * v_s_) / (2.0 * a_);
-      const double d3 = v_c_ * v_c_ / (2.0 * a_);
+      const double d3 = v_c_ * v_c_ / (2.0 * a_dec_);
       t1_ = (v_c_ - v_s_) / a_;
       t2_ = std::max(0.0, L_ - d1 - d3) / v_c_;
-      t3_ = v_c_ / a_;
+      t3_ = v_c_ / a_dec_;
     }
   }
   double duration() const { return t1_ + t2_ + t3_; }
@@ -83,7 +87,7 @@ class SpeedProfile {
 
  private:
   double L_;
-  double v_s_ = 0.0, v_c_ = 0.0, a_ = 1.0, a_dec_ = 1.0;
+  double v_s_ = 0.0, v_c_ = 0.0, a_ = 1.0, a_dec_ = 1.0;  ///< a_: signed, of the first phase
   double t1_ = 0.0, t2_ = 0.0, t3_ = 0.0;
 };
 
@@ -219,7 +223,9 @@ UniformBspline BsplineFromPath(const Eigen::Vector3d& v0, const Eigen::Vector3d&
               SpeedProfile(line.length() + overshoot, 0.0, 0.9 * v_max, a_profile).duration();
   }
   const double time_scale = t_total > 0.0 ? t_profile / t_total : 1.0;
-  const double dt_nominal = control_point_spacing / v_max;
+  // Control points about control_point_spacing apart at the profile's fastest: a start above the
+  // limit is braked within knot spans short enough to hold it.
+  const double dt_nominal = control_point_spacing / std::max(v_max, v_along);
   int m = static_cast<int>(std::ceil(t_total / dt_nominal - 1e-9));
   double dt = m > 0 ? t_total / m : dt_nominal;
   if (m < 4) {

@@ -74,6 +74,37 @@ TEST(BsplineTest, FromPathStartsAtTheStartStateAndEndsAtRestAtTheGoal) {
   EXPECT_LT(nearest, 0.6);
 }
 
+// A plan under a speed limit below the flown speed (E-Navi's reaction-constraint fallback): the
+// profile brakes from the start speed at 0.8 a_max, so the curve slows down along the path and
+// never flies back to knots timed as if it had started at the limit.
+TEST(BsplineTest, FromPathStartingAboveTheSpeedLimitBrakesWithoutFlyingBack) {
+  const std::vector<Eigen::Vector3d> path = {{0, 0, 1}, {10, 0, 1}};
+  const double v_limit = 0.3, a_max = 3.0, v_start = 1.9;
+  const UniformBspline s = BsplineFromPath(Eigen::Vector3d(v_start, 0, 0), Eigen::Vector3d::Zero(), path, v_limit,
+                                           a_max, 0.4);
+  const double T = s.duration();
+  double least_vx = 1e9, x_max = -1e9;
+  for (int i = 0; i <= 2000; ++i) {
+    const double t = T * i / 2000;
+    least_vx = std::min(least_vx, s.Velocity(t).x());
+    x_max = std::max(x_max, s.Position(t).x());
+  }
+  EXPECT_GT(least_vx, -0.02) << "the curve flies back along the path";
+  EXPECT_LT(x_max, 10.0 + 1e-6);
+  // Braking from 1.9 to 0.27 m/s at 0.8 a_max takes 0.68 s; the fit may round it by a knot span.
+  // Up to the last three spans: the knot spans that hold the start speed are longer than the final
+  // stop from 0.27 m/s (0.11 s), so the fit rounds that stop with a small bump, 35 s into a plan
+  // that a replan replaces long before.
+  const double t_braked = (v_start - 0.9 * v_limit) / (0.8 * a_max) + 0.5;
+  const double t_last = T - 3 * s.dt();
+  double fastest_after = 0;
+  for (int i = 0; i <= 1000; ++i) {
+    const double t = t_braked + (t_last - t_braked) * i / 1000;
+    fastest_after = std::max(fastest_after, s.Velocity(t).norm());
+  }
+  EXPECT_LT(fastest_after, 1.15 * v_limit) << "still above the limit " << t_braked << " s into the plan";
+}
+
 TEST(BsplineTest, ZeroLengthPathGivesFourSegmentsThatStopAtThePoint) {
   const std::vector<Eigen::Vector3d> path = {{1, 1, 1}};
   const UniformBspline s = BsplineFromPath(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), path, 2.0, 3.0, 0.4);
