@@ -61,9 +61,10 @@ UniformBspline FitBspline(const Eigen::Vector3d& p0, const Eigen::Vector3d& v0,
 
 /// Ego-Planner-style initial trajectory along a polyline path from the start state: the path is
 /// timed by a trapezoidal speed profile (from the start speed along the path to 0.9 v_max,
-/// braking to it first if the start is faster, 0.8 a_max, to rest at the end; slowed down by the time to brake a start velocity pointing
-/// away from the path and fly back), sampled every knot span dt ~ control_point_spacing / v_max and
-/// fitted with FitBspline. path.front() is taken as p0 and path.back() as the end point.
+/// braking to it first if the start is faster, 0.8 a_max, to rest at the end; slowed down by the
+/// time to brake a start velocity pointing away from the path and fly back), sampled every knot
+/// span dt ~ control_point_spacing / max(v_max, start speed along the path) and fitted with
+/// FitBspline. path.front() is taken as p0 and path.back() as the end point.
 /// @throws std::invalid_argument if the path is empty or a parameter is not positive.
 UniformBspline BsplineFromPath(const Eigen::Vector3d& v0, const Eigen::Vector3d& a0,
                                const std::vector<Eigen::Vector3d>& path, double v_max,

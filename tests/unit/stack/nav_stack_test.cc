@@ -448,7 +448,8 @@ TEST(NavStackTest, ASpeedLimitReplacesAFasterPlanAndItsLiftingThePlanMadeUnderIt
   EXPECT_GT(v_planned, 1.0);
   EXPECT_LT(v_limited, 0.5) << "once braked, the new plan flies at the limit (at least 0.3 m/s)";
   double least_forward = 1e9;
-  for (double tau = t; tau <= t + 4.0; tau += 0.01) least_forward = std::min(least_forward, limited.Sample(tau).v.dot(on.v.normalized()));
+  for (double tau = t; tau <= t + 4.0; tau += 0.01)
+    least_forward = std::min(least_forward, limited.Sample(tau).v.dot(on.v.normalized()));
   EXPECT_GT(least_forward, -0.05) << "the braking plan flies back";
 
   ex.triggers.clear();
