@@ -34,13 +34,29 @@ class FlushDenormalsScope {
 };
 
 struct RenderSetup {
-  RTCScene scene;
+  const EmbreeScene::Impl& world;
   const PixelRays& rays;
   CameraRayFrame frame;
   int width, height;
   float min_range, max_range;
   float* depth;
+  Eigen::Vector3d origin;  ///< frame.origin in double, for PixelDepth
 };
+
+// The pixel's depth from Embree's answer. Embree's own hit distance carries its kernels'
+// approximate reciprocal, whose last bits depend on the CPU's vendor (embree_scene.h); the
+// distance is recomputed here in double from the plane of the triangle Embree found, so only
+// which triangle a ray hits comes from Embree.
+float PixelDepth(const RenderSetup& s, bool hit, unsigned prim, float dir_x, float dir_y,
+                 float dir_z, float t_embree) {
+  if (!hit) return navstack::DepthImage::kNoReturn;
+  const Eigen::Vector4d& plane = s.world.planes[prim];
+  const double along = plane.x() * dir_x + plane.y() * dir_y + plane.z() * dir_z;
+  const double t = (plane.w() - plane.head<3>().dot(s.origin)) / along;
+  // A ray Embree hit is not parallel to the triangle; keep its distance if it somehow was.
+  const float depth = std::isfinite(t) ? static_cast<float>(t) : t_embree;
+  return DepthOrNoReturn(true, depth, s.min_range, s.max_range);
+}
 
 RTCIntersectContext CoherentContext() {
   RTCIntersectContext context;
@@ -74,9 +90,10 @@ void RenderSingle(const RenderSetup& s) {
       FillRay(s, u, v, &rh.ray);
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(s.scene, &context, &rh);
-      s.depth[v * s.width + u] = DepthOrNoReturn(rh.hit.geomID != RTC_INVALID_GEOMETRY_ID,
-                                                 rh.ray.tfar, s.min_range, s.max_range);
+      rtcIntersect1(s.world.scene, &context, &rh);
+      s.depth[v * s.width + u] =
+          PixelDepth(s, rh.hit.geomID != RTC_INVALID_GEOMETRY_ID, rh.hit.primID, rh.ray.dir_x,
+                     rh.ray.dir_y, rh.ray.dir_z, rh.ray.tfar);
     }
   }
 }
@@ -125,13 +142,13 @@ void RenderPackets(const RenderSetup& s, IntersectN intersect) {
           rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
         }
       }
-      intersect(valid, s.scene, &context, &rh);
+      intersect(valid, s.world.scene, &context, &rh);
       for (int dv = 0; dv < TH && v0 + dv < s.height; ++dv) {
         float* row = s.depth + static_cast<std::size_t>(v0 + dv) * s.width + u0;
         for (int du = 0; du < TW && u0 + du < s.width; ++du) {
           const int j = dv * TW + du;
-          row[du] = DepthOrNoReturn(rh.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID, rh.ray.tfar[j],
-                                    s.min_range, s.max_range);
+          row[du] = PixelDepth(s, rh.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID, rh.hit.primID[j],
+                               rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j], rh.ray.tfar[j]);
         }
       }
     }
@@ -154,13 +171,14 @@ void RenderStream(const RenderSetup& s) {
           rh[m].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         }
       }
-      rtcIntersect1M(s.scene, &context, rh.data(), static_cast<unsigned>(m), sizeof(RTCRayHit));
+      rtcIntersect1M(s.world.scene, &context, rh.data(), static_cast<unsigned>(m), sizeof(RTCRayHit));
       m = 0;
       for (int dv = 0; dv < th; ++dv) {
         for (int du = 0; du < tw; ++du, ++m) {
+          const RTCRay& ray = rh[m].ray;
           s.depth[(v0 + dv) * s.width + u0 + du] =
-              DepthOrNoReturn(rh[m].hit.geomID != RTC_INVALID_GEOMETRY_ID, rh[m].ray.tfar,
-                              s.min_range, s.max_range);
+              PixelDepth(s, rh[m].hit.geomID != RTC_INVALID_GEOMETRY_ID, rh[m].hit.primID,
+                         ray.dir_x, ray.dir_y, ray.dir_z, ray.tfar);
         }
       }
     }
@@ -226,14 +244,15 @@ void DepthCamera::Render(const EmbreeScene& scene, const Eigen::Isometry3d& X_WC
   // Ray directions per column/row are rebuilt per call (cheap next to tracing) so that the
   // camera holds no buffers and can render from several threads.
   const PixelRays rays(k);
-  const RenderSetup setup{scene.impl().scene,
+  const RenderSetup setup{scene.impl(),
                           rays,
                           CameraRayFrame(X_WC),
                           k.width,
                           k.height,
                           static_cast<float>(k.min_range),
                           static_cast<float>(k.max_range),
-                          out->data.data()};
+                          out->data.data(),
+                          CameraRayFrame(X_WC).origin.cast<double>()};
   {
     FlushDenormalsScope flush;
     switch (mode_) {
@@ -246,7 +265,7 @@ void DepthCamera::Render(const EmbreeScene& scene, const Eigen::Isometry3d& X_WC
       case EmbreeRayMode::kStream: RenderStream(setup); break;
     }
   }
-  ThrowIfEmbreeError(EmbreeDevice::Get().impl().device, "rtcIntersect");
+  ThrowIfEmbreeError(scene.impl().device, "rtcIntersect");
   ApplyDepthNoise(noise_, k, noise_seed, out);
 }
 

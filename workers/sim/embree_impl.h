@@ -1,6 +1,8 @@
 #pragma once
 // Private to enavi_sim: the Embree handles behind EmbreeDevice and EmbreeScene.
 
+#include <vector>
+
 #include <embree3/rtcore.h>
 
 #include "workers/sim/embree_scene.h"
@@ -12,7 +14,11 @@ struct EmbreeDevice::Impl {
 };
 
 struct EmbreeScene::Impl {
+  RTCDevice device = nullptr;  ///< the device the scene was made on
   RTCScene scene = nullptr;
+  /// Per triangle, its plane in double: normal n = (b - a) x (c - a) and offset n . a, from the
+  /// float corners (the depth camera's hit distances; depth_camera.cc).
+  std::vector<Eigen::Vector4d> planes;
   std::size_t triangle_count = 0;
   Eigen::AlignedBox3f bounds;
   ~Impl();

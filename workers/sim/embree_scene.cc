@@ -62,8 +62,8 @@ std::string RayKernels() {
 // ---------------------------------------------------------------------------------------------
 // EmbreeDevice
 
-EmbreeDevice::EmbreeDevice() : impl_(std::make_unique<Impl>()) {
-  const std::string config = std::string("verbose=0,max_isa=") + kEmbreeMaxIsa;
+EmbreeDevice::EmbreeDevice(const std::string& max_isa) : impl_(std::make_unique<Impl>()) {
+  const std::string config = "verbose=0,max_isa=" + max_isa;
   impl_->device = rtcNewDevice(config.c_str());
   if (impl_->device == nullptr) {
     throw std::runtime_error(std::string("Embree error in rtcNewDevice: ") +
@@ -78,7 +78,7 @@ EmbreeDevice::~EmbreeDevice() {
 
 const EmbreeDevice& EmbreeDevice::Get() {
   // C++ guarantees thread-safe initialisation of a function-local static.
-  static const EmbreeDevice device;
+  static const EmbreeDevice device(kEmbreeMaxIsa);
   return device;
 }
 
@@ -110,10 +110,12 @@ EmbreeScene::Impl::~Impl() {
   if (scene) rtcReleaseScene(scene);
 }
 
-EmbreeScene::EmbreeScene(const worlds::TriangleMesh& mesh, const EmbreeSceneOptions& options)
+EmbreeScene::EmbreeScene(const worlds::TriangleMesh& mesh, const EmbreeSceneOptions& options,
+                         const EmbreeDevice& embree_device)
     : impl_(std::make_unique<Impl>()) {
   CheckTriangleMesh(mesh, "EmbreeScene");
-  RTCDevice device = EmbreeDevice::Get().impl().device;
+  RTCDevice device = embree_device.impl().device;
+  impl_->device = device;
   const RTCBuildQuality quality =
       options.high_quality ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM;
 
@@ -155,6 +157,13 @@ EmbreeScene::EmbreeScene(const worlds::TriangleMesh& mesh, const EmbreeSceneOpti
   ThrowIfEmbreeError(device, "rtcCommitScene");
 
   impl_->triangle_count = mesh.triangles.size();
+  impl_->planes.reserve(mesh.triangles.size());
+  for (const auto& tri : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.vertices[tri[0]].cast<double>();
+    const Eigen::Vector3d n =
+        (mesh.vertices[tri[1]].cast<double>() - a).cross(mesh.vertices[tri[2]].cast<double>() - a);
+    impl_->planes.emplace_back(n.x(), n.y(), n.z(), n.dot(a));
+  }
   if (!mesh.triangles.empty()) {
     RTCBounds b;
     rtcGetSceneBounds(impl_->scene, &b);

@@ -23,13 +23,14 @@ struct EmbreeDeviceInfo {
   std::string ray_kernels;   ///< RayKernels()
 };
 
-/// Embree picks its ray kernels for the widest SIMD instruction set of the host, and kernels of
-/// different widths traverse differently built BVHs, so a ray that grazes an edge can report
-/// another hit and a flight can take another path (measured: s2 seed 1 on tx2, E-Navi, flies
-/// 30.86 s with the SSE2, SSE4.2 or AVX kernels and 32.92 s with the AVX2 ones, glibc's FMA
-/// variants of libm masked or not). The device is therefore capped at AVX2 (Debian's Embree
-/// 3.13.5 also carries AVX-512 kernels), so that every host with AVX2, AVX-512 ones included,
-/// runs the same kernels; a host without AVX2 runs the narrower ones.
+/// Embree picks its ray kernels for the widest SIMD instruction set of the host. Kernels of
+/// different widths traverse differently built BVHs, and every kernel computes a hit's distance
+/// with the CPU's approximate reciprocal (rcpps plus a Newton step), whose last bits the CPU's
+/// vendor defines: the same kernels gave other flights on an Intel host than on an AMD one
+/// (s3 seed 1, pi4b, the baseline: 15.6 against 21.4 s). So the depth camera takes from Embree
+/// only which triangle a ray hits and computes the distance itself (depth_camera.cc), and the
+/// device is capped at AVX2 (Debian's Embree 3.13.5 also carries AVX-512 kernels), so that
+/// every host with AVX2 traverses the same BVH; a host without AVX2 runs the narrower ones.
 inline constexpr const char* kEmbreeMaxIsa = "avx2";
 
 /// The kernels this host runs under that cap: "avx2", or "sse-avx" when the CPU lacks one of the
@@ -46,8 +47,14 @@ class EmbreeDevice {
  public:
   struct Impl;
 
-  /// The one device of this process.
+  /// The one device of this process, capped at kEmbreeMaxIsa.
   static const EmbreeDevice& Get();
+
+  /// A device whose kernels are capped at `max_isa` (Embree's names: "sse2", "sse4.2", "avx",
+  /// "avx2", "avx512"; a cap above what the CPU has runs the CPU's widest). Tests render with
+  /// each to check that the kernels do not change the image.
+  /// @throws std::runtime_error with Embree's message if the device cannot be created.
+  explicit EmbreeDevice(const std::string& max_isa);
 
   EmbreeDeviceInfo Info() const;
   const Impl& impl() const { return *impl_; }
@@ -57,7 +64,6 @@ class EmbreeDevice {
   ~EmbreeDevice();
 
  private:
-  EmbreeDevice();
   std::unique_ptr<Impl> impl_;
 };
 
@@ -79,7 +85,8 @@ class EmbreeScene {
   struct Impl;
 
   /// @throws std::invalid_argument if a triangle index is out of range or a vertex is not finite.
-  explicit EmbreeScene(const worlds::TriangleMesh& mesh, const EmbreeSceneOptions& options = {});
+  explicit EmbreeScene(const worlds::TriangleMesh& mesh, const EmbreeSceneOptions& options = {},
+                       const EmbreeDevice& device = EmbreeDevice::Get());
   ~EmbreeScene();
   EmbreeScene(EmbreeScene&&) noexcept;
   EmbreeScene& operator=(EmbreeScene&&) noexcept;
