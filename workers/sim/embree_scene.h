@@ -26,17 +26,18 @@ struct EmbreeDeviceInfo {
 /// Embree picks its ray kernels for the widest SIMD instruction set of the host. Kernels of
 /// different widths traverse differently built BVHs, and every kernel computes a hit's distance
 /// with the CPU's approximate reciprocal (rcpps plus a Newton step), whose last bits the CPU's
-/// vendor defines: the same kernels gave other flights on an Intel host than on an AMD one
-/// (s3 seed 1, pi4b, the baseline: 15.6 against 21.4 s). So the depth camera takes from Embree
-/// only which triangle a ray hits and computes the distance itself (depth_camera.cc), and the
-/// device is capped at AVX2 (Debian's Embree 3.13.5 also carries AVX-512 kernels), so that
-/// every host with AVX2 traverses the same BVH; a host without AVX2 runs the narrower ones.
+/// vendor defines: the same build and kernels flew other flights on an Intel host than on an
+/// AMD one (the baseline's s3 on pi4b, seeds 1-3: 17.5 against 21.4 s). So the depth camera takes
+/// from Embree only which triangle a ray hits and computes the distance itself
+/// (depth_camera.cc). Which triangle a ray grazing an edge hits can still depend on the BVH, so
+/// the device is capped at AVX2 (Debian's Embree 3.13.5 also carries AVX-512 kernels) and every
+/// host with AVX2 traverses the same one; a host without AVX2 runs the narrower kernels.
 inline constexpr const char* kEmbreeMaxIsa = "avx2";
 
 /// The kernels this host runs under that cap: "avx2", or "sse-avx" when the CPU lacks one of the
 /// features Embree's AVX2 kernels need (AVX2, FMA3, BMI1, BMI2, LZCNT, with the OS saving YMM).
-/// Results of hosts with different kernels are not comparable bit for bit; episodes record it
-/// (provenance.ray_kernels).
+/// Results of hosts with different kernels may differ where a ray grazes an edge; episodes
+/// record the class (provenance.ray_kernels).
 std::string RayKernels();
 
 /// The process-wide Embree device. Created on first use (thread-safe), never destroyed before
