@@ -244,15 +244,16 @@ void DepthCamera::Render(const EmbreeScene& scene, const Eigen::Isometry3d& X_WC
   // Ray directions per column/row are rebuilt per call (cheap next to tracing) so that the
   // camera holds no buffers and can render from several threads.
   const PixelRays rays(k);
+  const CameraRayFrame frame(X_WC);
   const RenderSetup setup{scene.impl(),
                           rays,
-                          CameraRayFrame(X_WC),
+                          frame,
                           k.width,
                           k.height,
                           static_cast<float>(k.min_range),
                           static_cast<float>(k.max_range),
                           out->data.data(),
-                          CameraRayFrame(X_WC).origin.cast<double>()};
+                          frame.origin.cast<double>()};
   {
     FlushDenormalsScope flush;
     switch (mode_) {
