@@ -55,6 +55,8 @@ std::map<std::string, double> ResultMetrics(const nlohmann::json& record) {
   return out;
 }
 
+bool AbsentMeansZero(const std::string& metric) { return metric.rfind("replans_by_trigger.", 0) == 0; }
+
 std::string ResultError(const EpisodeResult& r, const EpisodeSpec& expected) {
   // The identity of the episode: the worker echoes the spec it was given (a collection episode's
   // policy becomes its hash, so the policy is not compared).

@@ -18,6 +18,10 @@ namespace enavi::api {
 /// strings are left out.
 std::map<std::string, double> ResultMetrics(const nlohmann::json& record);
 
+/// True for a metric of a count map whose keys are only the ones that occurred
+/// ("replans_by_trigger.difference"): where a record lacks it, the count is 0, not unknown.
+bool AbsentMeansZero(const std::string& metric);
+
 /// Why `r` cannot be stored as the result of the episode `expected`, or "" when it can: "FIELD:
 /// REASON" for a spec of another episode (world, seed, board, method or clock differs), a metric
 /// or series sample that is not finite, or a series column whose length is neither 0 nor t's.

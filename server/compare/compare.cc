@@ -269,6 +269,12 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
       for (const auto& kv : bm.back()) names.insert(kv.first);
       for (const auto& kv : cm.back()) names.insert(kv.first);
     }
+    // A trigger that never fired is left out of a record's count map: compare it as 0.
+    for (const std::string& name : names) {
+      if (!api::AbsentMeansZero(name)) continue;
+      for (auto* side : {&bm, &cm})
+        for (auto& metrics : *side) metrics.emplace(name, 0.0);
+    }
     for (const std::string& name : names) {
       const auto rule_it = options.rules.find(name);
       const MetricRule rule = rule_it == options.rules.end() ? MetricRule{} : rule_it->second;
@@ -292,8 +298,9 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
       ChangedEpisode e{cell.seeds[i], cell.base_episodes[i], cell.candidate_episodes[i], {}};
       for (const std::string& name : names) {
         const auto bi = bm[i].find(name), ci = cm[i].find(name);
-        const bool both = bi != bm[i].end() && ci != cm[i].end();
-        if (!both || bi->second != ci->second) e.metrics.push_back(name);
+        const bool in_base = bi != bm[i].end(), in_candidate = ci != cm[i].end();
+        // In neither record of this pair (another pair has it): nothing changed here.
+        if (in_base != in_candidate || (in_base && bi->second != ci->second)) e.metrics.push_back(name);
       }
       if (!e.metrics.empty()) cell.changed.push_back(std::move(e));
     }

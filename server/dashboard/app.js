@@ -114,11 +114,13 @@ function range(values, pad) {
 }
 
 // Time series: lines (optionally steps), event markers on the time axis.
-function lineChart({title, series, events, width = 560, height = 180, ylabel, xlabel = 't (s)'}) {
-  const xs = series.flatMap(s => s.x), ys = series.flatMap(s => s.y);
+function lineChart({title, series, events, width = 560, height = 180, ylabel, xlabel = 't (s)', xIntegers = false}) {
+  const xs = series.flatMap(s => s.x);
+  const ys = series.flatMap(s => s.err ? s.y.flatMap((y, k) => [y - (s.err[k] || 0), y + (s.err[k] || 0)]) : s.y);
   const f = frame(title, width, height, range(xs, 0), range(ys), ylabel);
   for (const t of niceTicks(range(xs, 0)[0], range(xs, 0)[1], 6)) {
-    f.root.appendChild(svg('text', {x: f.sx(t), y: height - 10, 'text-anchor': 'middle'}, fmt(t)));
+    if (xIntegers && Math.abs(t - Math.round(t)) > 1e-9) continue;
+    f.root.appendChild(svg('text', {x: f.sx(t), y: height - 10, 'text-anchor': 'middle'}, xIntegers ? String(Math.round(t)) : fmt(t)));
   }
   f.root.appendChild(svg('text', {x: width - f.m.r, y: height - 2, 'text-anchor': 'end', fill: '#777'}, xlabel));
   for (const e of events || []) {
@@ -137,6 +139,14 @@ function lineChart({title, series, events, width = 560, height = 180, ylabel, xl
     }
     const color = s.color || COLORS[i % COLORS.length];
     f.root.appendChild(svg('path', {class: 'mark', d, fill: 'none', stroke: color, 'stroke-width': 1.5}));
+    // Error bars (s.err: half-widths, null where unknown).
+    (s.err || []).forEach((e, k) => {
+      if (e === null || e === undefined) return;
+      const x = f.sx(s.x[k]);
+      f.root.appendChild(svg('path', {class: 'mark ci', stroke: color, 'stroke-width': 1,
+                                      d: `M${x - 4},${f.sy(s.y[k] + e)}H${x + 4}M${x},${f.sy(s.y[k] + e)}` +
+                                         `V${f.sy(s.y[k] - e)}M${x - 4},${f.sy(s.y[k] - e)}H${x + 4}`}));
+    });
     f.root.appendChild(svg('text', {x: f.m.l + 8 + 90 * i, y: f.m.t + 10, fill: color}, s.name));
   });
   return f.root;
@@ -356,6 +366,28 @@ async function episodePage(id) {
 }
 
 const VERDICT_RANK = {regression: 4, improvement: 3, change: 2, insignificant: 1, too_few_pairs: 1, same: 0};
+const COMPARE_MODES = [['auto', 'auto mode'], ['exact', 'exact mode'], ['paired', 'paired mode (95 % CI)']];
+
+// What the verdicts of this mode can and cannot tell. Flights fork on sub-micrometre differences,
+// so on the virtual clock a changed build changes many flights that are no better or worse: an
+// exact difference over a few seeds can be a draw, which only the paired test weighs.
+function modeNote(report, base, cand) {
+  const pairs = report.cells.map(c => c.pairs);
+  const seeds = pairs.length ? (Math.min(...pairs) === Math.max(...pairs) ? `${pairs[0]}`
+                                                                          : `${Math.min(...pairs)}-${Math.max(...pairs)}`) : '0';
+  const paired = `#/compare?base=${encodeURIComponent(base)}&candidate=${encodeURIComponent(cand)}&mode=paired`;
+  if (report.mode === 'exact') {
+    if (report.changed_metrics === 0) return el('p', {id: 'mode-note', class: 'muted'}, 'exact mode: the same results to the last digit');
+    return el('p', {id: 'mode-note', class: 'note'},
+              `exact mode: every difference is real, but flights fork on tiny differences, so with ${seeds} seeds a ` +
+              'cell can change by the draw of its routes alone. ',
+              el('a', {href: paired}, 'judge the same jobs in paired mode'),
+              ': a change is called only when its 95 % confidence interval over the seeds excludes zero.');
+  }
+  return el('p', {id: 'mode-note', class: 'muted'},
+            `paired mode: ${seeds} seed pairs per cell; a change is called only when the 95 % confidence interval ` +
+            'of its mean difference excludes zero (fewer than 2 pairs: too few to judge)');
+}
 
 async function comparePage() {
   const params = hashParams();
@@ -367,23 +399,30 @@ async function comparePage() {
   }));
   let base = params.get('base'), cand = params.get('candidate');
   const series = params.get('label');
+  const mode = params.get('mode') || 'auto';
   if (series && (!base || !cand)) {
     const matching = await api('/api/jobs?label=' + encodeURIComponent(series));
     if (matching.length >= 2) { base = matching[matching.length - 2].id; cand = matching[matching.length - 1].id; }
   }
   const baseSel = pick('base', base), candSel = pick('candidate', cand);
   const labelIn = el('input', {type: 'text', placeholder: 'or a label series: suite=nightly', value: series || ''});
+  const modeSel = el('select', {name: 'mode'}, COMPARE_MODES.map(([value, text]) => {
+    const o = el('option', {value}, text);
+    if (value === mode) o.selected = true;
+    return o;
+  }));
   const form = el('form', {class: 'inline', onsubmit: ev => {
     ev.preventDefault();
-    location.hash = labelIn.value.trim() && labelIn.value.trim() !== (series || '')
+    location.hash = (labelIn.value.trim() && labelIn.value.trim() !== (series || '')
       ? '#/compare?label=' + encodeURIComponent(labelIn.value.trim())
-      : `#/compare?base=${baseSel.value}&candidate=${candSel.value}`;
-  }}, 'base', baseSel, 'candidate', candSel, labelIn, el('button', {type: 'submit'}, 'compare'));
+      : `#/compare?base=${baseSel.value}&candidate=${candSel.value}`) + `&mode=${modeSel.value}`;
+  }}, 'base', baseSel, 'candidate', candSel, labelIn, modeSel, el('button', {type: 'submit'}, 'compare'));
   if (!base || !cand) {
     show(el('h1', {}, 'Compare'), form, el('p', {class: 'muted'}, 'pick two jobs (or a label series: its last two jobs)'));
     return;
   }
-  const report = await api(`/api/compare?base=${encodeURIComponent(base)}&candidate=${encodeURIComponent(cand)}`);
+  const report = await api(`/api/compare?base=${encodeURIComponent(base)}&candidate=${encodeURIComponent(cand)}` +
+                           `&mode=${encodeURIComponent(mode)}`);
   const boards = [...new Set(report.cells.map(c => c.board))];
   const scenarios = [...new Set(report.cells.map(c => c.scenario))];
   const detail = el('div', {id: 'detail'});
@@ -412,6 +451,7 @@ async function comparePage() {
   show(el('h1', {}, 'Compare'), form,
        el('p', {class: 'verdict'}, `${report.mode} mode: ${report.regressions} regressions, ${report.improvements} improvements, ` +
           `${report.changed_metrics} changed metrics` + (report.no_change ? ' — no change' : '')),
+       modeNote(report, base, cand),
        provenance.length ? el('div', {id: 'provenance'}, el('h2', {}, 'Provenance that differs'),
                               table(['note', 'cells', 'base', 'candidate', 'meaning'], provenance)) : '',
        matrix, el('p', {class: 'muted'}, 'click a cell for its metrics and both flights'),
@@ -456,32 +496,49 @@ async function trendPage() {
   const metric = params.get('metric') || 'flight_time_s';
   const labelIn = el('input', {type: 'text', placeholder: 'suite=nightly', value: label});
   const metricIn = el('input', {type: 'text', value: metric});
+  const trend = label ? await api(`/api/trend?label=${encodeURIComponent(label)}&metric=${encodeURIComponent(metric)}&limit=1000`)
+                      : {points: []};
+  // One method at a time: the stacks differ by more than any commit moves one of them.
+  const methods = [...new Set(trend.points.map(p => p.method))].sort();
+  const method = methods.includes(params.get('method')) ? params.get('method') : methods[0];
+  const methodSel = el('select', {name: 'method'}, methods.map(m => {
+    const o = el('option', {value: m}, m);
+    if (m === method) o.selected = true;
+    return o;
+  }));
   const form = el('form', {class: 'inline', onsubmit: ev => {
     ev.preventDefault();
-    location.hash = `#/trend?label=${encodeURIComponent(labelIn.value.trim())}&metric=${encodeURIComponent(metricIn.value.trim())}`;
-  }}, 'label', labelIn, 'metric', metricIn, el('button', {type: 'submit'}, 'show'));
+    location.hash = `#/trend?label=${encodeURIComponent(labelIn.value.trim())}&metric=${encodeURIComponent(metricIn.value.trim())}` +
+                    (methodSel.value ? `&method=${encodeURIComponent(methodSel.value)}` : '');
+  }}, 'label', labelIn, 'metric', metricIn, methods.length ? 'method' : '', methods.length ? methodSel : '',
+     el('button', {type: 'submit'}, 'show'));
   if (!label) {
     show(el('h1', {}, 'Trend'), form, el('p', {class: 'muted'}, 'a label series (e.g. suite=nightly) over time, per board'));
     return;
   }
-  const trend = await api(`/api/trend?label=${encodeURIComponent(label)}&metric=${encodeURIComponent(metric)}&limit=1000`);
-  const jobIds = [...new Set(trend.points.map(p => p.job_id))];
-  const boards = [...new Set(trend.points.map(p => p.board))];
+  const points = trend.points.filter(p => p.method === method);
+  const jobIds = [...new Set(points.map(p => p.job_id))];
+  const boards = [...new Set(points.map(p => p.board))];
   const series = boards.map(b => {
-    const pts = trend.points.filter(p => p.board === b);
-    return {name: b, x: pts.map(p => jobIds.indexOf(p.job_id) + 1), y: pts.map(p => p.mean)};
+    const pts = points.filter(p => p.board === b);
+    return {name: b, x: pts.map(p => jobIds.indexOf(p.job_id) + 1), y: pts.map(p => p.mean), err: pts.map(p => p.ci95)};
   });
+  const cellText = q => q ? fmt(q.mean) + (q.ci95 === null ? '' : ` ± ${fmt(q.ci95)}`) : '–';
   const rows = jobIds.map((id, i) => {
-    const pts = trend.points.filter(p => p.job_id === id);
+    const pts = points.filter(p => p.job_id === id);
     return el('tr', {}, el('td', {class: 'num'}, i + 1), el('td', {}, link('#/job/' + id, id)),
               el('td', {class: 'job-name'}, pts[0].name),
               el('td', {}, new Date(pts[0].created_ms).toISOString().replace('T', ' ').slice(0, 19)),
-              boards.map(b => { const q = pts.find(p => p.board === b); return el('td', {class: 'num'}, q ? fmt(q.mean) : '–'); }));
+              boards.map(b => el('td', {class: 'num'}, cellText(pts.find(p => p.board === b)))));
   });
   show(el('h1', {}, 'Trend'), form,
-       trend.points.length ? lineChart({title: `${metric} per board, jobs with ${label}`, series, xlabel: 'job #',
-                                        width: 760, height: 260})
-                           : el('p', {class: 'muted'}, 'no results with this label and metric'),
+       points.length ? lineChart({title: `${metric} per board, ${method}, jobs with ${label}`, series, xlabel: 'job #',
+                                  xIntegers: true, width: 760, height: 260})
+                     : el('p', {class: 'muted'}, 'no results with this label and metric'),
+       points.length ? el('p', {id: 'trend-note', class: 'muted'},
+                          'bars: 95 % interval of each mean over the seeds\' draw (the spread over seeds within each ' +
+                          'scenario, pooled); a step smaller than the bars can be the draw: judge two jobs with compare ' +
+                          'in paired mode') : '',
        table(['#', 'job', 'name', 'created (UTC)'].concat(boards), rows));
 }
 

@@ -3,6 +3,7 @@
 #include <arpa/inet.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <regex>
 #include <stdexcept>
@@ -514,7 +515,14 @@ void HttpApi::Routes() {
     if (labels.size() != 1) return Error(res, 400, "label: give exactly one key=value");
     const auto [key, value] = api::ParseLabelFilter(labels.front(), "label");
     const std::string metric = req.has_param("metric") ? req.get_param_value("metric") : "flight_time_s";
-    Reply(res, 200, store.Trend(key, value, metric, PageOf(req)));
+    nlohmann::json trend = store.Trend(key, value, metric, PageOf(req));
+    // 95 % interval of each mean over the seeds' draw (Student's t, as `enavi compare` uses).
+    for (nlohmann::json& p : trend["points"]) {
+      p["ci95"] = p["seed_std"].is_null() ? nlohmann::json(nullptr)
+                                          : nlohmann::json(StudentT975(p["df"].get<int>()) * p["seed_std"].get<double>() /
+                                                           std::sqrt(p["n"].get<double>()));
+    }
+    Reply(res, 200, trend);
   });
 
   s.Get("/api/workers", [this, &store](const httplib::Request&, httplib::Response& res) {

@@ -1045,19 +1045,30 @@ nlohmann::json Store::Trend(const std::string& key, const std::string& value,
   count.Step();
   out["total"] = count.Int(0);
   count.Reset();
+  // The spread that matters between two jobs of the same matrix is the seeds' draw within each
+  // scenario, not the difference between scenarios (every job flies the same ones): pool the
+  // within-cell sums of squares.
   Statement& q = db_->Prepare(
       "WITH series AS (SELECT j.id, j.name, j.created_ms, j.rowid AS seq FROM jobs j "
       "  JOIN job_labels l ON l.job_id = j.id WHERE l.key = ?1 AND l.value = ?2 "
-      "  ORDER BY j.created_ms, j.rowid LIMIT ?4 OFFSET ?5) "
-      "SELECT s.id, s.name, s.created_ms, r.board, COUNT(json_extract(" + metrics + ", ?3)), "
-      "  AVG(json_extract(" + metrics + ", ?3)) "
-      "FROM series s JOIN results r ON r.job_id = s.id "
-      "GROUP BY s.id, r.board ORDER BY s.created_ms, s.seq, r.board");
+      "  ORDER BY j.created_ms, j.rowid LIMIT ?4 OFFSET ?5), "
+      "vals AS (SELECT s.id, s.name, s.created_ms, s.seq, r.board, r.method, r.scenario, "
+      "  json_extract(" + metrics + ", ?3) AS v FROM series s JOIN results r ON r.job_id = s.id), "
+      "cells AS (SELECT id, name, created_ms, seq, board, method, COUNT(v) AS n, SUM(v) AS sx, "
+      "  SUM(v * v) AS sxx FROM vals GROUP BY id, board, method, scenario) "
+      "SELECT id, name, created_ms, board, method, SUM(n), SUM(sx), "
+      "  SUM(CASE WHEN n > 0 THEN MAX(sxx - sx * sx / n, 0) ELSE 0 END), SUM(MAX(n - 1, 0)) "
+      "FROM cells GROUP BY id, board, method ORDER BY created_ms, seq, board, method");
   q.Bind(1, key).Bind(2, value).Bind(3, "$.\"" + metric + "\"").Bind(4, page.limit).Bind(5, page.offset);
   while (q.Step()) {
-    if (q.Int(4) == 0) continue;  // the metric is not in these results
-    out["points"].push_back({{"job_id", q.Text(0)}, {"name", q.Text(1)}, {"created_ms", q.Int(2)},
-                             {"board", q.Text(3)}, {"n", q.Int(4)}, {"mean", q.Double(5)}});
+    const std::int64_t n = q.Int(5);
+    if (n == 0) continue;  // the metric is not in these results
+    const std::int64_t df = q.Int(8);
+    nlohmann::json point = {{"job_id", q.Text(0)}, {"name", q.Text(1)}, {"created_ms", q.Int(2)},
+                            {"board", q.Text(3)}, {"method", q.Text(4)}, {"n", n},
+                            {"mean", q.Double(6) / static_cast<double>(n)}, {"df", df}, {"seed_std", nullptr}};
+    if (df > 0) point["seed_std"] = std::sqrt(q.Double(7) / static_cast<double>(df));
+    out["points"].push_back(std::move(point));
   }
   q.Reset();
   return out;

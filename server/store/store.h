@@ -186,8 +186,10 @@ class Store {
   nlohmann::json ResultsPage(const std::string& job_id, const Page& page);
   /// Failed episodes and unsuccessful flights with their reasons: {"failures", "total", ...}.
   nlohmann::json JobFailures(const std::string& job_id, const Page& page);
-  /// Mean of `metric` per job and board over the jobs with label `key=value`, oldest first:
-  /// {"points": [{"job_id", "name", "created_ms", "board", "n", "mean"}], "total" (jobs), ...}.
+  /// Mean of `metric` per job, board and method over the jobs with label `key=value`, oldest
+  /// first: {"points": [{"job_id", "name", "created_ms", "board", "method", "n", "mean", "df",
+  /// "seed_std"}], "total" (jobs), ...}. seed_std is the spread over seeds within each scenario,
+  /// pooled over the scenarios (df = sum of n - 1 per scenario; null when df is 0).
   nlohmann::json Trend(const std::string& key, const std::string& value,
                        const std::string& metric, const Page& page);
 

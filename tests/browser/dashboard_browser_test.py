@@ -5,7 +5,8 @@ seeded by seed_dashboard_db, and checks that
 
   - every chart drew (each svg.chart holds marks: paths, dots, boxes),
   - the compare page colours exactly the planted regression (tx2 x s1) as a regression and a
-    click on it overlays both flights,
+    click on it overlays both flights; in exact mode it says a difference over few seeds can be a
+    draw and links the paired test, which finds the same regression,
   - the job named <img src=x onerror=alert(1)> shows as that text (no element, no alert),
   - the bird's-eye PNG loaded,
   - `enavi status --label` and GET /api/jobs?label= filter by label,
@@ -157,6 +158,29 @@ class DashboardBrowserTest(unittest.TestCase):
         if self.shots:
             self.driver.save_screenshot(os.path.join(self.shots, "dashboard-compare.png"))
 
+    def test_compare_page_says_what_exact_mode_cannot_tell_and_links_the_paired_test(self):
+        self.open("#/compare?base=%s&candidate=%s" % (self.ids["base"], self.ids["candidate"]))
+        note = self.driver.find_element("id", "mode-note").text
+        self.assertIn("exact mode", note)
+        self.assertIn("with 2-3 seeds", note)  # pi4b s3 enavi seed 2 failed in both jobs
+        self.assertIn("draw", note)
+        self.driver.find_element("css selector", "#mode-note a").click()
+        from selenium.webdriver.support.ui import WebDriverWait
+        WebDriverWait(self.driver, 15).until(lambda d: d.execute_script(
+            "return location.hash.includes('mode=paired') && document.body.dataset.ready === location.hash"))
+        self.assertTrue(self.driver.find_element("css selector", "p.verdict").text.startswith("paired mode: 1 regressions"))
+        self.assertIn("2-3 seed pairs per cell", self.driver.find_element("id", "mode-note").text)
+        self.assertEqual(self.driver.execute_script("return document.querySelector('select[name=mode]').value"), "paired")
+        verdicts = self.driver.execute_script(
+            "return [...document.querySelectorAll('td.cell')].map(c => [c.dataset.board, c.dataset.scenario, c.dataset.verdict])")
+        self.assertEqual(len(verdicts), 4, verdicts)
+        for board, scenario, verdict in verdicts:
+            self.assertEqual(verdict, "regression" if (board, scenario) == ("tx2", "s1") else "same", (board, scenario))
+        # The mode survives a new pick in the form.
+        self.driver.find_element("css selector", "form.inline button").click()
+        WebDriverWait(self.driver, 15).until(lambda d: d.execute_script("return document.body.dataset.ready === location.hash"))
+        self.assertIn("mode=paired", self.driver.execute_script("return location.hash"))
+
     def test_compare_by_label_series_takes_its_last_two_jobs(self):
         self.open("#/compare?label=suite%3Dnightly")
         self.assertEqual(len(self.driver.find_elements("css selector", "td.cell.regression")), 1)
@@ -168,6 +192,25 @@ class DashboardBrowserTest(unittest.TestCase):
             "return [...document.querySelectorAll('svg.chart text')].map(t => t.textContent)")
         self.assertIn("tx2", legend)
         self.assertIn("pi4b", legend)
+        # One method at a time (the first, baseline), each mean with its 95 % interval over seeds:
+        # a bar per job and board.
+        self.assertEqual(self.driver.execute_script("return document.querySelector('select[name=method]').value"),
+                         "baseline")
+        self.assertEqual(self.driver.execute_script("return document.querySelectorAll('svg.chart .ci').length"), 4)
+        self.assertIn("95 % interval", self.driver.find_element("id", "trend-note").text)
+        cells = self.driver.execute_script("return [...document.querySelectorAll('tbody td.num')].map(t => t.textContent)")
+        self.assertEqual(sum("±" in c for c in cells), 4, cells)
+        # The planted regression (tx2 s1 baseline slower in the second job) moves tx2's mean.
+        tx2 = self.driver.execute_script(
+            "return [...document.querySelectorAll('tbody tr')].map(r => r.children[5].textContent)")
+        first, second = (float(t.split(" ")[0]) for t in tx2)
+        self.assertGreater(second, first)
+        self.driver.execute_script("document.querySelector('select[name=method]').value = 'enavi'")
+        self.driver.find_element("css selector", "form.inline button").click()
+        from selenium.webdriver.support.ui import WebDriverWait
+        WebDriverWait(self.driver, 15).until(lambda d: d.execute_script(
+            "return location.hash.includes('method=enavi') && document.body.dataset.ready === location.hash"))
+        self.assertIn("enavi", self.driver.find_element("css selector", "svg.chart text").text)
 
     def test_label_filters_in_the_api_and_the_cli(self):
         with urllib.request.urlopen(self.url + "/api/jobs?label=suite=nightly") as r:

@@ -53,6 +53,34 @@ TEST(CompareTest, SameResultsAreNoChange) {
   EXPECT_NE(CompareTable(r).find("no change"), std::string::npos);
 }
 
+// A record's count map lists only the triggers that fired. A trigger in one pair only is no
+// change of the other pairs; one that fires only in the candidate is a change from 0.
+TEST(CompareTest, CountMapKeysThatDidNotOccurCountAsZero) {
+  nlohmann::json a = Job("a", {"tx2"}, 3), b = Job("b", {"tx2"}, 3);
+  for (auto* job : {&a, &b}) {
+    for (auto& r : *job) {
+      if (r["seed"] == 1) r["replans_by_trigger"]["difference"] = 2;
+    }
+  }
+  const CompareReport same = Compare(a, b, {});
+  EXPECT_TRUE(same.no_change()) << CompareTable(same);
+  for (const auto& c : same.cells) EXPECT_TRUE(c.changed.empty()) << c.board << "/" << c.method;
+
+  for (auto& r : b) {
+    if (r["method"] == "enavi") r["replans_by_trigger"]["speed_limit"] = 4;
+  }
+  const CompareReport r = Compare(a, b, {});
+  const MetricChange& m = Metric(r, "tx2", "enavi", "replans_by_trigger.speed_limit");
+  EXPECT_EQ(m.verdict, "change");
+  EXPECT_EQ(m.pairs, 3);
+  EXPECT_DOUBLE_EQ(m.base_mean, 0.0);
+  EXPECT_DOUBLE_EQ(m.candidate_mean, 4.0);
+  for (const auto& c : r.cells) {
+    EXPECT_EQ(c.changed.size(), c.method == "enavi" ? 3u : 0u) << c.method;
+    for (const auto& e : c.changed) EXPECT_EQ(e.metrics, std::vector<std::string>{"replans_by_trigger.speed_limit"});
+  }
+}
+
 TEST(CompareTest, ExactModeGivesExactDeltasAndNamesTheRegressedCell) {
   const auto a = Job("a", {"tx2", "pi4b"}, 3);
   const auto b = Job("b", {"tx2", "pi4b"}, 3, /*v_max_on_tx2=*/1.0);  // twice the flight time

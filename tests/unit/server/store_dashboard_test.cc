@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -133,9 +135,51 @@ TEST_F(StoreDashboardTest, FailuresResultsPageAndTrend) {
   testing::SeedJob(*store_, kJob, 5000);
   const nlohmann::json trend = store_->Trend("suite", "nightly", "nav_cpu_util_pct", {});
   EXPECT_EQ(trend["total"], 2);
-  ASSERT_EQ(trend["points"].size(), 4u);  // 2 jobs x 2 boards
+  ASSERT_EQ(trend["points"].size(), 8u);  // 2 jobs x 2 boards x 2 methods
   EXPECT_EQ(trend["points"][0]["board"], "pi4b");
+  EXPECT_EQ(trend["points"][0]["method"], "baseline");
   EXPECT_THROW(store_->Trend("suite", "nightly", "x'); DROP TABLE jobs; --", {}), std::invalid_argument);
+}
+
+// A trend point's spread is the seeds' draw within each scenario, pooled; the difference between
+// scenarios (flown by every job of the series) is not part of it.
+TEST_F(StoreDashboardTest, TrendPoolsTheSpreadOverSeedsWithinEachScenario) {
+  const std::string job = testing::SeedJob(
+      *store_, "name: n\nlabels: {suite: nightly}\nboards: [tx2]\nscenarios: [s1, s3]\nmethods: [baseline]\nseeds: 4\n", 1000);
+  std::map<std::string, std::vector<double>> by_scenario;
+  double sum = 0;
+  int n = 0;
+  for (const auto& r : store_->Results(job)) {
+    const double v = r["flight_time_s"].get<double>();
+    by_scenario[r["scenario"].get<std::string>()].push_back(v);
+    sum += v;
+    ++n;
+  }
+  ASSERT_EQ(n, 8);
+  double ss = 0;
+  for (const auto& [scenario, values] : by_scenario) {
+    ASSERT_EQ(values.size(), 4u) << scenario;
+    double m = 0;
+    for (double v : values) m += v / 4;
+    for (double v : values) ss += (v - m) * (v - m);
+  }
+  ASSERT_GT(ss, 0.0);  // the synthetic flights differ by seed
+  // s3 flights 100 s longer: a scenario difference, which every job of a series flies alike.
+  Sql("UPDATE results SET metrics_json = json_set(metrics_json, '$.flight_time_s', "
+      "json_extract(metrics_json, '$.flight_time_s') + 100) WHERE scenario = 's3'");
+  const nlohmann::json trend = store_->Trend("suite", "nightly", "flight_time_s", {});
+  ASSERT_EQ(trend["points"].size(), 1u);
+  const nlohmann::json& p = trend["points"][0];
+  EXPECT_EQ(p["n"], 8);
+  EXPECT_EQ(p["df"], 6);  // (4 - 1) per scenario
+  EXPECT_NEAR(p["mean"].get<double>(), (sum + 400) / 8, 1e-9);
+  EXPECT_NEAR(p["seed_std"].get<double>(), std::sqrt(ss / 6), 1e-6);
+  // One seed per scenario: no spread to estimate.
+  testing::SeedJob(*store_, "name: one\nlabels: {suite: single}\nboards: [tx2]\nscenarios: [s1, s3]\nmethods: [baseline]\nseeds: 1\n", 2000);
+  const nlohmann::json single = store_->Trend("suite", "single", "flight_time_s", {});
+  ASSERT_EQ(single["points"].size(), 1u);
+  EXPECT_EQ(single["points"][0]["df"], 0);
+  EXPECT_TRUE(single["points"][0]["seed_std"].is_null());
 }
 
 TEST_F(StoreDashboardTest, ReadOnlyStoreReadsAndNeverWrites) {
