@@ -107,19 +107,24 @@ void Judge(const MetricRule& rule, bool exact, const std::vector<double>& base,
     m->verdict = "same";
     return;
   }
-  if (!exact) {
-    const int n = static_cast<int>(d.size());
-    if (n < 2) {
-      m->verdict = "too_few_pairs";
-      return;
-    }
+  // The paired t interval, in both modes: exact mode judges by the delta but reports whether the
+  // seeds' draw alone could give it.
+  const int n = static_cast<int>(d.size());
+  if (n >= 2) {
     double ss = 0;
     for (double x : d) ss += (x - m->delta) * (x - m->delta);
     const double se = std::sqrt(ss / (n - 1)) / std::sqrt(static_cast<double>(n));
     const double half = StudentT975(n - 1) * se;
     m->ci_low = m->delta - half;
     m->ci_high = m->delta + half;
-    if (m->ci_low <= 0 && m->ci_high >= 0) {
+  }
+  const bool includes_zero = n >= 2 && m->ci_low <= 0 && m->ci_high >= 0;
+  if (!exact) {
+    if (n < 2) {
+      m->verdict = "too_few_pairs";
+      return;
+    }
+    if (includes_zero) {
       m->verdict = "insignificant";
       return;
     }
@@ -130,6 +135,7 @@ void Judge(const MetricRule& rule, bool exact, const std::vector<double>& base,
   }
   const bool worse = rule.direction == Direction::kLower ? m->delta > 0 : m->delta < 0;
   m->verdict = worse ? "regression" : "improvement";
+  m->within_draw = exact && includes_zero;
 }
 
 std::string Num(double v) {
@@ -173,6 +179,7 @@ std::string Describe(const MetricChange& m, bool exact) {
   if (!exact && m.verdict != "too_few_pairs") {
     s += " 95% CI [" + Num(m.ci_low) + ", " + Num(m.ci_high) + "]";
   }
+  if (m.within_draw) s += " within the seeds' draw (paired 95% CI [" + Num(m.ci_low) + ", " + Num(m.ci_high) + "])";
   if (m.direction == Direction::kNone) {
     s += ", not judged";
   } else {
@@ -290,6 +297,7 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
       m.name = name;
       Judge(rule, exact, bv, cv, &m);
       if (m.verdict == "regression") ++cell.regressions;
+      if (m.verdict == "regression" && m.within_draw) ++report.regressions_within_draw;
       if (m.verdict == "improvement") ++cell.improvements;
       if (m.verdict != "same") ++report.changed_metrics;
       cell.metrics.push_back(std::move(m));
@@ -328,7 +336,8 @@ nlohmann::json CompareJson(const CompareReport& r) {
       metrics.push_back({{"name", m.name}, {"direction", DirectionName(m.direction)},
                          {"pairs", m.pairs}, {"base_mean", m.base_mean},
                          {"candidate_mean", m.candidate_mean}, {"delta", m.delta},
-                         {"ci_low", m.ci_low}, {"ci_high", m.ci_high}, {"threshold", m.threshold},
+                         {"ci_low", m.ci_low}, {"ci_high", m.ci_high}, {"within_draw", m.within_draw},
+                         {"threshold", m.threshold},
                          {"changed_pairs", m.changed_pairs}, {"verdict", m.verdict}});
     }
     nlohmann::json changed = nlohmann::json::array();
@@ -355,7 +364,8 @@ nlohmann::json CompareJson(const CompareReport& r) {
   return {{"base", r.base}, {"candidate", r.candidate}, {"mode", r.mode}, {"provenance", provenance},
           {"base_results", r.base_results}, {"candidate_results", r.candidate_results},
           {"regressions", r.regressions}, {"improvements", r.improvements},
-          {"changed_metrics", r.changed_metrics}, {"no_change", r.no_change()},
+          {"changed_metrics", r.changed_metrics}, {"regressions_within_draw", r.regressions_within_draw},
+          {"no_change", r.no_change()},
           {"cells", cells}, {"unpaired", unpaired}};
 }
 
@@ -433,6 +443,10 @@ std::string CompareTable(const CompareReport& r) {
     const bool repriced = std::any_of(r.provenance.begin(), r.provenance.end(),
                                       [](const ProvenanceChange& p) { return p.name == "cost_model_sha256"; });
     out << (repriced ? " (with another cost model: see provenance above)" : "") << "\n";
+    if (r.regressions_within_draw > 0) {
+      out << "  " << r.regressions_within_draw << " of the " << r.regressions
+          << " are within the seeds' draw: their paired 95% CI includes 0 (--mode paired calls them insignificant)\n";
+    }
   } else {
     out << "no regression: " << r.changed_metrics << " metric(s) changed, " << r.improvements
         << " improved" << (r.unpaired.empty() ? "" : ", " + std::to_string(r.unpaired.size()) + " unpaired") << "\n";

@@ -30,7 +30,10 @@ struct MetricChange {
   Direction direction = Direction::kNone;
   int pairs = 0;              ///< pairs the statistics use (success_only: both succeeded)
   double base_mean = 0, candidate_mean = 0, delta = 0;
-  double ci_low = 0, ci_high = 0;  ///< paired mode: 95 % CI of the mean difference
+  double ci_low = 0, ci_high = 0;  ///< 95 % CI of the mean difference over the pairs (the delta with < 2 pairs)
+  /// Exact mode: a regression or improvement whose CI includes 0, i.e. real but within the
+  /// seeds' draw (paired mode would call it insignificant).
+  bool within_draw = false;
   double threshold = 0;       ///< |delta| beyond which the change counts
   int changed_pairs = 0;      ///< pairs whose values differ at all
   /// regression, improvement, change (no direction, or within threshold), same, insignificant,
@@ -81,6 +84,7 @@ struct CompareReport {
   std::vector<Unpaired> unpaired;
   std::vector<ProvenanceChange> provenance;  ///< by name
   int regressions = 0, improvements = 0, changed_metrics = 0;
+  int regressions_within_draw = 0;  ///< exact mode: regressions whose 95 % CI includes 0
   bool no_change() const { return changed_metrics == 0 && unpaired.empty(); }
 };
 

@@ -380,7 +380,9 @@ function modeNote(report, base, cand) {
     if (report.changed_metrics === 0) return el('p', {id: 'mode-note', class: 'muted'}, 'exact mode: the same results to the last digit');
     return el('p', {id: 'mode-note', class: 'note'},
               `exact mode: every difference is real, but flights fork on tiny differences, so with ${seeds} seeds a ` +
-              'cell can change by the draw of its routes alone. ',
+              'cell can change by the draw of its routes alone' +
+              (report.regressions ? ` (${report.regressions_within_draw} of the ${report.regressions} regressions have a ` +
+                                    'paired 95 % interval that includes 0). ' : '. '),
               el('a', {href: paired}, 'judge the same jobs in paired mode'),
               ': a change is called only when its 95 % confidence interval over the seeds excludes zero.');
   }
@@ -465,7 +467,8 @@ async function cellDetail(cells, box) {
   let pair = null;
   for (const c of cells) {
     const rows = c.metrics.filter(m => m.verdict !== 'same').map(m => el('tr', {class: m.verdict},
-        el('td', {}, m.name), el('td', {}, m.verdict), el('td', {class: 'num'}, fmt(m.base_mean)),
+        el('td', {}, m.name), el('td', {}, m.verdict + (m.within_draw ? ' (within the draw)' : '')),
+        el('td', {class: 'num'}, fmt(m.base_mean)),
         el('td', {class: 'num'}, fmt(m.candidate_mean)), el('td', {class: 'num'}, fmt(m.delta)),
         el('td', {class: 'num'}, `[${fmt(m.ci_low)}, ${fmt(m.ci_high)}]`), el('td', {class: 'num'}, fmt(m.threshold)),
         el('td', {class: 'num'}, m.pairs)));

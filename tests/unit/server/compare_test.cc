@@ -189,6 +189,34 @@ TEST(CompareTest, PairedModeCallsOnlySignificantChanges) {
   EXPECT_EQ(r.regressions, 1);
 }
 
+// Exact mode judges by the delta (any difference is real) and says which verdicts the seeds'
+// draw alone could give: the same data as above on the virtual clock.
+TEST(CompareTest, ExactModeNamesTheRegressionsWithinTheSeedsDraw) {
+  auto a = Job("a", {"tx2"}, 8);
+  auto b = a;
+  const double noise[8] = {0.3, -0.2, 0.1, -0.4, 0.2, 0.0, -0.1, 0.3};
+  for (std::size_t i = 0; i < 8; ++i) {
+    b[i]["flight_time_s"] = a[i]["flight_time_s"].get<double>() * 1.10 + noise[i] * 0.1;
+    b[8 + i]["flight_time_s"] = a[8 + i]["flight_time_s"].get<double>() + (i % 2 ? 1.0 : -1.0) * 6.0 + 1.0;
+  }
+  const CompareReport r = Compare(a, b, {});
+  ASSERT_EQ(r.mode, "exact");
+  const MetricChange& slow = Metric(r, "tx2", "baseline", "flight_time_s");
+  EXPECT_EQ(slow.verdict, "regression");
+  EXPECT_FALSE(slow.within_draw);
+  EXPECT_GT(slow.ci_low, 0.0);
+  const MetricChange& erratic = Metric(r, "tx2", "enavi", "flight_time_s");
+  EXPECT_EQ(erratic.verdict, "regression");  // +1 s mean is beyond the 5 % threshold
+  EXPECT_TRUE(erratic.within_draw);
+  EXPECT_LT(erratic.ci_low, 0.0);
+  EXPECT_GT(erratic.ci_high, 0.0);
+  EXPECT_EQ(r.regressions, 2);
+  EXPECT_EQ(r.regressions_within_draw, 1);
+  const std::string text = CompareTable(r);
+  EXPECT_NE(text.find("1 of the 2 are within the seeds' draw"), std::string::npos) << text;
+  EXPECT_EQ(CompareJson(r)["regressions_within_draw"], 1);
+}
+
 TEST(CompareTest, ThresholdFileOverridesDefaultsAndAddsMetrics) {
   const MetricRules rules = ParseMetricRules(
       "metrics:\n  flight_time_s: {rel: 2.0}\n  velocity_mean_mps: {direction: higher, rel: 0.01}\n", "t.yaml");
