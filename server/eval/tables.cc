@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "api/fixed.h"
+#include "server/compare/compare.h"
 #include "server/eval/paper_reference.h"
 
 namespace enavi::server {
@@ -74,13 +75,18 @@ std::string CsvField(const std::string& s) {
 }
 
 struct Mean {
-  double sum = 0;
+  double sum = 0, sum_sq = 0;
   int n = 0;
   void Add(double v) {
     sum += v;
+    sum_sq += v * v;
     ++n;
   }
   double value() const { return n > 0 ? sum / n : std::nan(""); }
+  /// Sample variance of the values (NaN with fewer than two).
+  double variance() const {
+    return n > 1 ? std::max(0.0, (sum_sq - sum * sum / n) / (n - 1)) : std::nan("");
+  }
   std::string Text(int digits) const { return n > 0 ? Fixed(value(), digits) : "-"; }
 };
 
@@ -239,6 +245,36 @@ std::string PaperTable(const nlohmann::json& results) {
   return out;
 }
 
+namespace {
+
+// 95 % interval of the reduction 1 - E / B of two means of scenario means, from the spread over
+// seeds within each scenario (the draw of routes; the scenarios are the same in every run):
+// Var(B) = sum_s var_s / n_s / S^2 per method, the delta method for the ratio, Student's t with
+// the smaller method's pooled degrees of freedom. "-" when a scenario has fewer than two values.
+template <typename CellOf, typename Metric>
+std::string ReductionInterval(const CellOf& cell_of, const std::string& board, Metric metric, std::size_t scenarios) {
+  double mean[2] = {0, 0}, var[2] = {0, 0};
+  int df[2] = {0, 0};
+  const char* methods[2] = {"baseline", "enavi"};
+  for (int k = 0; k < 2; ++k) {
+    for (std::size_t s = 0; s < scenarios; ++s) {
+      const auto* c = cell_of(board, methods[k], s);
+      if (c == nullptr || ((*c).*metric).n < 2) return "-";
+      const Mean& m = (*c).*metric;
+      mean[k] += m.value() / static_cast<double>(scenarios);
+      var[k] += m.variance() / m.n / static_cast<double>(scenarios * scenarios);
+      df[k] += m.n - 1;
+    }
+  }
+  const double b = mean[0], e = mean[1];
+  if (b == 0) return "-";
+  const double sd = std::sqrt(var[1] / (b * b) + e * e * var[0] / (b * b * b * b));
+  const double r = 1.0 - e / b, half = StudentT975(std::min(df[0], df[1])) * sd;
+  return Fixed(100.0 * (r - half), 1) + " to " + Fixed(100.0 * (r + half), 1) + "%";
+}
+
+}  // namespace
+
 std::string PaperComparison(const nlohmann::json& results) {
   const std::vector<std::string>& scenarios = PaperScenarios();
   // Ours, by (board, method, scenario): the same means as PaperTable.
@@ -308,8 +344,8 @@ std::string PaperComparison(const nlohmann::json& results) {
     if (rows.size() > 2) out += std::string("\n") + block.title + ": ours beside the paper's HIL table\n" + Render(rows, 2);
   }
 
-  std::vector<std::vector<std::string>> red = {
-      {"board", "cpu reduction ours", "paper", "flight time reduction ours", "paper"}};
+  std::vector<std::vector<std::string>> red = {{"board", "cpu reduction ours", "95 % interval", "paper",
+                                                 "flight time reduction ours", "95 % interval", "paper"}};
   for (const std::string& b : PaperBoards()) {
     auto reduction = [&](Metric metric, std::array<double, 5> PaperRow::*paper, bool mine) {
       const double base = mine ? average(ours_of(b, "baseline", metric)) : average(FindPaperRow(b, "baseline")->*paper);
@@ -320,11 +356,14 @@ std::string PaperComparison(const nlohmann::json& results) {
     const std::string cpu_ours = reduction(&Cell::cpu, &PaperRow::cpu_pct, true);
     const std::string time_ours = reduction(&Cell::flight, &PaperRow::flight_time_s, true);
     if (cpu_ours == "-" && time_ours == "-") continue;
-    red.push_back({b, cpu_ours, reduction(&Cell::cpu, &PaperRow::cpu_pct, false), time_ours,
+    red.push_back({b, cpu_ours, ReductionInterval(our_cell, b, &Cell::cpu, scenarios.size()),
+                   reduction(&Cell::cpu, &PaperRow::cpu_pct, false), time_ours,
+                   ReductionInterval(our_cell, b, &Cell::flight, scenarios.size()),
                    reduction(&Cell::flight, &PaperRow::flight_time_s, false)});
   }
   if (red.size() > 1) {
-    out += "\nE-Navi vs baseline, mean of the scenario means (a board's reduction needs all of S1-S5)\n" +
+    out += "\nE-Navi vs baseline, mean of the scenario means (a board's reduction needs all of S1-S5; the "
+           "interval is the seeds' draw: their spread within each scenario)\n" +
            Render(red, 1);
   }
   return out.empty() ? "no results on the paper's boards and scenarios\n" : out;

@@ -75,9 +75,38 @@ TEST(PaperComparisonTest, PrintsOursBesideThePapersCellsAndTheReductions) {
   EXPECT_NE(out.find("x86    enavi     44.0   44.3  -0.3"), std::string::npos) << out;
   // Ours: cpu (50-25)/50 = 50.0 %, time (40-30)/40 = 25.0 %. Paper x86: cpu mean 49.4 -> 42.16
   // = 14.7 %, flight 69.16 -> 40.5 = 41.4 %.
-  EXPECT_NE(out.find("x86                 50.0%  14.7%                       25.0%  41.4%"), std::string::npos)
+  // One seed per scenario: no spread to give an interval from.
+  EXPECT_NE(out.find("x86                 50.0%              -  14.7%                       25.0%              -  41.4%"),
+            std::string::npos)
       << out;
   EXPECT_EQ(out.find("tx2"), std::string::npos) << "boards without results are left out";
+}
+
+// The interval is the seeds' draw: baseline cpu 48 / 52 and E-Navi 24 / 26 in every scenario,
+// flight 39 / 41 and 29 / 31. CPU: Var(B) = 5 x (8 / 2) / 25 = 0.8, Var(E) = 0.2, r = 0.5,
+// sd = sqrt(0.2 / 50^2 + 25^2 x 0.8 / 50^4) = 0.012649, t(5) = 2.5706: 46.7 to 53.3 %. Flight:
+// Var(B) = Var(E) = 0.2, r = 0.25, sd = sqrt(0.2 / 40^2 + 30^2 x 0.2 / 40^4) = 0.013975: 21.4 to
+// 28.6 %.
+TEST(PaperComparisonTest, TheReductionsIntervalIsTheSeedsSpreadWithinEachScenario) {
+  nlohmann::json results = nlohmann::json::array();
+  for (const char* s : {"s1", "s2", "s3", "s4", "s5"}) {
+    results.push_back(Result("x86", "baseline", s, 1, 48, 39, 45, true));
+    results.push_back(Result("x86", "baseline", s, 2, 52, 41, 45, true));
+    results.push_back(Result("x86", "enavi", s, 1, 24, 29, 44, true));
+    results.push_back(Result("x86", "enavi", s, 2, 26, 31, 44, true));
+  }
+  const std::string out = PaperComparison(results);
+  EXPECT_NE(out.find("x86                 50.0%  46.7 to 53.3%  14.7%                       25.0%  21.4 to 28.6%  41.4%"),
+            std::string::npos)
+      << out;
+  // A scenario offset the same in every run is not part of the draw: s1 10 points dearer for both
+  // methods moves the reduction, not the width of its interval.
+  for (auto& r : results) {
+    if (r["scenario"] == "s1") r["nav_cpu_util_pct"] = r["nav_cpu_util_pct"].get<double>() + 10;
+  }
+  const std::string shifted = PaperComparison(results);
+  // B = 52, E = 27: r = 48.1 %; sd = sqrt(0.2 / 52^2 + 27^2 x 0.8 / 52^4) = 0.012399, half 3.2.
+  EXPECT_NE(shifted.find("x86                 48.1%  44.9 to 51.3%"), std::string::npos) << shifted;
 }
 
 TEST(PaperComparisonTest, AReductionNeedsEveryScenario) {
