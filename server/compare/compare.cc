@@ -220,7 +220,7 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
   } else if (options.mode == "exact" || options.mode == "paired") {
     report.mode = options.mode;
   } else {
-    throw std::invalid_argument("--mode: '" + options.mode + "': expected auto, exact or paired");
+    throw std::invalid_argument("mode: '" + options.mode + "': expected auto, exact or paired");
   }
   const bool exact = report.mode == "exact";
 

@@ -115,6 +115,27 @@ TEST_F(HttpApiTest, UnknownJobIsBadInput) {
   }
 }
 
+// The dashboard's compare mode and trend metric come from the address: bad values are 400s that
+// name the parameter.
+TEST_F(HttpApiTest, BadCompareModeAndTrendMetricAreRefusedNamingTheParameter) {
+  api::FarmClient client(Serve());
+  const std::string job = client.Submit(std::string(kJob) + "labels: {suite: nightly}\n", "job.yaml").job_id;
+  auto get = [&](const std::string& target) {
+    return api_->HandleRaw("GET " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
+  };
+  const std::string mode = get("/api/compare?base=" + job + "&candidate=" + job + "&mode=bogus");
+  EXPECT_EQ(mode.rfind("HTTP/1.1 400", 0), 0u) << mode;
+  EXPECT_NE(mode.find("mode: 'bogus': expected auto, exact or paired"), std::string::npos) << mode;
+  const std::string paired = get("/api/compare?base=" + job + "&candidate=" + job + "&mode=paired");
+  EXPECT_EQ(paired.rfind("HTTP/1.1 200", 0), 0u) << paired;
+  const std::string metric = get("/api/trend?label=suite=nightly&metric=x%27y");
+  EXPECT_EQ(metric.rfind("HTTP/1.1 400", 0), 0u) << metric;
+  EXPECT_NE(metric.find("metric: 'x'y'"), std::string::npos) << metric;
+  const std::string trend = get("/api/trend?label=suite=nightly&metric=flight_time_s");
+  EXPECT_EQ(trend.rfind("HTTP/1.1 200", 0), 0u) << trend;
+  EXPECT_NE(trend.find("\"points\":[]"), std::string::npos) << trend;  // no results yet
+}
+
 TEST_F(HttpApiTest, TokenIsRequiredForStateChangesOnly) {
   const std::string url = Serve("s3cret");
   api::FarmClient anonymous(url);
