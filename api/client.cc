@@ -113,6 +113,11 @@ nlohmann::json FarmClient::Episodes(const std::string& job_id) {
   return Request("GET", "/api/jobs/" + job_id + "/episodes");
 }
 
+nlohmann::json FarmClient::Trend(const std::string& label, const std::string& metric) {
+  return Request("GET", "/api/trend?label=" + httplib::detail::encode_query_param(label) +
+                            "&metric=" + httplib::detail::encode_query_param(metric) + "&limit=1000");
+}
+
 JobProgress FarmClient::Cancel(const std::string& job_id) {
   return Request("POST", "/api/jobs/" + job_id + "/cancel").get<JobProgress>();
 }

@@ -35,6 +35,9 @@ class FarmClient {
   /// A list of result objects (board, scenario, method, seed, metrics) in episode order.
   nlohmann::json Results(const std::string& job_id);
   nlohmann::json Episodes(const std::string& job_id);
+  /// GET /api/trend: a metric's mean per job, board and method over the jobs labelled `label`
+  /// (KEY=VALUE), oldest first, with the spread over seeds and its 95 % interval.
+  nlohmann::json Trend(const std::string& label, const std::string& metric);
   JobProgress Cancel(const std::string& job_id);
   nlohmann::json Workers();
   nlohmann::json Health();

@@ -56,6 +56,8 @@ void RegisterEvalCommand(CLI::App& app);
 void RegisterDatasetCommands(CLI::App& app);
 /// `enavi compare` (server/cli/compare_cmd.cc).
 void RegisterCompareCommand(CLI::App& app);
+/// `enavi trend` (server/cli/compare_cmd.cc): a metric over a label series, per board and method.
+void RegisterTrendCommand(CLI::App& app);
 /// `enavi dashboard` (server/cli/dashboard_cmd.cc).
 void RegisterDashboardCommand(CLI::App& app);
 /// `enavi policy convert` (server/cli/policy_cmd.cc).

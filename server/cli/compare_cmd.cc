@@ -1,11 +1,14 @@
 // enavi compare BASE CANDIDATE: did the candidate job get worse than the base job?
+// enavi trend: how a metric moved over a label series of jobs, with the seeds' draw beside it.
 #include <filesystem>
 #include <iostream>
 #include <memory>
 
 #include "api/client.h"
 #include "server/cli/commands.h"
+#include "api/job_spec.h"
 #include "server/compare/compare.h"
+#include "server/eval/tables.h"
 #include "server/store/store.h"
 
 namespace enavi::cli {
@@ -78,7 +81,46 @@ void RunCompare(const CompareFlags& f) {
   if (report.regressions > 0) throw ExitStatus{kExitRegression};
 }
 
+struct TrendFlags {
+  std::string label, metric = "flight_time_s", method, db, format = "table";
+  std::string server = api::DefaultServerUrl();
+};
+
+void RunTrend(const TrendFlags& f) {
+  nlohmann::json trend;
+  if (!f.db.empty()) {
+    if (!std::filesystem::is_regular_file(f.db)) throw std::invalid_argument("--db: " + f.db + ": no such database file");
+    const auto [key, value] = api::ParseLabelFilter(f.label, "--label");
+    server::StoreOptions options;
+    options.read_only = true;
+    server::Store store(f.db, options);
+    trend = store.Trend(key, value, f.metric, server::Page{0, 1000});
+    server::AddTrendIntervals(&trend);
+  } else {
+    trend = api::FarmClient(f.server).Trend(f.label, f.metric);
+  }
+  if (f.format == "json") {
+    std::cout << trend.dump(2) << "\n";
+  } else {
+    std::cout << server::TrendTable(trend, f.method);
+  }
+}
+
 }  // namespace
+
+void RegisterTrendCommand(CLI::App& app) {
+  auto f = std::make_shared<TrendFlags>();
+  CLI::App* sub = app.add_subcommand(
+      "trend", "A metric over the jobs of a label series (oldest first): mean per board and method with its 95 % interval");
+  sub->add_option("--label", f->label, "the series: jobs labelled KEY=VALUE")->required();
+  sub->add_option("--metric", f->metric, "a result metric (flight_time_s, nav_cpu_util_pct, eci.mean, ...)")
+      ->capture_default_str();
+  sub->add_option("--method", f->method, "only this method's rows");
+  sub->add_option("--db", f->db, "read a farm database instead of asking --server");
+  sub->add_option("--format", f->format, "table or json")->check(CLI::IsMember({"table", "json"}))->capture_default_str();
+  sub->add_option("--server", f->server, "farm server URL")->envname("ENAVI_SERVER")->capture_default_str();
+  sub->callback([f] { RunTrend(*f); });
+}
 
 void RegisterCompareCommand(CLI::App& app) {
   auto f = std::make_shared<CompareFlags>();

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   RegisterEvalCommand(app);
   RegisterDatasetCommands(app);
   RegisterCompareCommand(app);
+  RegisterTrendCommand(app);
   RegisterDashboardCommand(app);
   RegisterPolicyCommands(app);
   try {

@@ -191,6 +191,15 @@ std::string Describe(const MetricChange& m, bool exact) {
 
 }  // namespace
 
+void AddTrendIntervals(nlohmann::json* trend) {
+  for (nlohmann::json& p : (*trend)["points"]) {
+    p["ci95"] = p["seed_std"].is_null()
+                    ? nlohmann::json(nullptr)
+                    : nlohmann::json(StudentT975(p["df"].get<int>()) * p["seed_std"].get<double>() /
+                                     std::sqrt(p["n"].get<double>()));
+  }
+}
+
 double StudentT975(int df) {
   // Two-sided 95 % critical values of Student's t (any statistics table, e.g. NIST/SEMATECH
   // e-Handbook 1.3.6.7.2); between tabulated df the next smaller df is used (conservative).

@@ -104,4 +104,8 @@ std::string CompareJunit(const CompareReport& report);
 /// The two-sided 95 % quantile of Student's t with `df` degrees of freedom.
 double StudentT975(int df);
 
+/// Adds "ci95" to every point of a trend (Store::Trend): the half-width of the 95 % interval of
+/// its mean over the seeds' draw, t(df) x seed_std / sqrt(n); null where seed_std is.
+void AddTrendIntervals(nlohmann::json* trend);
+
 }  // namespace enavi::server

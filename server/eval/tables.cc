@@ -19,18 +19,23 @@ namespace {
 
 using api::Fixed;
 
+// Characters on a terminal, not bytes: UTF-8 continuation bytes take no column ("±").
+std::size_t Columns(const std::string& s) {
+  return static_cast<std::size_t>(std::count_if(s.begin(), s.end(), [](char c) { return (c & 0xC0) != 0x80; }));
+}
+
 // Left-aligned first `left` columns, the rest right-aligned.
 std::string Render(const std::vector<std::vector<std::string>>& rows, std::size_t left) {
   std::vector<std::size_t> width;
   for (const auto& r : rows) {
     if (width.size() < r.size()) width.resize(r.size(), 0);
-    for (std::size_t i = 0; i < r.size(); ++i) width[i] = std::max(width[i], r[i].size());
+    for (std::size_t i = 0; i < r.size(); ++i) width[i] = std::max(width[i], Columns(r[i]));
   }
   std::ostringstream os;
   for (const auto& r : rows) {
     std::string line;
     for (std::size_t i = 0; i < r.size(); ++i) {
-      const std::string pad(width[i] - r[i].size(), ' ');
+      const std::string pad(width[i] - Columns(r[i]), ' ');
       if (i > 0) line += "  ";
       line += i < left ? r[i] + pad : pad + r[i];
     }
@@ -367,6 +372,47 @@ std::string PaperComparison(const nlohmann::json& results) {
            Render(red, 1);
   }
   return out.empty() ? "no results on the paper's boards and scenarios\n" : out;
+}
+
+std::string TrendTable(const nlohmann::json& trend, const std::string& method) {
+  std::vector<std::string> boards, jobs;
+  std::map<std::string, std::set<std::string>> methods_of;  // job -> methods
+  std::map<std::tuple<std::string, std::string, std::string>, const nlohmann::json*> point;
+  for (const auto& p : trend.at("points")) {
+    const std::string job = p.at("job_id"), board = p.at("board"), m = p.at("method");
+    if (!method.empty() && m != method) continue;
+    if (std::find(jobs.begin(), jobs.end(), job) == jobs.end()) jobs.push_back(job);
+    if (std::find(boards.begin(), boards.end(), board) == boards.end()) boards.push_back(board);
+    methods_of[job].insert(m);
+    point[{job, m, board}] = &p;
+  }
+  if (jobs.empty()) return "no results with this label and metric\n";
+  std::sort(boards.begin(), boards.end());
+  std::vector<std::vector<std::string>> rows = {{"#", "job", "name", "method"}};
+  rows[0].insert(rows[0].end(), boards.begin(), boards.end());
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    for (const std::string& m : methods_of[jobs[i]]) {
+      std::vector<std::string> line = {std::to_string(i + 1), jobs[i], "", m};
+      for (const std::string& b : boards) {
+        const auto it = point.find({jobs[i], m, b});
+        if (it == point.end()) {
+          line.push_back("-");
+          continue;
+        }
+        const nlohmann::json& p = *it->second;
+        line[2] = p.value("name", "");
+        const double mean = p.at("mean").get<double>();
+        const int digits = std::abs(mean) >= 100 ? 1 : std::abs(mean) >= 1 ? 2 : 3;
+        line.push_back(Fixed(mean, digits) +
+                       (p.value("ci95", nlohmann::json()).is_number() ? " ± " + Fixed(p["ci95"].get<double>(), digits) : ""));
+      }
+      rows.push_back(std::move(line));
+    }
+  }
+  return Render(rows, 4) +
+         "(mean over the job's flights of the board and method ± the 95 % interval of the seeds' draw: their spread "
+         "within each scenario, pooled; a step smaller than it can be the draw, `enavi compare --mode paired` "
+         "judges it)\n";
 }
 
 std::string EciRangeTable(const nlohmann::json& results) {

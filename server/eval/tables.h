@@ -37,6 +37,11 @@ std::string PaperComparison(const nlohmann::json& results);
 /// Results without the flight fields (stored before they existed) are counted as "no range".
 std::string EciRangeTable(const nlohmann::json& results);
 
+/// `enavi trend`: one row per job and method (oldest job first), a column per board with the
+/// metric's mean and its 95 % interval ("24.86 ± 3.16"; no interval with one seed), from a trend
+/// with intervals (Store::Trend, AddTrendIntervals). `method` empty: every method.
+std::string TrendTable(const nlohmann::json& trend, const std::string& method);
+
 /// "[########------] 12/40 done  1 failed  3.2 ep/s  ETA 9s" (bar when `bar`, else plain).
 std::string ProgressLine(const api::JobProgress& p, bool bar);
 

@@ -3,7 +3,6 @@
 #include <arpa/inet.h>
 
 #include <algorithm>
-#include <cmath>
 #include <map>
 #include <regex>
 #include <stdexcept>
@@ -516,12 +515,7 @@ void HttpApi::Routes() {
     const auto [key, value] = api::ParseLabelFilter(labels.front(), "label");
     const std::string metric = req.has_param("metric") ? req.get_param_value("metric") : "flight_time_s";
     nlohmann::json trend = store.Trend(key, value, metric, PageOf(req));
-    // 95 % interval of each mean over the seeds' draw (Student's t, as `enavi compare` uses).
-    for (nlohmann::json& p : trend["points"]) {
-      p["ci95"] = p["seed_std"].is_null() ? nlohmann::json(nullptr)
-                                          : nlohmann::json(StudentT975(p["df"].get<int>()) * p["seed_std"].get<double>() /
-                                                           std::sqrt(p["n"].get<double>()));
-    }
+    AddTrendIntervals(&trend);
     Reply(res, 200, trend);
   });
 

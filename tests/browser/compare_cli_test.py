@@ -2,7 +2,8 @@
 """`enavi compare` end to end on a seeded database (seed_dashboard_db): the planted regression
 exits 3 and names its cell and metric; the same job twice exits 0 with "no change"; the JUnit
 output passes a JUnit XML schema (xmllint, libxml2-utils); JSON parses and matches the table;
-bad input exits 2 naming the file, field and reason.
+bad input exits 2 naming the file, field and reason; `enavi trend` prints each job and method
+with its interval, the same from the database and through a server.
 Usage: compare_cli_test.py BUILD_DIR SOURCE_DIR
 """
 import json
@@ -12,6 +13,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 
 BUILD, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
@@ -111,6 +113,48 @@ class CompareCliTest(unittest.TestCase):
         r = self.compare(self.db + ":jnope", self.base)
         self.assertEqual(r.returncode, 2)
         self.assertIn("has no job 'jnope'", r.stderr)
+
+    def trend(self, *args):
+        return subprocess.run([ENAVI, "trend", *args], capture_output=True, text=True, timeout=60)
+
+    def test_trend_prints_each_job_and_method_with_its_interval_from_the_database_and_the_server(self):
+        r = self.trend("--label", "suite=nightly", "--db", self.db)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        rows = [line.split() for line in r.stdout.splitlines() if line[:1].isdigit()]
+        # 2 jobs x 2 methods, tx2 and pi4b columns, each a mean ± its interval.
+        self.assertEqual([(row[0], row[3]) for row in rows],
+                         [("1", "baseline"), ("1", "enavi"), ("2", "baseline"), ("2", "enavi")], r.stdout)
+        for row in rows:
+            self.assertEqual(row[4:].count("±"), 2, row)
+        # The planted regression: tx2 baseline slower in the second job (tx2 is the last column).
+        self.assertGreater(float(rows[2][-3]), float(rows[0][-3]))
+        only = self.trend("--label", "suite=nightly", "--db", self.db, "--method", "enavi", "--format", "json")
+        self.assertEqual(only.returncode, 0, only.stderr)
+        points = json.loads(only.stdout)["points"]
+        self.assertTrue(all(p["ci95"] is not None and p["ci95"] > 0 for p in points), points)
+        # The same through a server (the read-only dashboard of the same database).
+        ready = os.path.join(self.tmp, "trend.ready")
+        server = subprocess.Popen([ENAVI, "dashboard", "--db", self.db, "--http", "127.0.0.1:0", "--ready-file", ready],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            for _ in range(200):
+                if os.path.exists(ready) and open(ready).read().strip():
+                    break
+                time.sleep(0.05)
+            via = self.trend("--label", "suite=nightly", "--server", open(ready).read().strip())
+            self.assertEqual(via.returncode, 0, via.stderr)
+            self.assertEqual(via.stdout, r.stdout)
+        finally:
+            server.terminate()
+            server.wait(10)
+
+    def test_trend_bad_input_exits_2_naming_the_flag(self):
+        for args, message in ((["--label", "nolabel", "--db", self.db], "--label: 'nolabel': expected key=value"),
+                              (["--label", "suite=nightly", "--db", self.db, "--metric", "a'b"], "metric: 'a'b'"),
+                              (["--label", "suite=nightly", "--db", self.db + ".missing"], "no such database file")):
+            r = self.trend(*args)
+            self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
+            self.assertIn(message, r.stderr)
 
 
 if __name__ == "__main__":

@@ -119,6 +119,20 @@ TEST(PaperComparisonTest, AReductionNeedsEveryScenario) {
   EXPECT_EQ(PaperComparison(nlohmann::json::array()), "no results on the paper's boards and scenarios\n");
 }
 
+TEST(TrendTableTest, OneRowPerJobAndMethodWithTheIntervalWhereThereIsOne) {
+  const nlohmann::json trend = {{"points", nlohmann::json::array({
+      {{"job_id", "ja"}, {"name", "n1"}, {"board", "tx2"}, {"method", "baseline"}, {"mean", 24.5}, {"ci95", 1.25}},
+      {{"job_id", "ja"}, {"name", "n1"}, {"board", "pi4b"}, {"method", "baseline"}, {"mean", 23.0}, {"ci95", nullptr}},
+      {{"job_id", "jb"}, {"name", "n2"}, {"board", "tx2"}, {"method", "enavi"}, {"mean", 0.5}, {"ci95", 0.125}},
+  })}};
+  const std::string all = TrendTable(trend, "");
+  EXPECT_NE(all.find("1  ja   n1    baseline  23.00   24.50 ± 1.25"), std::string::npos) << all;
+  EXPECT_NE(all.find("2  jb   n2    enavi         -  0.500 ± 0.125"), std::string::npos) << all;
+  const std::string enavi = TrendTable(trend, "enavi");
+  EXPECT_EQ(enavi.find("baseline"), std::string::npos) << enavi;
+  EXPECT_EQ(TrendTable(trend, "fixed"), "no results with this label and metric\n");
+}
+
 nlohmann::json WithEci(nlohmann::json r, double lo, double hi, int frames) {
   r["eci"] = {{"min", 0.0}, {"mean", 0.5}, {"max", 1.0}, {"flight_min", lo}, {"flight_max", hi},
               {"flight_frames", frames}};
