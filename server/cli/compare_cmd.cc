@@ -5,8 +5,8 @@
 #include <memory>
 
 #include "api/client.h"
-#include "server/cli/commands.h"
 #include "api/job_spec.h"
+#include "server/cli/commands.h"
 #include "server/compare/compare.h"
 #include "server/eval/tables.h"
 #include "server/store/store.h"

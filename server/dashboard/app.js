@@ -72,6 +72,15 @@ function hashParams() {
   return new URLSearchParams(q < 0 ? '' : location.hash.slice(q + 1));
 }
 
+// A <select> of [value, text] options with `selected` chosen.
+function selectOf(name, options, selected) {
+  return el('select', {name}, options.map(([value, text]) => {
+    const o = el('option', {value}, text);
+    if (value === selected) o.selected = true;
+    return o;
+  }));
+}
+
 function table(headers, rows) {
   return el('table', {}, el('thead', {}, el('tr', {}, headers.map(h => el('th', {}, h)))),
             el('tbody', {}, rows));
@@ -394,11 +403,7 @@ function modeNote(report, base, cand) {
 async function comparePage() {
   const params = hashParams();
   const jobs = await api('/api/jobs');
-  const pick = (name, value) => el('select', {name}, jobs.map(j => {
-    const o = el('option', {value: j.id}, `${j.id} ${j.name}`);
-    if (j.id === value) o.selected = true;
-    return o;
-  }));
+  const pick = (name, value) => selectOf(name, jobs.map(j => [j.id, `${j.id} ${j.name}`]), value);
   let base = params.get('base'), cand = params.get('candidate');
   const series = params.get('label');
   const mode = params.get('mode') || 'auto';
@@ -408,11 +413,7 @@ async function comparePage() {
   }
   const baseSel = pick('base', base), candSel = pick('candidate', cand);
   const labelIn = el('input', {type: 'text', placeholder: 'or a label series: suite=nightly', value: series || ''});
-  const modeSel = el('select', {name: 'mode'}, COMPARE_MODES.map(([value, text]) => {
-    const o = el('option', {value}, text);
-    if (value === mode) o.selected = true;
-    return o;
-  }));
+  const modeSel = selectOf('mode', COMPARE_MODES, mode);
   const form = el('form', {class: 'inline', onsubmit: ev => {
     ev.preventDefault();
     location.hash = (labelIn.value.trim() && labelIn.value.trim() !== (series || '')
@@ -504,11 +505,7 @@ async function trendPage() {
   // One method at a time: the stacks differ by more than any commit moves one of them.
   const methods = [...new Set(trend.points.map(p => p.method))].sort();
   const method = methods.includes(params.get('method')) ? params.get('method') : methods[0];
-  const methodSel = el('select', {name: 'method'}, methods.map(m => {
-    const o = el('option', {value: m}, m);
-    if (m === method) o.selected = true;
-    return o;
-  }));
+  const methodSel = selectOf('method', methods.map(m => [m, m]), method);
   const form = el('form', {class: 'inline', onsubmit: ev => {
     ev.preventDefault();
     location.hash = `#/trend?label=${encodeURIComponent(labelIn.value.trim())}&metric=${encodeURIComponent(metricIn.value.trim())}` +
