@@ -141,18 +141,29 @@ ControlOutput GeometricController::Compute(const VehicleState& state,
     out.w_WD_D = Eigen::Vector3d(w_x, w_y, w_z);
   }
 
-  // Attitude error: the rotation from the desired attitude to the body's as 2 sin(angle / 2)
-  // times its axis (the quaternion's vector part, on the hemisphere w >= 0), not the paper's
-  // eq. 10, whose sin(angle) magnitude shrinks past 90 deg and vanishes at 180: a yaw error near
-  // 180 deg then left the tilt uncorrected too, and a vehicle in s2 drifted off a smooth
-  // reference into a wall at 5 m/s. The two agree to first order, so the gains are unchanged.
-  // PX4's attitude controller uses the same error (mc_att_control, AttitudeControl.cpp, after
-  // Brescianini, Hehn, D'Andrea, "Nonlinear quadrocopter attitude control", ETH Zurich 2013).
-  // Torque: paper eq. 16 with zero angular acceleration feed-forward, gains per body axis.
+  // Attitude error: the rotation from the body to the desired attitude (q_BD, hemisphere w >= 0)
+  // split into a tilt part that turns body z onto desired z and a yaw part about z after it
+  // (Faessler, Fontana, Forster, Scaramuzza, "Automatic re-initialization and failure recovery
+  // for aggressive flight with a monocular vision-based quadrotor", ICRA 2015; PX4's
+  // mc_att_control AttitudeControl.cpp aligns the thrust axis first for the same reason). Each
+  // part enters as 2 sin(angle / 2) times its axis. The whole error's vector part (the paper's
+  // eq. 10 and its quaternion form) mixes the two: at a 150 deg yaw error a tilt error appears
+  // mostly about the perpendicular axis, and a vehicle in s3 that lagged its turning reference
+  // by 110-150 deg was tilted to 86 deg and fell into furniture. For a pure tilt or a pure yaw
+  // error the split equals the whole error, so the gains are unchanged.
   const Eigen::Matrix3d R_BD = R_WB.transpose() * out.R_WD;
-  Eigen::Quaterniond q_DB(R_BD.transpose());
-  if (q_DB.w() < 0.0) q_DB.coeffs() = -q_DB.coeffs();
-  out.e_R = 2.0 * q_DB.vec();
+  Eigen::Quaterniond q_BD(R_BD);
+  if (q_BD.w() < 0.0) q_BD.coeffs() = -q_BD.coeffs();
+  const double qw = q_BD.w(), qx = q_BD.x(), qy = q_BD.y(), qz = q_BD.z();
+  const double n = std::hypot(qw, qz);
+  if (n > 1e-6) {
+    // q_BD = q_tilt * q_yaw with q_tilt = (n, (qw qx - qy qz) / n, (qw qy + qx qz) / n, 0) and
+    // q_yaw = (qw, 0, 0, qz) / n. The sign turns it into the body-from-desired error of eq. 10.
+    out.e_R = -2.0 * Eigen::Vector3d((qw * qx - qy * qz) / n, (qw * qy + qx * qz) / n, qz / n);
+  } else {
+    // Body z opposite to desired z: no yaw is defined; the whole error turns the vehicle over.
+    out.e_R = -2.0 * q_BD.vec();
+  }
   const Eigen::Vector3d w_ref_B = R_BD * out.w_WD_D;
   out.e_w_B = w_B - w_ref_B;
   out.wrench.torque_B = -o.k_attitude.cwiseProduct(out.e_R) - o.k_rate.cwiseProduct(out.e_w_B) +

@@ -46,7 +46,7 @@ struct ControlOutput {
   Eigen::Vector3d F_W = Eigen::Vector3d::Zero();          ///< desired force after limits, W
   Eigen::Vector3d e_p_W = Eigen::Vector3d::Zero();        ///< position error p - p_ref
   Eigen::Vector3d e_v_W = Eigen::Vector3d::Zero();        ///< velocity error v - v_ref
-  Eigen::Vector3d e_R = Eigen::Vector3d::Zero();          ///< attitude error, 2 sin(angle / 2) x axis
+  Eigen::Vector3d e_R = Eigen::Vector3d::Zero();          ///< attitude error: tilt (x, y) then yaw (z), each 2 sin(angle / 2) x axis
   Eigen::Vector3d e_w_B = Eigen::Vector3d::Zero();        ///< angular velocity error
   bool tilt_limited = false;    ///< horizontal force cut to respect max_tilt_deg
   bool thrust_limited = false;  ///< desired force or collective thrust hit a thrust limit
@@ -59,7 +59,8 @@ struct ControlOutput {
 /// horizontal); desired heading from the yaw angle; thrust f = F . R e_z; torque
 /// M = -k_R e_R - k_W e_W + W x J W - J (W^ R^T R_D W_D) (the angular-acceleration feed-forward
 /// is taken as zero: the reference carries no snap), with e_R the quaternion error from the
-/// desired attitude to the body's (the paper's eq. 10 fails near a half turn; see Compute).
+/// desired attitude to the body's split into tilt and then yaw (the paper's eq. 10 fails near a
+/// half turn and couples a large yaw error into the tilt; see Compute).
 class GeometricController {
  public:
   /// @throws std::invalid_argument naming the option and its allowed range on a bad value.

@@ -74,6 +74,24 @@ TEST(GeometricControllerTest, DesiredHeadingFollowsYawIncludingWrapAround) {
   }
 }
 
+// The attitude error is the tilt that turns body z onto desired z, then the yaw about z: its
+// x-y part is that tilt's axis in the body frame, whatever the yaw error, and its z part the yaw
+// error alone (2 sin(angle / 2) each).
+TEST(GeometricControllerTest, AttitudeErrorSeparatesTiltFromYaw) {
+  GeometricController controller;
+  TrajectorySample ref;  // level, yaw 0
+  for (double yaw_deg : {0.0, 30.0, 150.0, -170.0}) {
+    const double yaw = yaw_deg * std::numbers::pi / 180.0, roll = 20.0 * std::numbers::pi / 180.0;
+    VehicleState state;
+    state.q_WB = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX());
+    const ControlOutput out = controller.Compute(state, ref);
+    // Body rolled about its own x by 20 deg: the tilt error is about body x, of size 2 sin(10 deg).
+    EXPECT_NEAR(out.e_R.x(), 2.0 * std::sin(roll / 2.0), 1e-9) << "yaw " << yaw_deg;
+    EXPECT_NEAR(out.e_R.y(), 0.0, 1e-9) << "yaw " << yaw_deg;
+    EXPECT_NEAR(out.e_R.z(), 2.0 * std::sin(yaw / 2.0), 1e-9) << "yaw " << yaw_deg;
+  }
+}
+
 // The desired angular velocity from jerk and yaw rate must be the true rate of change of the
 // desired attitude: compare against a finite difference along a smooth 3D reference.
 TEST(GeometricControllerTest, FeedForwardRateMatchesFiniteDifferenceOfDesiredAttitude) {
