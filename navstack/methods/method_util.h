@@ -31,6 +31,17 @@ inline double YawOf(const Eigen::Quaterniond& q_WB) {
   return std::atan2(x_W.y(), x_W.x());
 }
 
+/// A plan's start from the measured state: position, velocity, heading and heading rate (the
+/// world-z component of the body rate), zero acceleration.
+inline TrajectorySample StartFromState(const VehicleState& state) {
+  TrajectorySample s;
+  s.p = state.p_WB;
+  s.v = state.v_WB;
+  s.yaw = YawOf(state.q_WB);
+  s.yaw_rate = (state.q_WB * state.w_WB_B).z();
+  return s;
+}
+
 /// Hover at p facing yaw.
 inline TrajectorySample HoldAt(const Eigen::Vector3d& p, double yaw) {
   TrajectorySample s;

@@ -164,7 +164,8 @@ PlanResult Plan(const PlanRequest& request, const PlannerOptions& options) {
   if (!summary.clearance_ok) {
     return finish(PlanStatus::kTrajectoryInCollision, msg.str());
   }
-  result.trajectory = std::make_shared<Trajectory>(*spline, request.t_start, request.start.yaw, options);
+  result.trajectory = std::make_shared<Trajectory>(*spline, request.t_start, request.start.yaw, options,
+                                                       request.start.yaw_rate);
   return finish(PlanStatus::kOk, msg.str());
 }
 

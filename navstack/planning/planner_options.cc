@@ -75,6 +75,7 @@ void PlannerOptions::Validate() const {
   CheckRange("max_rebound_restarts", max_rebound_restarts, 0, 100, false);
   CheckRange("yaw_speed_threshold", yaw_speed_threshold, 0.0, 20.0, false);
   CheckRange("yaw_rate_max", yaw_rate_max, 0.0, 100.0, true);
+  CheckRange("yaw_accel_max", yaw_accel_max, 0.0, 1000.0, true);
   CheckRange("yaw_lookahead", yaw_lookahead, 0.0, 10.0, false);
 }
 

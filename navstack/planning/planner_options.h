@@ -67,9 +67,18 @@ struct PlannerOptions {
   int max_rebounds = 20;                    ///< L-BFGS runs cut short by a new obstacle, [0, 1000]
   int max_rebound_restarts = 3;             ///< re-runs with 2x collision weight if the result collides, [0, 100]
 
-  // Yaw: along the horizontal velocity; held below the speed threshold; rate limited.
+  // Yaw: along the horizontal velocity; held below the speed threshold; rate and acceleration
+  // limited.
   double yaw_speed_threshold = 0.3;  ///< [m/s], [0, 20]
   double yaw_rate_max = 2.0;         ///< [rad/s], (0, 100]
+  /// [rad/s^2], (0, 1000]. What the vehicle can follow: an X500-class quadrotor's yaw torque at
+  /// hover is at most k_m m g (each rotor pair between 0 and twice its hover thrust), 0.016 m x
+  /// 1.5 kg x 9.81 m/s^2 = 0.235 N m, or 5.9 rad/s^2 with J_z = 0.040 kg m^2 (VehicleParams);
+  /// half of it leaves the attitude controller the other half for feedback. Ego-Planner's
+  /// trajectory server has no such limit (traj_server.cpp: YAW_DOT_DOT_MAX_PER_SEC is commented
+  /// out) and reverses a 2 rad/s turn from one step to the next; the vehicle then fell 110 deg
+  /// behind, and its camera looked away from where it flew.
+  double yaw_accel_max = 3.0;
   double yaw_lookahead = 1.0;        ///< [s] heading towards the trajectory point this far ahead, [0, 10]
 
   /// Throws std::invalid_argument naming the field, its value and the allowed range.

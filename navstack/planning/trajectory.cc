@@ -14,7 +14,8 @@ constexpr int kLengthSamplesPerSpan = 20;
 
 }  // namespace
 
-Trajectory::Trajectory(UniformBspline spline, double t0, double yaw0, const PlannerOptions& options)
+Trajectory::Trajectory(UniformBspline spline, double t0, double yaw0, const PlannerOptions& options,
+                       double yaw_rate0)
     : spline_(std::move(spline)), t0_(t0) {
   const double duration = spline_.duration();
 
@@ -27,13 +28,16 @@ Trajectory::Trajectory(UniformBspline spline, double t0, double yaw0, const Plan
     prev = p;
   }
 
-  // Yaw profile: desired heading by the rule in the header, rate limited, unwrapped.
+  // Yaw profile: desired heading by the rule in the header, rate and acceleration limited,
+  // unwrapped.
   const int n = std::max(1, static_cast<int>(std::ceil(duration / kYawStep)));
   yaw_step_ = duration / n;
   yaw_.resize(n + 1);
   yaw_[0] = yaw0;
+  yaw_rate0_ = std::clamp(yaw_rate0, -options.yaw_rate_max, options.yaw_rate_max);
+  double rate = yaw_rate0_;
   const double threshold = options.yaw_speed_threshold;
-  const double max_turn = options.yaw_rate_max * yaw_step_;
+  const double max_rate_change = options.yaw_accel_max * yaw_step_;
   for (int k = 1; k <= n; ++k) {
     const double t = k * yaw_step_;
     const Eigen::Vector2d v = spline_.Velocity(t).head<2>();
@@ -50,8 +54,16 @@ Trajectory::Trajectory(UniformBspline spline, double t0, double yaw0, const Plan
     } else if (near.norm() >= threshold * kLookAhead && near.norm() > 0.0) {
       desired = std::atan2(near.y(), near.x());
     }
-    const double turn = std::clamp(WrapAngle(desired - yaw_[k - 1]), -max_turn, max_turn);
-    yaw_[k] = yaw_[k - 1] + turn;
+    // The rate that reaches the desired heading in this step, no faster than the rate limit or
+    // than the rate w from which the turn, braking a step later, still stops there
+    // (w dt + w^2 / 2a = error).
+    const double error = WrapAngle(desired - yaw_[k - 1]);
+    const double a_dt = max_rate_change;
+    const double braking = -a_dt + std::sqrt(a_dt * a_dt + 2.0 * options.yaw_accel_max * std::abs(error));
+    const double target =
+        std::copysign(std::min({std::abs(error) / yaw_step_, options.yaw_rate_max, braking}), error);
+    rate += std::clamp(target - rate, -max_rate_change, max_rate_change);
+    yaw_[k] = yaw_[k - 1] + rate * yaw_step_;
   }
 }
 

@@ -269,12 +269,7 @@ std::shared_ptr<const NavStack::PlanAttempt> NavStack::MakePlan(double t, WorkCo
   const double t_start = t + plan_latency_estimate_;
   TrajectorySample start = Reference(t_start);
   const bool from_state = !trajectory_ || stopped_ || scanning_ || (Reference(t).p - state_.p_WB).norm() > options_.max_tracking_error;
-  if (from_state) {
-    start = TrajectorySample{};
-    start.p = state_.p_WB;
-    start.v = state_.v_WB;
-    start.yaw = YawOf(state_.q_WB);
-  }
+  if (from_state) start = StartFromState(state_);
   PlanRequest request;
   request.t_start = from_state ? t : t_start;
   request.start = start;

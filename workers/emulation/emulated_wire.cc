@@ -41,6 +41,7 @@ void ToWire(const navstack::Trajectory& traj, TrajectoryWire* out) {
   out->t0 = traj.start_time();
   out->dt = traj.spline().dt();
   out->yaw0 = traj.Sample(traj.start_time()).yaw;
+  out->yaw_rate0 = traj.start_yaw_rate();
   for (Eigen::Index c = 0; c < q.cols(); ++c)
     for (int i = 0; i < 3; ++i) out->q[c][i] = q(i, c);
 }
@@ -56,7 +57,7 @@ std::shared_ptr<const navstack::Trajectory> FromWire(const TrajectoryWire& w,
   for (int c = 0; c < w.count; ++c)
     for (int i = 0; i < 3; ++i) q(i, c) = w.q[c][i];
   return std::make_shared<const navstack::Trajectory>(navstack::UniformBspline(std::move(q), w.dt), w.t0, w.yaw0,
-                                                      options);
+                                                      options, w.yaw_rate0);
 }
 
 namespace {

@@ -28,11 +28,12 @@ struct SampleWire {
 SampleWire ToWire(const navstack::TrajectorySample& s);
 navstack::TrajectorySample FromWire(const SampleWire& w);
 
-/// A Trajectory: uniform cubic B-spline control points, knot span, start time, initial yaw.
+/// A Trajectory: uniform cubic B-spline control points, knot span, start time, initial yaw and
+/// yaw rate.
 struct TrajectoryWire {
   static constexpr int kMaxControlPoints = 1024;
   std::int32_t count = 0;  ///< control points; 0 = no trajectory
-  double t0 = 0, dt = 0, yaw0 = 0;
+  double t0 = 0, dt = 0, yaw0 = 0, yaw_rate0 = 0;
   double q[kMaxControlPoints][3];
 };
 

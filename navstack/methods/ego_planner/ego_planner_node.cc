@@ -191,7 +191,7 @@ bool EgoPlannerNode::Land(const Attempt& attempt, const std::string& trigger) {
   trajectory_ = t0 == planned.start_time()
                     ? attempt.result->trajectory
                     : std::make_shared<const Trajectory>(planned.spline(), t0, planned.Sample(planned.start_time()).yaw,
-                                                         options_.planner);
+                                                         options_.planner, planned.start_yaw_rate());
   local_start_ = attempt.start_p;
   holding_ = false;
   AddEvent("replan", trigger);
@@ -204,10 +204,7 @@ JobOutput EgoPlannerNode::FsmJob() {
   switch (fsm_) {
     case State::kGenNewTraj: {
       // From odometry, zero acceleration; random initialisation when called again in a row.
-      TrajectorySample start;
-      start.p = state_.p_WB;
-      start.v = state_.v_WB;
-      start.yaw = YawOf(state_.q_WB);
+      const TrajectorySample start = StartFromState(state_);
       auto attempt = PlanOnce(TaskId::kPlanning, start, t, &out.work);
       out.commit = [this, attempt] {
         if (Land(*attempt, consecutive_gen_calls_ == 0 ? "start" : "retry")) {

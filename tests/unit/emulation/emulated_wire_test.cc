@@ -17,14 +17,14 @@ using navstack::Trajectory;
 using navstack::TrajectorySample;
 using navstack::UniformBspline;
 
-// A wiggly climb of `n` control points starting at t0 with heading yaw0.
+// A wiggly climb of `n` control points starting at t0 with heading yaw0 turning at yaw_rate0.
 std::shared_ptr<const Trajectory> MakeTrajectory(int n, double t0, double yaw0, const PlannerOptions& options,
-                                                 unsigned seed = 7) {
+                                                 unsigned seed = 7, double yaw_rate0 = 0.0) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> jitter(-0.15, 0.15);
   Eigen::Matrix3Xd q(3, n);
   for (int i = 0; i < n; ++i) q.col(i) = Eigen::Vector3d(0.4 * i + jitter(rng), 0.3 * std::sin(0.5 * i) + jitter(rng), 1.0 + 0.02 * i);
-  return std::make_shared<const Trajectory>(UniformBspline(q, 0.2), t0, yaw0, options);
+  return std::make_shared<const Trajectory>(UniformBspline(q, 0.2), t0, yaw0, options, yaw_rate0);
 }
 
 void ExpectSameSample(const TrajectorySample& a, const TrajectorySample& b, double t) {
@@ -40,12 +40,15 @@ TEST(EmulatedWireTest, TrajectoryRoundTripSamplesLikeTheOriginal) {
   PlannerOptions options;
   options.yaw_rate_max = 1.0;
   for (double yaw0 : {0.0, 2.9, -3.1, 3.14159}) {
-    const auto traj = MakeTrajectory(30, 12.5, yaw0, options);
+    // A start rate against the turn the path asks for, so the rebuilt profile differs unless
+    // the wire carries it.
+    const auto traj = MakeTrajectory(30, 12.5, yaw0, options, 7, -0.8);
     auto wire = std::make_unique<TrajectoryWire>();
     ToWire(*traj, wire.get());
     EXPECT_EQ(wire->count, 30);
     EXPECT_EQ(wire->t0, 12.5);
     EXPECT_EQ(wire->dt, 0.2);
+    EXPECT_EQ(wire->yaw_rate0, -0.8);
     const auto back = FromWire(*wire, options);
     ASSERT_NE(back, nullptr);
     EXPECT_EQ(back->spline().control_points(), traj->spline().control_points()) << "control points are exact";

@@ -1,5 +1,6 @@
 #include "navstack/planning/trajectory.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -55,6 +56,33 @@ TEST(TrajectoryTest, YawTakesTheShortWayRoundThroughPi) {
   EXPECT_GT(std::abs(yaw), 3.0) << yaw;
   EXPECT_LE(yaw, kPi);
   EXPECT_GT(yaw, -kPi);
+}
+
+TEST(TrajectoryTest, AHeadingReversalIsAccelerationLimitedFromTheStartRate) {
+  // Flying +y while the previous reference turned the other way at the full 2 rad/s: the
+  // heading brakes that turn and swings round to +y, its rate changing by at most
+  // yaw_accel_max per second (a reversal in one step is what the vehicle could not follow),
+  // and arrives without overshooting.
+  const PlannerOptions options;
+  const Trajectory traj(BsplineFromPath(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), {{0, 0, 1}, {0, 8, 1}},
+                                        2.0, 3.0, 0.4),
+                        0.0, 0.0, options, -2.0);
+  EXPECT_DOUBLE_EQ(traj.start_yaw_rate(), -2.0);
+  const double step = 0.01;
+  double previous_rate = -2.0, least_yaw = 0.0;
+  for (double t = step; t < traj.duration(); t += step) {
+    const TrajectorySample s = traj.Sample(t);
+    EXPECT_LE(std::abs(s.yaw_rate - previous_rate), options.yaw_accel_max * 0.03 + 1e-9) << "t = " << t;
+    EXPECT_LE(std::abs(s.yaw_rate), options.yaw_rate_max + 1e-9) << "t = " << t;
+    EXPECT_LE(s.yaw, kPi / 2 + 1e-9) << "t = " << t;
+    least_yaw = std::min(least_yaw, s.yaw);
+    previous_rate = s.yaw_rate;
+  }
+  // Braking from -2 rad/s at 3 rad/s^2 carries it 2^2 / (2 x 3) = 0.67 rad the old way first.
+  EXPECT_NEAR(least_yaw, -4.0 / (2.0 * options.yaw_accel_max), 0.05);
+  EXPECT_NEAR(traj.Sample(0.5 * traj.duration()).yaw, kPi / 2, 1e-6);
+  // The start rate is kept within the rate limit.
+  EXPECT_DOUBLE_EQ(Trajectory(traj.spline(), 0.0, 0.0, options, 50.0).start_yaw_rate(), options.yaw_rate_max);
 }
 
 }  // namespace
