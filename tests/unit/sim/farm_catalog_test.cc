@@ -42,6 +42,20 @@ TEST(FarmCatalogTest, AJobOfEveryRegisteredBoardScenarioAndMethodIsAcceptedOnEve
   }
 }
 
+// The heading's limits are tunables of every method (an ablation: planner.yaw_accel_max=1000 is
+// about Ego-Planner's traj_server, which has no acceleration limit).
+TEST(FarmCatalogTest, TheHeadingLimitsAreTunablesThatReachThePlanner) {
+  for (const std::string& method : {"baseline", "fixed", "enavi"}) {
+    api::EpisodeSpec spec;
+    spec.method = method;
+    EXPECT_EQ(MakeEpisodeConfig(spec).nav.planner.yaw_accel_max, 3.0) << method;
+    spec.overrides = {{"planner.yaw_rate_max", 3.14}, {"planner.yaw_accel_max", 1000.0}};
+    const EpisodeConfig c = MakeEpisodeConfig(spec);
+    EXPECT_EQ(c.nav.planner.yaw_rate_max, 3.14) << method;
+    EXPECT_EQ(c.nav.planner.yaw_accel_max, 1000.0) << method;
+  }
+}
+
 TEST(FarmCatalogTest, UnknownNamesAreRefusedWithTheRegisteredOnes) {
   const api::Catalog c = FarmCatalog();
   auto error = [](const std::string& yaml) {
