@@ -58,8 +58,8 @@ Trajectory::Trajectory(UniformBspline spline, double t0, double yaw0, const Plan
     // than the rate w from which the turn, braking a step later, still stops there
     // (w dt + w^2 / 2a = error).
     const double error = WrapAngle(desired - yaw_[k - 1]);
-    const double a_dt = max_rate_change;
-    const double braking = -a_dt + std::sqrt(a_dt * a_dt + 2.0 * options.yaw_accel_max * std::abs(error));
+    const double braking = -max_rate_change + std::sqrt(max_rate_change * max_rate_change +
+                                                         2.0 * options.yaw_accel_max * std::abs(error));
     const double target =
         std::copysign(std::min({std::abs(error) / yaw_step_, options.yaw_rate_max, braking}), error);
     rate += std::clamp(target - rate, -max_rate_change, max_rate_change);
