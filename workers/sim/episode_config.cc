@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "navstack/methods/registry.h"
+#include "navstack/planning/planner_options.h"
 #include "workers/board/board_profile.h"
 #include "workers/sim/episode.h"
 #include "worlds/generators.h"
@@ -35,9 +36,9 @@ const std::vector<Setter>& Setters() {
        [](EpisodeConfig& c, double v) { c.nav.planner.v_max = v; }},
       {{"planner.a_max", 0.5, 20.0, 3.0, false, "maximum acceleration, m/s^2"},
        [](EpisodeConfig& c, double v) { c.nav.planner.a_max = v; }},
-      {{"planner.yaw_rate_max", 0.1, 100.0, 2.0, false, "heading rate limit, rad/s"},
+      {{"planner.yaw_rate_max", 0.1, 100.0, navstack::PlannerOptions{}.yaw_rate_max, false, "heading rate limit, rad/s"},
        [](EpisodeConfig& c, double v) { c.nav.planner.yaw_rate_max = v; }},
-      {{"planner.yaw_accel_max", 0.1, 1000.0, 3.0, false,
+      {{"planner.yaw_accel_max", 0.1, 1000.0, navstack::PlannerOptions{}.yaw_accel_max, false,
         "heading acceleration limit, rad/s^2 (1000: about none, as in Ego-Planner's traj_server)"},
        [](EpisodeConfig& c, double v) { c.nav.planner.yaw_accel_max = v; }},
       {{"planner.robot_radius", 0.1, 2.0, 0.3, false, "obstacle inflation radius, m"},
