@@ -120,24 +120,21 @@ WorkerStatus FromSample(const enavi_farm_WorkerStatus& c) {
 
 // ---- Assignment ----
 
-struct AssignmentSample {
-  enavi_farm_Assignment c{};
-  std::string spec_json;
-};
-
-void ToSample(const Assignment& a, AssignmentSample* out) {
-  out->spec_json = nlohmann::json(a.spec).dump();
-  enavi_farm_Assignment& c = out->c;
-  c.worker_id = Str(a.worker_id);
-  c.episode_id = Str(a.episode_id);
-  c.attempt = a.attempt;
-  c.job_id = Str(a.job_id);
-  c.lease_deadline_ms = a.lease_deadline_ms;
-  c.lease_ms = a.lease_ms;
-  c.spec_json = Str(out->spec_json);
+// The plain and the collection assignment topics carry the same fields; a collection job's adds
+// the policy it must fly.
+template <class C>
+void ToCommonFields(const Assignment& a, const std::string& spec_json, C* c) {
+  c->worker_id = Str(a.worker_id);
+  c->episode_id = Str(a.episode_id);
+  c->attempt = a.attempt;
+  c->job_id = Str(a.job_id);
+  c->lease_deadline_ms = a.lease_deadline_ms;
+  c->lease_ms = a.lease_ms;
+  c->spec_json = Str(spec_json);
 }
 
-Assignment FromSample(const enavi_farm_Assignment& c) {
+template <class C>
+Assignment FromCommonFields(const C& c) {
   Assignment a;
   a.worker_id = Str(c.worker_id);
   a.episode_id = Str(c.episode_id);
@@ -145,9 +142,21 @@ Assignment FromSample(const enavi_farm_Assignment& c) {
   a.job_id = Str(c.job_id);
   a.lease_deadline_ms = c.lease_deadline_ms;
   a.lease_ms = c.lease_ms;
-  a.spec = nlohmann::json::parse(Str(c.spec_json)).get<EpisodeSpec>();
+  a.spec = nlohmann::json::parse(Str(c.spec_json)).template get<EpisodeSpec>();
   return a;
 }
+
+struct AssignmentSample {
+  enavi_farm_Assignment c{};
+  std::string spec_json;
+};
+
+void ToSample(const Assignment& a, AssignmentSample* out) {
+  out->spec_json = nlohmann::json(a.spec).dump();
+  ToCommonFields(a, out->spec_json, &out->c);
+}
+
+Assignment FromSample(const enavi_farm_Assignment& c) { return FromCommonFields(c); }
 
 struct CollectSample {
   enavi_farm_CollectAssignment c{};
@@ -156,26 +165,12 @@ struct CollectSample {
 
 void ToSample(const Assignment& a, CollectSample* out) {
   out->spec_json = nlohmann::json(a.spec).dump();
-  enavi_farm_CollectAssignment& c = out->c;
-  c.worker_id = Str(a.worker_id);
-  c.episode_id = Str(a.episode_id);
-  c.attempt = a.attempt;
-  c.job_id = Str(a.job_id);
-  c.lease_deadline_ms = a.lease_deadline_ms;
-  c.lease_ms = a.lease_ms;
-  c.spec_json = Str(out->spec_json);
-  c.policy_hash = Str(a.policy_hash);
+  ToCommonFields(a, out->spec_json, &out->c);
+  out->c.policy_hash = Str(a.policy_hash);
 }
 
 Assignment FromSample(const enavi_farm_CollectAssignment& c) {
-  Assignment a;
-  a.worker_id = Str(c.worker_id);
-  a.episode_id = Str(c.episode_id);
-  a.attempt = c.attempt;
-  a.job_id = Str(c.job_id);
-  a.lease_deadline_ms = c.lease_deadline_ms;
-  a.lease_ms = c.lease_ms;
-  a.spec = nlohmann::json::parse(Str(c.spec_json)).get<EpisodeSpec>();
+  Assignment a = FromCommonFields(c);
   a.policy_hash = Str(c.policy_hash);
   if (a.policy_hash.empty()) throw std::invalid_argument("collect assignment: empty policy_hash");
   return a;
