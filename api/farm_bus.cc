@@ -332,8 +332,12 @@ JobEvent FromSample(const enavi_farm_JobEvent& c) {
           Str(c.message), c.time_ms};
 }
 
+}  // namespace
+
 // Entities both sides share. Members are declared in creation order: the participant first,
-// so it is deleted last (and deletes anything left).
+// so it is deleted last (and deletes anything left). Outside the anonymous namespace because
+// ServerBus::Impl and WorkerBus::Impl, which have linkage, hold one.
+namespace bus_detail {
 struct Common {
   Common(const BusOptions& options)
       : participant(dds::Domain::Acquire(options.domain_id, options.config_xml)),
@@ -362,6 +366,9 @@ struct Common {
   dds::GuardCondition guard;
   dds::WaitSet waitset;
 };
+}  // namespace bus_detail
+
+namespace {
 
 // Spool files are JSON: rollout bytes go in as hex (spool files are local and short-lived).
 std::string HexEncode(const std::string& bytes) {
@@ -485,7 +492,7 @@ struct ServerBus::Impl {
     common.waitset.Attach(result_cond.get(), 2);
     common.waitset.Attach(rollout_cond.get(), 3);
   }
-  Common common;
+  bus_detail::Common common;
   dds::Reader<enavi_farm_WorkerStatus> status_reader;
   dds::Reader<enavi_farm_EpisodeResult> result_reader;
   dds::Writer<enavi_farm_Assignment> assignment_writer;
@@ -607,7 +614,7 @@ struct WorkerBus::Impl {
     common.waitset.Attach(policy_cond.get(), 5);
   }
   std::string worker_id;
-  Common common;
+  bus_detail::Common common;
   dds::Reader<enavi_farm_Assignment> assignment_reader;
   dds::Reader<enavi_farm_ResultAck> ack_reader;
   dds::Reader<enavi_farm_JobEvent> event_reader;
