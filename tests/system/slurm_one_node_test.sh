@@ -13,7 +13,8 @@
 # exactly once; (3) the whole Slurm job is cancelled midway with a plain `scancel JOBID`: nothing
 # stored is lost or doubled, and the script submitted again on the same farm directory (no job
 # spec: it serves the database's unfinished jobs), with one worker task of its own and two more
-# from the array form, finishes the job, every result exactly once.
+# from the array form, finishes the job, every result exactly once; the array's workers start
+# first, with the cancelled farm's server.env still in place, and must wait for the new farm.
 set -euo pipefail
 
 enavi=$1 fake_episode=$2 sbatch_script=$3
@@ -245,14 +246,30 @@ IFS='|' read -r stored distinct failed running <<<"$row"
   fail "case 3: after scancel: results|distinct|failed episodes|running jobs = $row"
 [ "$stored" -lt "$total" ] || fail "case 3: the job finished before the scancel; nothing was tested"
 echo "case 3: scancel $id with $stored/$total results stored; submitting the farm again"
-id=$(TASKS=1 submit "$dir/farm3" 2)
+# A farm job killed before its clean-up leaves its server.env behind. Plant one naming the
+# cancelled job (whether this one was left depends on how fast Slurm killed the batch shell) and
+# start the array form first: its workers must wait for the new farm job, not join the dead one.
+{
+  echo "export ENAVI_SERVER_HOST=localhost"
+  echo "export ENAVI_DOMAIN=$((id % 233))"
+  echo "export ENAVI_PARTITION=slurm-$id"
+  echo "export ENAVI_SERVER=http://127.0.0.1:9"
+  echo "export ENAVI_FARM_JOB=$id"
+} >"$dir/farm3/server.env"
 array=$(ENAVI_BIN=$enavi ENAVI_FARM_DIR=$dir/farm3 ENAVI_INTERFACE=127.0.0.1 \
   ENAVI_EPISODE_CMD=$fake_episode FAKE_EPISODE_SLEEP_S=2 ENAVI_DRAIN_TIMEOUT=20 \
   sbatch --parsable --array=1-2 --ntasks=1 --cpus-per-task=1 --time=5 --chdir="$dir" \
-  --dependency="after:$id" --output="$dir/array-%A_%a.out" "$sbatch_script")
+  --output="$dir/array-%A_%a.out" "$sbatch_script")
+deadline=$((SECONDS + 60))
+until [ "$(squeue -h -j "$array" -t RUNNING -o %i | wc -l)" -ge 2 ]; do
+  before "$deadline" || fail "case 3: the array tasks did not start"
+  sleep 0.2
+done
+sleep 2  # both have read the stale file by now
+id=$(TASKS=1 submit "$dir/farm3" 2)
 deadline=$((SECONDS + 120))
 while before "$deadline"; do
-  [ "$(sqlite3 "$dir/farm3/farm.db" "SELECT state FROM jobs" 2>/dev/null)" = done ] && break
+  [ "$(sqlite3 "$dir/farm3/farm.db" "SELECT state FROM jobs" 2>/dev/null)" = "done" ] && break
   sleep 0.1
 done
 scancel --signal=TERM "$array" "$id"
