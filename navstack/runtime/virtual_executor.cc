@@ -51,7 +51,7 @@ void VirtualExecutor::Release(TaskId task, double relative_deadline) {
     ++s.stats.skipped;
     return;
   }
-  s.job = Job{now_, now_ + relative_deadline, 0.0, false, {}};
+  s.job = Job{.release = now_, .deadline = now_ + relative_deadline};
 }
 
 std::vector<TaskId> VirtualExecutor::Running() const {

@@ -47,8 +47,8 @@ class VirtualExecutor final : public TaskExecutor {
     double release = 0, deadline = 0;
     double remaining = 0;  ///< board seconds still to execute
     bool started = false;
-    std::function<void()> commit;
-    WorkCounts work;
+    std::function<void()> commit{};
+    WorkCounts work{};
     double host_cpu_s = 0;  ///< of the job's code at its start
   };
   struct Slot {

@@ -15,12 +15,13 @@
 #include "workers/worker/process.h"
 
 namespace enavi::server {
-namespace {
 
 namespace fs = std::filesystem;
 
 // A private directory for the temporary database, spools and logs; removed on destruction
-// unless asked to keep it.
+// unless asked to keep it. Not in the anonymous namespace: LocalFarm::Impl, which has linkage,
+// holds one.
+namespace local_farm_detail {
 class TempDir {
  public:
   explicit TempDir(const std::string& name) {
@@ -39,6 +40,9 @@ class TempDir {
   fs::path path_;
   bool keep_ = false;
 };
+}  // namespace local_farm_detail
+
+namespace {
 
 std::string LogTail(const fs::path& file) {
   std::ifstream in(file);
@@ -51,7 +55,7 @@ std::string LogTail(const fs::path& file) {
 
 struct LocalFarm::Impl {
   explicit Impl(const LocalFarmOptions& o) : tmp(o.name) {}
-  TempDir tmp;
+  local_farm_detail::TempDir tmp;
   std::unique_ptr<Store> store;
   std::unique_ptr<FarmServer> farm;
   std::unique_ptr<HttpApi> http;

@@ -14,7 +14,7 @@ struct Series {
   std::string name;
   std::vector<double> x;
   std::vector<double> y;     ///< same length as x; non-finite values break the line
-  std::optional<Rgb> color;  ///< default: PaletteColor(index in its chart)
+  std::optional<Rgb> color{};  ///< default: PaletteColor(index in its chart)
   double line_width = 1.6;
   bool step = false;         ///< draw as a staircase (piecewise-constant values such as res)
 };

@@ -79,12 +79,10 @@ void WriteFlightPlots(const api::EpisodeResult& result, const worlds::World& wor
   adapt.AddPanel("eci", "eci").AddSeries("eci", s.t, s.eci).SetYRange(0.0, 1.0);
   Chart& rates = adapt.AddPanel("task frequencies", "Hz");
   for (const auto& [name, values] : {std::pair{"f_per", &s.f_per}, {"f_col", &s.f_col}, {"f_dif", &s.f_dif}}) {
-    Series series{name, s.t, *values};
-    series.step = true;
+    Series series{.name = name, .x = s.t, .y = *values, .step = true};
     rates.AddSeries(series);
   }
-  Series res{"res", s.t, s.res};
-  res.step = true;
+  Series res{.name = "res", .x = s.t, .y = s.res, .step = true};
   adapt.AddPanel("map resolution", "m").AddSeries(res);
   adapt.SavePng((out / "adaptation.png").string());
 }

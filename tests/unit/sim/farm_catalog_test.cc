@@ -45,7 +45,7 @@ TEST(FarmCatalogTest, AJobOfEveryRegisteredBoardScenarioAndMethodIsAcceptedOnEve
 // The heading's limits are tunables of every method (an ablation: planner.yaw_accel_max=1000 is
 // about Ego-Planner's traj_server, which has no acceleration limit).
 TEST(FarmCatalogTest, TheHeadingLimitsAreTunablesThatReachThePlanner) {
-  for (const std::string& method : {"baseline", "fixed", "enavi"}) {
+  for (const char* method : {"baseline", "fixed", "enavi"}) {
     api::EpisodeSpec spec;
     spec.method = method;
     EXPECT_EQ(MakeEpisodeConfig(spec).nav.planner.yaw_accel_max, 3.0) << method;
