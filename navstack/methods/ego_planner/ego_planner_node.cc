@@ -238,7 +238,17 @@ JobOutput EgoPlannerNode::FsmJob() {
       } else {
         next = State::kReplanTraj;
       }
-      if (next != fsm_) out.commit = [this, next] { fsm_ = next; };
+      if (next == State::kWaitTarget) {
+        // ego_replan_fsm.cpp sets have_target_ = false here: the node waits for a new goal, and
+        // the vehicle hovers at the trajectory's end even when that is short of the goal.
+        const double to_goal = (options_.goal - p).norm();
+        out.commit = [this, to_goal] {
+          fsm_ = State::kWaitTarget;
+          AddEvent("wait_target", "trajectory ended " + std::to_string(to_goal) + " m from the goal");
+        };
+      } else if (next != fsm_) {
+        out.commit = [this, next] { fsm_ = next; };
+      }
       return out;
     }
     case State::kEmergencyStop: {

@@ -169,6 +169,20 @@ TEST(EgoPlannerNodeTest, AWallItCannotReplanAroundStopsTheVehicleBeforeIt) {
   EXPECT_LT(no_stop.hold_x, 0.0);
 }
 
+TEST(EgoPlannerNodeTest, ATrajectoryThatRunsOutShortOfTheGoalLeavesTheNodeWaiting) {
+  // With no distance replan (thresh_replan beyond the planning horizon) the first local
+  // trajectory ends at its target, 7.5 m along the 30 m line: EXEC_TRAJ goes to WAIT_TARGET and
+  // the vehicle hovers there, as Ego-Planner's FSM does (have_target_ = false).
+  const Flight f = Fly(PlanCost(0.01), {{"ego.thresh_replan", 20.0}}, 12.0);
+  EXPECT_EQ(Count(f, "replan", "distance"), 0);
+  ASSERT_EQ(Count(f, "wait_target"), 1);
+  EXPECT_NEAR(f.final_x, 7.5, 0.5) << "it stopped at the end of its first local trajectory";
+  // With the default threshold it keeps replanning and never waits short of the goal in 12 s.
+  const Flight replanning = Fly(PlanCost(0.01), {}, 12.0);
+  EXPECT_EQ(Count(replanning, "wait_target"), 0);
+  EXPECT_GT(replanning.final_x, 15.0);
+}
+
 TEST(GlobalPathTargetTest, LiesThePlanningHorizonAheadOnTheStartGoalLine) {
   GlobalPathTarget target(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(30, 0, 1), 7.5);
   // Walked in steps of horizon / 20 = 0.375 m from the progress point.
