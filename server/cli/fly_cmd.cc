@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -23,6 +25,21 @@
 
 namespace enavi::cli {
 namespace {
+
+// Every depth frame's eci with what it was computed from: where a flight's extremes come from
+// (d0, the layers and zones, the camera's pitch), at the sensor's rate.
+std::string EciFramesCsv(const std::vector<sim::EciFrame>& frames) {
+  std::string out =
+      "t,eci,d0,d_ahead,layers,occupied_zones,valid_pixels,velocity_aligned,speed,camera_pitch_deg,in_flight\n";
+  char line[256];
+  for (const sim::EciFrame& f : frames) {
+    std::snprintf(line, sizeof line, "%.3f,%.4f,%.3f,%.3f,%d,%d,%lld,%d,%.3f,%.2f,%d\n", f.t, f.eci.eci, f.eci.d0,
+                  f.eci.d_ahead, f.eci.layers, f.eci.occupied_zones, static_cast<long long>(f.eci.valid_pixels),
+                  f.eci.velocity_aligned ? 1 : 0, f.speed, f.camera_pitch_deg, f.in_flight ? 1 : 0);
+    out += line;
+  }
+  return out;
+}
 
 struct FlyArgs {
   api::EpisodeSpec spec;
@@ -57,6 +74,8 @@ void Run(FlyArgs args) {
       std::fflush(stderr);
     };
   }
+  std::vector<sim::EciFrame> eci_frames;
+  if (!args.out_dir.empty()) options.eci_observer = [&eci_frames](const sim::EciFrame& f) { eci_frames.push_back(f); };
   const auto world = sim::PrepareWorld(worlds::ResolveWorld(sim::WorldRequestOf(spec)));
   const api::EpisodeResult result = sim::RunEpisode(spec, *world, options);
   if (tty) std::fprintf(stderr, "\n");
@@ -68,6 +87,7 @@ void Run(FlyArgs args) {
     full.erase("series");
     api::WriteFileAtomic(dir / "result.json", full.dump(2) + "\n");
     api::WriteFileAtomic(dir / "timeseries.csv", report::TimeSeriesCsv(result.series));
+    api::WriteFileAtomic(dir / "eci_frames.csv", EciFramesCsv(eci_frames));
     report::WriteFlightPlots(result, world->world, dir.string());
   }
   if (args.json) {
@@ -155,7 +175,7 @@ void RegisterFlyCommand(CLI::App& app) {
     list(m.tunables);
   }
   fly->add_option("--set", args->overrides, tunables);
-  fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv and plots here");
+  fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv (10 Hz), eci_frames.csv (every depth frame) and plots here");
   fly->add_flag("--json", args->json, "print one JSON object with the results on stdout");
   fly->callback([args] { Run(*args); });
 }

@@ -37,7 +37,8 @@ TEST(FlyCliTest, OutTwiceGivesByteIdenticalFiles) {
   ASSERT_EQ(r.code, 0) << r.err;
   r = Enavi(dir, args + b);
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* file : {"result.json", "timeseries.csv", "flight_topdown.png", "speed.png", "adaptation.png"}) {
+  for (const char* file :
+       {"result.json", "timeseries.csv", "eci_frames.csv", "flight_topdown.png", "speed.png", "adaptation.png"}) {
     const std::string first = ReadFile(dir.path() / "a" / file);
     ASSERT_FALSE(first.empty()) << file;
     EXPECT_TRUE(first == ReadFile(dir.path() / "b" / file)) << file << " differs between two identical runs";
@@ -99,6 +100,33 @@ TEST(FlyCliTest, OutWritesTheResultTheTimeSeriesAndThreePlotsThatDecode) {
   EXPECT_TRUE(saw_replan) << "the events column records replans";
   const std::vector<std::string> first = Split(lines[1], ',');
   EXPECT_EQ(first[1] + "," + first[2] + "," + first[3], "-3.0000,0.0000,1.5000") << "starts at the world's start";
+
+  // eci_frames.csv: every depth frame (30 Hz) with what its eci came from; the frames marked in
+  // flight are the ones the result's flight range summarises.
+  const std::vector<std::string> frames = Split(ReadFile(out / "eci_frames.csv"), '\n');
+  ASSERT_GE(frames.size(), 3u);
+  EXPECT_EQ(frames[0],
+            "t,eci,d0,d_ahead,layers,occupied_zones,valid_pixels,velocity_aligned,speed,camera_pitch_deg,in_flight");
+  EXPECT_TRUE(frames.back().empty()) << "file ends with a newline";
+  const std::size_t frame_rows = frames.size() - 2;
+  EXPECT_NEAR(static_cast<double>(frame_rows), result.flight_time_s * 30.0, 2.0) << "a row per 30 Hz frame";
+  std::int64_t in_flight = 0;
+  double lo = 1.0, hi = 0.0;
+  for (std::size_t i = 0; i < frame_rows; ++i) {
+    const std::vector<std::string> f = Split(frames[i + 1], ',');
+    ASSERT_EQ(f.size(), 11u) << "row " << i << ": " << frames[i + 1];
+    const double eci = std::stod(f[1]);
+    EXPECT_TRUE(eci >= 0 && eci <= 1) << frames[i + 1];
+    EXPECT_GE(std::stoi(f[4]), 1) << "at least one layer: " << frames[i + 1];
+    if (f[10] == "1") {
+      ++in_flight;
+      lo = std::min(lo, eci);
+      hi = std::max(hi, eci);
+    }
+  }
+  EXPECT_EQ(in_flight, result.eci.flight_frames);
+  EXPECT_NEAR(lo, result.eci.flight_min, 1e-4);
+  EXPECT_NEAR(hi, result.eci.flight_max, 1e-4);
 
   // Plots: PNGs that decode, of a readable size, with something drawn on them.
   for (const char* png : {"flight_topdown.png", "speed.png", "adaptation.png"}) {

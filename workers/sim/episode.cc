@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 #include "navstack/common/cpu_time.h"
@@ -218,7 +219,9 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
       navstack::WorkCounts eci_work;
       const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * state.v_WB;
       const double eci_cpu0 = navstack::ThreadCpuSeconds();
-      eci_latest = navstack::ComputeEci(frame->image, config.nav.camera, v_C, config.nav.eci, &eci_work).eci;
+      const navstack::EciResult eci_frame = navstack::ComputeEci(frame->image, config.nav.camera, v_C, config.nav.eci,
+                                                                 &eci_work);
+      eci_latest = eci_frame.eci;
       const double eci_cpu = navstack::ThreadCpuSeconds() - eci_cpu0;
       if (options.job_observer) options.job_observer(TaskId::kEci, eci_work, eci_cpu);
       eci_cost_sum += nav->OffBoardSeconds(TaskId::kEci, eci_work, eci_cpu);
@@ -230,6 +233,11 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
         ++flight_frames;
         flight_eci_min = std::min(flight_eci_min, eci_latest);
         flight_eci_max = std::max(flight_eci_max, eci_latest);
+      }
+      if (options.eci_observer) {
+        const double up = std::clamp(frame->X_WC.linear().col(2).z(), -1.0, 1.0);  // optical axis, world z
+        options.eci_observer(
+            {t, eci_frame, state.v_WB.norm(), std::asin(up) * 180.0 / std::numbers::pi, took_off});
       }
       nav->OnFrame(std::move(frame));
     }

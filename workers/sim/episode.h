@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "api/episode.h"
+#include "navstack/eci/eci.h"
 #include "navstack/rl/rollout.h"
 #include "navstack/runtime/executor.h"
 #include "workers/emulation/emulation_options.h"
@@ -34,6 +35,15 @@ std::shared_ptr<const PreparedWorld> PrepareWorld(worlds::World world);
 /// placement (unknown unit, up axis, scale out of range).
 worlds::WorldRequest WorldRequestOf(const api::EpisodeSpec& spec);
 
+/// One depth frame's eci as the episode computed it (the metric, on every frame at f_sen).
+struct EciFrame {
+  double t = 0;                 ///< s, sim time of the frame
+  navstack::EciResult eci;
+  double speed = 0;             ///< m/s, vehicle speed
+  double camera_pitch_deg = 0;  ///< optical axis above the horizontal (+: nose up)
+  bool in_flight = false;       ///< counts for eci.flight_min / flight_max (after take-off)
+};
+
 struct EpisodeOptions {
   double physics_dt = 0.001;  ///< 1 kHz
   double control_dt = 0.005;  ///< 200 Hz, on the flight controller (not the board)
@@ -43,6 +53,8 @@ struct EpisodeOptions {
   std::function<void(double t, double distance_to_goal)> progress;
   /// Sees every navstack job (and every eci computation) with its host CPU time: calibration.
   navstack::JobObserver job_observer;
+  /// Sees the eci of every depth frame (`enavi fly --out` writes them to eci_frames.csv).
+  std::function<void(const EciFrame&)> eci_observer;
   /// E-Navi training: when set, the Strategy Controller records its decisions and rewards here.
   navstack::rl::Rollout* rollout = nullptr;
   /// The emulated clock (spec.clock == "emulated"): host calibration file and test knobs.
