@@ -89,6 +89,14 @@ void Run(FlyArgs args) {
     api::WriteFileAtomic(dir / "timeseries.csv", report::TimeSeriesCsv(result.series));
     api::WriteFileAtomic(dir / "eci_frames.csv", EciFramesCsv(eci_frames));
     report::WriteFlightPlots(result, world->world, dir.string());
+    report::EciFrameSeries plot;
+    for (const sim::EciFrame& f : eci_frames) {
+      plot.t.push_back(f.t);
+      plot.eci.push_back(f.eci.eci);
+      plot.d0.push_back(f.eci.d0);
+      plot.camera_pitch_deg.push_back(f.camera_pitch_deg);
+    }
+    report::WriteEciFramesPlot(result, plot, (dir / "eci_frames.png").string());
   }
   if (args.json) {
     std::printf("%s\n", api::ResultSummaryJson(result).dump().c_str());
@@ -175,7 +183,7 @@ void RegisterFlyCommand(CLI::App& app) {
     list(m.tunables);
   }
   fly->add_option("--set", args->overrides, tunables);
-  fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv (10 Hz), eci_frames.csv (every depth frame) and plots here");
+  fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv (10 Hz), eci_frames.csv (every depth frame) and plots (PNG) here");
   fly->add_flag("--json", args->json, "print one JSON object with the results on stdout");
   fly->callback([args] { Run(*args); });
 }

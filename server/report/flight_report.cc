@@ -87,4 +87,13 @@ void WriteFlightPlots(const api::EpisodeResult& result, const worlds::World& wor
   adapt.SavePng((out / "adaptation.png").string());
 }
 
+void WriteEciFramesPlot(const api::EpisodeResult& result, const EciFrameSeries& f, const std::string& path) {
+  ChartStack chart(Caption(result) + ": eci per frame");
+  chart.AddPanel("eci of every depth frame", "eci").AddSeries("eci", f.t, f.eci).SetYRange(0.0, 1.0);
+  chart.AddPanel("d0: nearest return in view (layer width 2 d0)", "m").AddSeries("d0", f.t, f.d0);
+  chart.AddPanel("camera pitch (+: nose up, the ground leaves the view)", "deg")
+      .AddSeries("pitch", f.t, f.camera_pitch_deg);
+  chart.SavePng(path);
+}
+
 }  // namespace enavi::report

@@ -38,14 +38,15 @@ TEST(FlyCliTest, OutTwiceGivesByteIdenticalFiles) {
   r = Enavi(dir, args + b);
   ASSERT_EQ(r.code, 0) << r.err;
   for (const char* file :
-       {"result.json", "timeseries.csv", "eci_frames.csv", "flight_topdown.png", "speed.png", "adaptation.png"}) {
+       {"result.json", "timeseries.csv", "eci_frames.csv", "flight_topdown.png", "speed.png", "adaptation.png",
+        "eci_frames.png"}) {
     const std::string first = ReadFile(dir.path() / "a" / file);
     ASSERT_FALSE(first.empty()) << file;
     EXPECT_TRUE(first == ReadFile(dir.path() / "b" / file)) << file << " differs between two identical runs";
   }
 }
 
-TEST(FlyCliTest, OutWritesTheResultTheTimeSeriesAndThreePlotsThatDecode) {
+TEST(FlyCliTest, OutWritesTheResultTheTimeSeriesAndFourPlotsThatDecode) {
   TempDir dir;
   const auto out = dir.path() / "out";
   const CliRun r = Enavi(dir, "fly --world empty --param length=6 --seed 1 --json --out " + out.string());
@@ -129,7 +130,7 @@ TEST(FlyCliTest, OutWritesTheResultTheTimeSeriesAndThreePlotsThatDecode) {
   EXPECT_NEAR(hi, result.eci.flight_max, 1e-4);
 
   // Plots: PNGs that decode, of a readable size, with something drawn on them.
-  for (const char* png : {"flight_topdown.png", "speed.png", "adaptation.png"}) {
+  for (const char* png : {"flight_topdown.png", "speed.png", "adaptation.png", "eci_frames.png"}) {
     const report::PngImage img = report::ReadPng((out / png).string());
     EXPECT_GE(img.width, 400) << png;
     EXPECT_GE(img.height, 300) << png;
