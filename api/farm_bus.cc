@@ -121,16 +121,26 @@ WorkerStatus FromSample(const enavi_farm_WorkerStatus& c) {
 // ---- Assignment ----
 
 // The plain and the collection assignment topics carry the same fields; a collection job's adds
-// the policy it must fly.
+// the policy it must fly. A sample owns the spec's JSON its spec_json field points into.
 template <class C>
-void ToCommonFields(const Assignment& a, const std::string& spec_json, C* c) {
-  c->worker_id = Str(a.worker_id);
-  c->episode_id = Str(a.episode_id);
-  c->attempt = a.attempt;
-  c->job_id = Str(a.job_id);
-  c->lease_deadline_ms = a.lease_deadline_ms;
-  c->lease_ms = a.lease_ms;
-  c->spec_json = Str(spec_json);
+struct SpecSample {
+  C c{};
+  std::string spec_json;
+};
+using AssignmentSample = SpecSample<enavi_farm_Assignment>;
+using CollectSample = SpecSample<enavi_farm_CollectAssignment>;
+
+template <class C>
+void ToCommonFields(const Assignment& a, SpecSample<C>* out) {
+  out->spec_json = nlohmann::json(a.spec).dump();
+  C& c = out->c;
+  c.worker_id = Str(a.worker_id);
+  c.episode_id = Str(a.episode_id);
+  c.attempt = a.attempt;
+  c.job_id = Str(a.job_id);
+  c.lease_deadline_ms = a.lease_deadline_ms;
+  c.lease_ms = a.lease_ms;
+  c.spec_json = Str(out->spec_json);
 }
 
 template <class C>
@@ -146,26 +156,12 @@ Assignment FromCommonFields(const C& c) {
   return a;
 }
 
-struct AssignmentSample {
-  enavi_farm_Assignment c{};
-  std::string spec_json;
-};
-
-void ToSample(const Assignment& a, AssignmentSample* out) {
-  out->spec_json = nlohmann::json(a.spec).dump();
-  ToCommonFields(a, out->spec_json, &out->c);
-}
+void ToSample(const Assignment& a, AssignmentSample* out) { ToCommonFields(a, out); }
 
 Assignment FromSample(const enavi_farm_Assignment& c) { return FromCommonFields(c); }
 
-struct CollectSample {
-  enavi_farm_CollectAssignment c{};
-  std::string spec_json;
-};
-
 void ToSample(const Assignment& a, CollectSample* out) {
-  out->spec_json = nlohmann::json(a.spec).dump();
-  ToCommonFields(a, out->spec_json, &out->c);
+  ToCommonFields(a, out);
   out->c.policy_hash = Str(a.policy_hash);
 }
 

@@ -183,7 +183,9 @@ void RegisterFlyCommand(CLI::App& app) {
     list(m.tunables);
   }
   fly->add_option("--set", args->overrides, tunables);
-  fly->add_option("--out", args->out_dir, "write result.json, timeseries.csv (10 Hz), eci_frames.csv (every depth frame) and plots (PNG) here");
+  fly->add_option("--out", args->out_dir,
+                  "write result.json, timeseries.csv (10 Hz), eci_frames.csv (every depth frame) and plots "
+                  "(PNG) here");
   fly->add_flag("--json", args->json, "print one JSON object with the results on stdout");
   fly->callback([args] { Run(*args); });
 }

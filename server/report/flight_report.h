@@ -29,8 +29,8 @@ struct EciFrameSeries {
   std::vector<double> t, eci, d0, camera_pitch_deg;
 };
 /// Writes `path` (PNG) for the flight `result`: eci per frame, its nearest return d0 and the
-/// camera's pitch over time, the pictures behind a flight's eci range. Throws std::runtime_error naming the file if it
-/// cannot be written.
+/// camera's pitch over time, the pictures behind a flight's eci range. Throws
+/// std::runtime_error naming the file if it cannot be written.
 void WriteEciFramesPlot(const api::EpisodeResult& result, const EciFrameSeries& frames, const std::string& path);
 
 }  // namespace enavi::report
