@@ -18,6 +18,9 @@
 #include "api/dds_config.h"
 #include "api/farm_bus.h"
 #include "server/scheduler/farm_server.h"
+#include "server/store/jobs.h"
+#include "server/store/leases.h"
+#include "server/store/queries.h"
 #include "server/store/store.h"
 
 namespace enavi {
@@ -83,9 +86,9 @@ void BM_ResultIngestion(benchmark::State& state) {
     // A job whose episodes are all leased to the bench worker (not timed).
     std::vector<api::EpisodeSpec> specs(kResults);
     for (int i = 0; i < kResults; ++i) specs[i].seed = static_cast<std::uint64_t>(i + 1);
-    const std::string job = store.CreateJob("bench", "bench", specs, server::NowMs());
+    const std::string job = store.jobs().CreateJob("bench", "bench", specs, server::NowMs());
     const auto leases =
-        store.LeaseEpisodes("bench-w", kResults, {}, server::NowMs() + 3600'000, server::NowMs());
+        store.leases().LeaseEpisodes("bench-w", kResults, {}, server::NowMs() + 3600'000, server::NowMs());
     std::vector<api::ResultMessage> messages;
     for (const auto& l : leases) {
       api::ResultMessage m;
@@ -127,7 +130,7 @@ void BM_ResultIngestion(benchmark::State& state) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     state.SetIterationTime(elapsed);
     farm.Stop();
-    if (store.Results(job).size() != static_cast<std::size_t>(kResults)) {
+    if (store.queries().Results(job).size() != static_cast<std::size_t>(kResults)) {
       state.SkipWithError("not every result was stored");
     }
   }

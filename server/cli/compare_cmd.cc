@@ -9,6 +9,8 @@
 #include "server/cli/commands.h"
 #include "server/compare/compare.h"
 #include "server/eval/tables.h"
+#include "server/store/jobs.h"
+#include "server/store/queries.h"
 #include "server/store/store.h"
 
 namespace enavi::cli {
@@ -47,7 +49,7 @@ nlohmann::json LoadResults(const std::string& source, const CompareFlags& f, con
   server::StoreOptions options;
   options.read_only = true;
   server::Store store(path, options);
-  const auto jobs = store.ListJobs(0);
+  const auto jobs = store.jobs().ListJobs(0);
   if (job.empty()) {
     if (jobs.size() != 1) {
       std::string ids;
@@ -57,10 +59,10 @@ nlohmann::json LoadResults(const std::string& source, const CompareFlags& f, con
                                   ":JOB (jobs:" + (ids.empty() ? " none" : ids) + ")");
     }
     job = jobs.front().id;
-  } else if (!store.Progress(job, 0)) {
+  } else if (!store.jobs().Progress(job, 0)) {
     throw std::invalid_argument(std::string(which) + ": " + path + " has no job '" + job + "'");
   }
-  return store.Results(job);
+  return store.queries().Results(job);
 }
 
 void RunCompare(const CompareFlags& f) {
@@ -94,7 +96,7 @@ void RunTrend(const TrendFlags& f) {
     server::StoreOptions options;
     options.read_only = true;
     server::Store store(f.db, options);
-    trend = store.Trend(key, value, f.metric, server::Page{0, 1000});
+    trend = store.queries().Trend(key, value, f.metric, server::Page{0, 1000});
     server::AddTrendIntervals(&trend);
   } else {
     trend = api::FarmClient(f.server).Trend(f.label, f.metric);

@@ -88,7 +88,7 @@ struct CompareReport {
   bool no_change() const { return changed_metrics == 0 && unpaired.empty(); }
 };
 
-/// Compares two lists of result objects (Store::Results / GET /api/jobs/{id}/results).
+/// Compares two lists of result objects (ResultQueries::Results / GET /api/jobs/{id}/results).
 /// @throws std::invalid_argument for an unknown mode or a record without board/method/seed.
 CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidate,
                       const CompareOptions& options, const std::string& base_name = "base",
@@ -104,7 +104,7 @@ std::string CompareJunit(const CompareReport& report);
 /// The two-sided 95 % quantile of Student's t with `df` degrees of freedom.
 double StudentT975(int df);
 
-/// Adds "ci95" to every point of a trend (Store::Trend): the half-width of the 95 % interval of
+/// Adds "ci95" to every point of a trend (ResultQueries::Trend): the half-width of the 95 % interval of
 /// its mean over the seeds' draw, t(df) x seed_std / sqrt(n); null where seed_std is.
 void AddTrendIntervals(nlohmann::json* trend);
 

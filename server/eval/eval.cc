@@ -12,6 +12,8 @@
 #include "server/http/http_api.h"
 #include "server/eval/tables.h"
 #include "server/scheduler/farm_server.h"
+#include "server/store/jobs.h"
+#include "server/store/queries.h"
 #include "server/store/store.h"
 
 namespace enavi::server {
@@ -95,7 +97,7 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   report.job_id = farm.Submit(job, yaml);
   auto last_print = std::chrono::steady_clock::time_point{};
   while (true) {
-    report.progress = *store.Progress(report.job_id, NowMs());
+    report.progress = *store.jobs().Progress(report.job_id, NowMs());
     const auto now = std::chrono::steady_clock::now();
     // A bar redrawn in place on a terminal; piped, only the final line (README.md, "What it does").
     if (report.progress.terminal() ||
@@ -114,7 +116,7 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   }
   if (options.progress_bar) progress_out << "\n";
 
-  report.results = store.Results(report.job_id);
+  report.results = store.queries().Results(report.job_id);
   // The dashboard serves the finished job (workers idle) until the caller lets go.
   if (http && options.while_serving) options.while_serving(report);
   if (http) http->Stop();

@@ -10,7 +10,7 @@
 
 namespace enavi::server {
 
-/// One row per result object (as returned by Store::Results / GET .../results).
+/// One row per result object (as returned by ResultQueries::Results / GET .../results).
 std::string ResultsTable(const nlohmann::json& results);
 /// Every scalar field, nested objects flattened with dots (task_cpu_util_pct.perception).
 std::string ResultsCsv(const nlohmann::json& results);
@@ -39,7 +39,7 @@ std::string EciRangeTable(const nlohmann::json& results);
 
 /// `enavi trend`: one row per job and method (oldest job first), a column per board with the
 /// metric's mean and its 95 % interval ("24.86 ± 3.16"; no interval with one seed), from a trend
-/// with intervals (Store::Trend, AddTrendIntervals). `method` empty: every method.
+/// with intervals (ResultQueries::Trend, AddTrendIntervals). `method` empty: every method.
 std::string TrendTable(const nlohmann::json& trend, const std::string& method);
 
 /// "[########------] 12/40 done  1 failed  3.2 ep/s  ETA 9s" (bar when `bar`, else plain).

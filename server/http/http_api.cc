@@ -20,6 +20,10 @@
 #include "server/scheduler/collection.h"
 #include "api/provenance.h"
 #include "server/compare/compare.h"
+#include "server/store/collect_store.h"
+#include "server/store/jobs.h"
+#include "server/store/queries.h"
+#include "server/store/worker_store.h"
 
 namespace enavi::server {
 namespace {
@@ -386,7 +390,7 @@ void HttpApi::Routes() {
                               std::to_string(options_.max_job_episodes) + " per job");
       }
       const std::string id = farm_->Submit(job, req.body);
-      const auto progress = store.Progress(id, NowMs());
+      const auto progress = store.jobs().Progress(id, NowMs());
       return Reply(res, 201, {{"job_id", id}, {"name", job.name}, {"episodes", progress ? progress->total : 0}});
     }
     // A policy for collection jobs, by content hash: {"hash": "sha256:HEX"}.
@@ -398,7 +402,7 @@ void HttpApi::Routes() {
     std::smatch m;
     if (std::regex_match(req.path, m, kCancel)) {
       if (!farm_->Cancel(m[1])) return Error(res, 404, "no job '" + std::string(m[1]) + "'");
-      return Reply(res, 200, *farm_->store().Progress(m[1], NowMs()));
+      return Reply(res, 200, *farm_->store().jobs().Progress(m[1], NowMs()));
     }
     Error(res, 404, "no route POST " + req.path);
   });
@@ -406,14 +410,14 @@ void HttpApi::Routes() {
   // A collection job's rollouts, exactly one per done episode (api/rollout_records.h stream).
   s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/rollouts)", [&store](const httplib::Request& req,
                                                            httplib::Response& res) {
-    if (!store.Progress(req.matches[1], NowMs())) {
+    if (!store.jobs().Progress(req.matches[1], NowMs())) {
       return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
     }
-    if (!store.Collection(req.matches[1])) {
+    if (!store.collect().Collection(req.matches[1])) {
       return Error(res, 400, "job '" + std::string(req.matches[1]) + "' is not a collection job (collect: rollouts)");
     }
     res.status = 200;
-    res.set_content(api::EncodeRolloutStream(store.Rollouts(req.matches[1])), "application/octet-stream");
+    res.set_content(api::EncodeRolloutStream(store.collect().Rollouts(req.matches[1])), "application/octet-stream");
   });
 
   s.Get("/api/jobs", [&store](const httplib::Request& req, httplib::Response& res) {
@@ -423,51 +427,51 @@ void HttpApi::Routes() {
       if (labels.count(k) && labels[k] != v) return Reply(res, 200, nlohmann::json::array());
       labels[k] = v;
     }
-    Reply(res, 200, store.ListJobs(NowMs(), labels));
+    Reply(res, 200, store.jobs().ListJobs(NowMs(), labels));
   });
 
   s.Get(R"(/api/jobs/([A-Za-z0-9_-]+))", [&store](const httplib::Request& req,
                                                   httplib::Response& res) {
-    const auto p = store.Progress(req.matches[1], NowMs());
+    const auto p = store.jobs().Progress(req.matches[1], NowMs());
     if (!p) return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
     Reply(res, 200, *p);
   });
 
   s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/results)", [&store](const httplib::Request& req,
                                                           httplib::Response& res) {
-    if (!store.Progress(req.matches[1], NowMs())) {
+    if (!store.jobs().Progress(req.matches[1], NowMs())) {
       return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
     }
     // Paged when asked (the dashboard); the whole list otherwise (scripts, `enavi results`).
     if (req.has_param("offset") || req.has_param("limit")) {
-      return Reply(res, 200, store.ResultsPage(req.matches[1], PageOf(req)));
+      return Reply(res, 200, store.queries().ResultsPage(req.matches[1], PageOf(req)));
     }
-    Reply(res, 200, store.Results(req.matches[1]));
+    Reply(res, 200, store.queries().Results(req.matches[1]));
   });
 
   s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/summary)", [&store](const httplib::Request& req,
                                                           httplib::Response& res) {
-    if (!store.Progress(req.matches[1], NowMs())) {
+    if (!store.jobs().Progress(req.matches[1], NowMs())) {
       return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
     }
-    Reply(res, 200, store.JobSummary(req.matches[1], PageOf(req)));
+    Reply(res, 200, store.queries().JobSummary(req.matches[1], PageOf(req)));
   });
 
   s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/failures)", [&store](const httplib::Request& req,
                                                            httplib::Response& res) {
-    if (!store.Progress(req.matches[1], NowMs())) {
+    if (!store.jobs().Progress(req.matches[1], NowMs())) {
       return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
     }
-    Reply(res, 200, store.JobFailures(req.matches[1], PageOf(req)));
+    Reply(res, 200, store.queries().JobFailures(req.matches[1], PageOf(req)));
   });
 
   s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/episodes)", [&store](const httplib::Request& req,
                                                            httplib::Response& res) {
-    if (!store.Progress(req.matches[1], NowMs())) {
+    if (!store.jobs().Progress(req.matches[1], NowMs())) {
       return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
     }
     nlohmann::json list = nlohmann::json::array();
-    for (const auto& e : store.Episodes(req.matches[1])) {
+    for (const auto& e : store.jobs().Episodes(req.matches[1])) {
       list.push_back({{"id", e.id}, {"index", e.index}, {"state", e.state},
                       {"attempts", e.attempts}, {"lease_owner", e.lease_owner},
                       {"last_error", e.last_error}, {"board", e.spec.board},
@@ -478,14 +482,14 @@ void HttpApi::Routes() {
 
   s.Get(R"(/api/episodes/([A-Za-z0-9_-]+)/result)", [&store](const httplib::Request& req,
                                                              httplib::Response& res) {
-    const auto r = store.FullResult(req.matches[1]);
+    const auto r = store.queries().FullResult(req.matches[1]);
     if (!r) return Error(res, 404, "no result for episode '" + std::string(req.matches[1]) + "'");
     Reply(res, 200, *r);
   });
 
   s.Get(R"(/api/episodes/([A-Za-z0-9_-]+)/topdown.png)", [&store](const httplib::Request& req,
                                                                   httplib::Response& res) {
-    const auto r = store.FullResult(req.matches[1]);
+    const auto r = store.queries().FullResult(req.matches[1]);
     if (!r) return Error(res, 404, "no result for episode '" + std::string(req.matches[1]) + "'");
     const int width = req.has_param("width") ? ParseInt(req.get_param_value("width"), "width", 300, 2000) : 900;
     worlds::WorldRequest w;
@@ -502,11 +506,11 @@ void HttpApi::Routes() {
     const std::string base = req.get_param_value("base"), candidate = req.get_param_value("candidate");
     for (const auto& [name, id] : {std::pair{"base", base}, {"candidate", candidate}}) {
       if (id.empty()) return Error(res, 400, std::string(name) + ": missing (a job id)");
-      if (!store.Progress(id, NowMs())) return Error(res, 404, std::string(name) + ": no job '" + id + "'");
+      if (!store.jobs().Progress(id, NowMs())) return Error(res, 404, std::string(name) + ": no job '" + id + "'");
     }
     CompareOptions options;
     if (req.has_param("mode")) options.mode = req.get_param_value("mode");
-    Reply(res, 200, CompareJson(Compare(store.Results(base), store.Results(candidate), options, base, candidate)));
+    Reply(res, 200, CompareJson(Compare(store.queries().Results(base), store.queries().Results(candidate), options, base, candidate)));
   });
 
   s.Get("/api/trend", [&store](const httplib::Request& req, httplib::Response& res) {
@@ -514,7 +518,7 @@ void HttpApi::Routes() {
     if (labels.size() != 1) return Error(res, 400, "label: give exactly one key=value");
     const auto [key, value] = api::ParseLabelFilter(labels.front(), "label");
     const std::string metric = req.has_param("metric") ? req.get_param_value("metric") : "flight_time_s";
-    nlohmann::json trend = store.Trend(key, value, metric, PageOf(req));
+    nlohmann::json trend = store.queries().Trend(key, value, metric, PageOf(req));
     AddTrendIntervals(&trend);
     Reply(res, 200, trend);
   });
@@ -525,7 +529,7 @@ void HttpApi::Routes() {
       for (const auto& w : farm_->Workers()) list.push_back(WorkerJson(w));
     } else {
       // A finished database: the workers it saw, none of them known to be alive.
-      for (auto w : store.KnownWorkers()) {
+      for (auto w : store.workers().KnownWorkers()) {
         w["alive"] = false;
         list.push_back(std::move(w));
       }

@@ -8,6 +8,7 @@
 #include "api/content_hash.h"
 #include "navstack/rl/policy_io.h"
 #include "server/scheduler/farm_server.h"
+#include "server/store/collect_store.h"
 
 namespace enavi::server {
 
@@ -15,7 +16,7 @@ std::string StorePolicy(Store* store, const std::string& text, const std::string
   const std::string canonical =
       navstack::rl::CanonicalPolicyText(navstack::rl::FrequencyPolicyFromText(text, source));
   const std::string hash = api::Sha256Hex(canonical);
-  store->PutPolicy(hash, canonical, NowMs());
+  store->collect().PutPolicy(hash, canonical, NowMs());
   return hash;
 }
 
@@ -42,7 +43,7 @@ std::optional<CollectionInfo> PrepareCollection(Store* store, const api::JobSpec
   std::string hash;
   if (api::IsPolicyHashRef(job.policy)) {
     hash = job.policy.substr(prefix.size());
-    if (!store->Policy(hash)) {
+    if (!store->collect().Policy(hash)) {
       throw std::invalid_argument("policy: " + job.policy + ": not on this server (POST /api/policies first)");
     }
   } else {

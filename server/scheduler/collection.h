@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "api/job_spec.h"
+#include "server/store/jobs.h"
 #include "server/store/store.h"
 
 namespace enavi::server {

@@ -7,6 +7,9 @@
 #include "api/provenance.h"
 #include "navstack/rl/rollout.h"
 #include "server/scheduler/collection.h"
+#include "server/store/collect_store.h"
+#include "server/store/ingest.h"
+#include "server/store/worker_store.h"
 
 namespace enavi::server {
 
@@ -26,14 +29,14 @@ FarmServer::~FarmServer() { Stop(); }
 void FarmServer::Start() {
   // Leases that ran out while no server was watching go back to pending now; leases still
   // running are kept for their workers' heartbeats to renew.
-  HandleReleased(store_->ExpireLeases(NowMs()), NowMs());
+  HandleReleased(store_->leases().ExpireLeases(NowMs()), NowMs());
   // Workers need the policies of every running collection job.
-  for (const auto& [hash, json] : store_->ActivePolicies()) bus_->Publish(api::PolicyBlob{hash, json});
+  for (const auto& [hash, json] : store_->collect().ActivePolicies()) bus_->Publish(api::PolicyBlob{hash, json});
   // An assignment lives in the DDS writer of the server that made it: one its worker had not yet
   // received when that server died was lost, and the worker would neither run nor renew it (the
   // lease ran out, an attempt spent, its slot idle meanwhile). Re-send every lease still held; a
   // worker ignores the replay of one it already runs or has finished.
-  for (const Lease& l : store_->HeldLeases()) {
+  for (const Lease& l : store_->leases().HeldLeases()) {
     bus_->Publish(api::Assignment{l.worker, l.episode_id, l.attempt, l.job_id, l.deadline_ms,
                                   options_.lease.count(), l.spec, CollectionHash(l.job_id)});
   }
@@ -70,7 +73,7 @@ std::string FarmServer::Submit(const std::string& name, const std::string& spec_
                                const std::optional<CollectionInfo>& collect) {
   const std::int64_t now = NowMs();
   if (collect) PublishPolicy(collect->policy_hash);
-  std::string job_id = store_->CreateJob(name, spec_yaml, episodes, now, meta, collect);
+  std::string job_id = store_->jobs().CreateJob(name, spec_yaml, episodes, now, meta, collect);
   spdlog::info("job {} '{}': {} episodes", job_id, name, episodes.size());
   PublishEvents({{job_id, "submitted", "", name}}, now);
   bus_->Wake();
@@ -79,7 +82,7 @@ std::string FarmServer::Submit(const std::string& name, const std::string& spec_
 
 bool FarmServer::Cancel(const std::string& job_id) {
   const std::int64_t now = NowMs();
-  auto revoked = store_->CancelJob(job_id, now);
+  auto revoked = store_->jobs().CancelJob(job_id, now);
   if (!revoked) return false;
   for (const auto& r : *revoked) RetireAssignment(r.worker, r.episode_id, r.attempt);
   spdlog::info("job {} cancelled ({} running episodes revoked)", job_id, revoked->size());
@@ -90,7 +93,7 @@ bool FarmServer::Cancel(const std::string& job_id) {
 }
 
 std::vector<WorkerView> FarmServer::Workers() const {
-  const auto leased = store_->LeasedCounts();
+  const auto leased = store_->leases().LeasedCounts();
   std::lock_guard lock(mutex_);
   std::vector<WorkerView> out;
   const auto now = std::chrono::steady_clock::now();
@@ -144,7 +147,7 @@ void FarmServer::Step() {
       }
     }
     for (const auto& id : silent) HandleGone(id, "worker gone (no heartbeat)", now);
-    HandleReleased(store_->ExpireLeases(now), now);
+    HandleReleased(store_->leases().ExpireLeases(now), now);
   }
   Assign(now);
 }
@@ -178,11 +181,11 @@ void FarmServer::HandleStatuses(const std::vector<api::WorkerStatus>& statuses,
       }
     }
     if (is_new) {
-      store_->RecordWorker(s, now_ms);
+      store_->workers().RecordWorker(s, now_ms);
       spdlog::info("worker {} on {} (pid {}): {} slots", s.worker_id, s.host, s.pid, s.slots);
     }
   }
-  store_->RenewLeases(renew, now_ms + options_.lease.count());
+  store_->leases().RenewLeases(renew, now_ms + options_.lease.count());
 }
 
 void FarmServer::HandleGone(const std::string& worker_id, const std::string& reason,
@@ -193,7 +196,7 @@ void FarmServer::HandleGone(const std::string& worker_id, const std::string& rea
     if (it == workers_.end() || !it->second.alive) return;
     it->second.alive = false;
   }
-  const auto released = store_->ReleaseWorker(worker_id, reason, now_ms);
+  const auto released = store_->leases().ReleaseWorker(worker_id, reason, now_ms);
   if (released.empty()) {
     spdlog::info("worker {}: {}", worker_id, reason);
   } else {
@@ -216,7 +219,7 @@ void FarmServer::HandleReleased(const std::vector<ReleasedLease>& released, std:
 }
 
 void FarmServer::PublishPolicy(const std::string& hash) {
-  const auto json = store_->Policy(hash);
+  const auto json = store_->collect().Policy(hash);
   if (!json) throw std::invalid_argument("policy sha256:" + hash + ": not stored on this server");
   bus_->Publish(api::PolicyBlob{hash, *json});
 }
@@ -225,7 +228,7 @@ void FarmServer::PublishPolicy(const std::string& hash) {
 // so late-joining workers are not sent every policy a long training ever used.
 void FarmServer::RetirePolicyOf(const std::string& job_id) {
   const std::string hash = CollectionHash(job_id);
-  if (hash.empty() || store_->ActivePolicies().count(hash)) return;
+  if (hash.empty() || store_->collect().ActivePolicies().count(hash)) return;
   try {
     bus_->Retire(api::PolicyBlob{hash, ""});
   } catch (const std::exception&) {
@@ -238,7 +241,7 @@ std::string FarmServer::CollectionHash(const std::string& job_id) {
     std::lock_guard lock(mutex_);
     if (auto it = collect_hash_.find(job_id); it != collect_hash_.end()) return it->second;
   }
-  const auto c = store_->Collection(job_id);
+  const auto c = store_->collect().Collection(job_id);
   std::lock_guard lock(mutex_);
   return collect_hash_[job_id] = c ? c->policy_hash : std::string();
 }
@@ -291,7 +294,7 @@ void FarmServer::HandleResults(const std::vector<api::ResultMessage>& input,
   }
   // One transaction for the whole batch, then the acks: a result is acknowledged only once it
   // is durable.
-  const std::vector<IngestOutcome> outcomes = store_->Ingest(results, now_ms);
+  const std::vector<IngestOutcome> outcomes = store_->ingest().Ingest(results, now_ms);
   {
     // Counted before the acks go out, so whoever sees an ack also sees it counted.
     std::lock_guard lock(mutex_);
@@ -332,7 +335,7 @@ void FarmServer::Assign(std::int64_t now_ms) {
     }
   }
   if (candidates.empty()) return;
-  const auto leased = store_->LeasedCounts();
+  const auto leased = store_->leases().LeasedCounts();
   // Least-loaded workers first, so a job spreads over the farm.
   std::sort(candidates.begin(), candidates.end(), [&](const auto& a, const auto& b) {
     auto load = [&](const std::string& id) {
@@ -350,7 +353,7 @@ void FarmServer::Assign(std::int64_t now_ms) {
         std::min(status.slots - (it == leased.end() ? 0 : it->second), status.free_slots);
     if (free <= 0) continue;
     const auto leases =
-        store_->LeaseEpisodes(id, free, {status.boards, status.clocks}, deadline, now_ms);
+        store_->leases().LeaseEpisodes(id, free, {status.boards, status.clocks}, deadline, now_ms);
     for (const Lease& l : leases) {
       bus_->Publish(api::Assignment{id, l.episode_id, l.attempt, l.job_id, l.deadline_ms,
                                     options_.lease.count(), l.spec, CollectionHash(l.job_id)});
@@ -367,7 +370,7 @@ void FarmServer::PublishEvents(const std::vector<PendingEvent>& events, std::int
   std::map<std::string, api::JobProgress> progress;
   for (const auto& pe : events) {
     if (!progress.count(pe.job_id)) {
-      progress[pe.job_id] = store_->Progress(pe.job_id, now_ms).value_or(api::JobProgress{});
+      progress[pe.job_id] = store_->jobs().Progress(pe.job_id, now_ms).value_or(api::JobProgress{});
     }
   }
   for (const auto& pe : events) {

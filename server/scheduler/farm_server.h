@@ -17,6 +17,8 @@
 
 #include "api/farm_bus.h"
 #include "api/job_spec.h"
+#include "server/store/jobs.h"
+#include "server/store/leases.h"
 #include "server/store/store.h"
 
 namespace enavi::server {
@@ -70,7 +72,7 @@ class FarmServer {
   void Stop();
 
   /// Stores a job and starts scheduling it; returns the job id.
-  /// A collection job's policy must be in the store (Store::PutPolicy) first.
+  /// A collection job's policy must be in the store (CollectStore::PutPolicy) first.
   std::string Submit(const std::string& name, const std::string& spec_yaml,
                      const std::vector<api::EpisodeSpec>& episodes, const JobMeta& meta = {},
                      const std::optional<CollectionInfo>& collect = std::nullopt);

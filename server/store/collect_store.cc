@@ -1,18 +1,18 @@
-// Store: the collection-job tables (policies, collect_jobs, rollouts); schema in store.cc.
-#include "server/store/sqlite.h"
-#include "server/store/store.h"
+// The collection-job tables (collect_store.h); their schema is in schema.cc.
+#include "server/store/collect_store.h"
+#include "server/store/connection.h"
 
 namespace enavi::server {
 
-void Store::PutPolicy(const std::string& hash, const std::string& json, std::int64_t now_ms) {
-  std::lock_guard lock(mutex_);
-  db_->Prepare("INSERT OR IGNORE INTO policies (hash, json, created_ms) VALUES (?, ?, ?)")
+void CollectStore::PutPolicy(const std::string& hash, const std::string& json, std::int64_t now_ms) {
+  std::lock_guard lock(c_.mutex);
+  c_.db.Prepare("INSERT OR IGNORE INTO policies (hash, json, created_ms) VALUES (?, ?, ?)")
       .Bind(1, hash).Bind(2, json).Bind(3, now_ms).Run();
 }
 
-std::optional<std::string> Store::Policy(const std::string& hash) {
-  std::lock_guard lock(mutex_);
-  Statement& q = db_->Prepare("SELECT json FROM policies WHERE hash = ?");
+std::optional<std::string> CollectStore::Policy(const std::string& hash) {
+  std::lock_guard lock(c_.mutex);
+  Statement& q = c_.db.Prepare("SELECT json FROM policies WHERE hash = ?");
   q.Bind(1, hash);
   std::optional<std::string> out;
   if (q.Step()) out = q.Text(0);
@@ -20,9 +20,9 @@ std::optional<std::string> Store::Policy(const std::string& hash) {
   return out;
 }
 
-std::optional<CollectionInfo> Store::Collection(const std::string& job_id) {
-  std::lock_guard lock(mutex_);
-  Statement& q = db_->Prepare("SELECT policy_hash, sample FROM collect_jobs WHERE job_id = ?");
+std::optional<CollectionInfo> CollectStore::Collection(const std::string& job_id) {
+  std::lock_guard lock(c_.mutex);
+  Statement& q = c_.db.Prepare("SELECT policy_hash, sample FROM collect_jobs WHERE job_id = ?");
   q.Bind(1, job_id);
   std::optional<CollectionInfo> out;
   if (q.Step()) out = CollectionInfo{q.Text(0), q.Int(1) != 0};
@@ -30,9 +30,9 @@ std::optional<CollectionInfo> Store::Collection(const std::string& job_id) {
   return out;
 }
 
-std::map<std::string, std::string> Store::ActivePolicies() {
-  std::lock_guard lock(mutex_);
-  Statement& q = db_->Prepare(
+std::map<std::string, std::string> CollectStore::ActivePolicies() {
+  std::lock_guard lock(c_.mutex);
+  Statement& q = c_.db.Prepare(
       "SELECT DISTINCT p.hash, p.json FROM collect_jobs c JOIN jobs j ON j.id = c.job_id "
       "JOIN policies p ON p.hash = c.policy_hash WHERE j.state = 'running'");
   std::map<std::string, std::string> out;
@@ -41,9 +41,9 @@ std::map<std::string, std::string> Store::ActivePolicies() {
   return out;
 }
 
-std::vector<api::StoredRollout> Store::Rollouts(const std::string& job_id) {
-  std::lock_guard lock(mutex_);
-  Statement& q = db_->Prepare(
+std::vector<api::StoredRollout> CollectStore::Rollouts(const std::string& job_id) {
+  std::lock_guard lock(c_.mutex);
+  Statement& q = c_.db.Prepare(
       "SELECT r.episode_id, e.idx, r.attempt, s.worker, s.board, s.scenario, s.world, s.seed, "
       "r.policy_hash, s.success, s.collided, s.flight_time_s, s.nav_cpu_util_pct, r.data "
       "FROM rollouts r JOIN episodes e ON e.id = r.episode_id "

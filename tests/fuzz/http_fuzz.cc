@@ -16,6 +16,9 @@
 
 #include "api/dds_config.h"
 #include "server/http/http_api.h"
+#include "server/store/ingest.h"
+#include "server/store/jobs.h"
+#include "server/store/leases.h"
 #include "tests/fuzz/fuzz_check.h"
 
 namespace {
@@ -55,8 +58,8 @@ Farm& TheFarm() {
     api::EpisodeSpec spec;
     spec.board = "tx2";
     spec.method = "enavi";
-    f.job_id = f.store->CreateJob("seed", "boards: [tx2]", {spec}, 1000);
-    const auto lease = f.store->LeaseEpisodes("w1", 1, {}, 20'000, 1000).at(0);
+    f.job_id = f.store->jobs().CreateJob("seed", "boards: [tx2]", {spec}, 1000);
+    const auto lease = f.store->leases().LeaseEpisodes("w1", 1, {}, 20'000, 1000).at(0);
     f.episode_id = lease.episode_id;
     api::ResultMessage m;
     m.episode_id = lease.episode_id;
@@ -68,7 +71,7 @@ Farm& TheFarm() {
     m.result.flight_time_s = 10;
     m.result.series.t = {0, 0.1};
     m.result.series.position = {{0, 0, 1}, {0.1, 0, 1}};
-    f.store->Ingest({m}, 2000);
+    f.store->ingest().Ingest({m}, 2000);
     return f;
   }();
   return f;

@@ -1,5 +1,5 @@
 // A rogue worker's result sample on its way into the store: api::ResultFromSample (the decoder
-// of what Cyclone DDS delivers), then server::Store::Ingest with its validation, against a fresh
+// of what Cyclone DDS delivers), then server::ResultIngest::Ingest with its validation, against a fresh
 // job whose one episode is leased to worker w1. The input drives every field of the sample:
 // another episode's id or attempt, a huge time series, NaN and infinite metrics, malformed
 // result JSON. A sample is refused or handled; a stored result is always the leased episode's,
@@ -23,6 +23,10 @@
 
 #include "api/farm_samples.h"
 #include "api/result_metrics.h"
+#include "server/store/ingest.h"
+#include "server/store/jobs.h"
+#include "server/store/leases.h"
+#include "server/store/queries.h"
 #include "server/store/store.h"
 #include "tests/fuzz/fuzz_check.h"
 
@@ -95,8 +99,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   api::EpisodeSpec spec;
   spec.board = "tx2";
   spec.method = "enavi";
-  const std::string job = store.CreateJob("fuzz", "fuzz", {spec}, kNow);
-  const auto leases = store.LeaseEpisodes("w1", 1, {}, kNow + 15'000, kNow);
+  const std::string job = store.jobs().CreateJob("fuzz", "fuzz", {spec}, kNow);
+  const auto leases = store.leases().LeaseEpisodes("w1", 1, {}, kNow + 15'000, kNow);
   fuzz::Check(leases.size() == 1, "the fresh job's episode is not leased");
   const server::Lease& lease = leases[0];
 
@@ -133,12 +137,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     m = api::ResultFromSample(c);
   } catch (const std::exception&) {
-    store.CancelJob(job, kNow);
+    store.jobs().CancelJob(job, kNow);
     return 0;  // the bus counts it as a bad sample of its topic and drops it
   }
-  const server::IngestOutcome out = store.Ingest({m}, kNow)[0];
-  const nlohmann::json stored = store.Results(job);
-  store.CancelJob(job, kNow);  // a re-queued episode must not be the next input's lease
+  const server::IngestOutcome out = store.ingest().Ingest({m}, kNow)[0];
+  const nlohmann::json stored = store.queries().Results(job);
+  store.jobs().CancelJob(job, kNow);  // a re-queued episode must not be the next input's lease
   if (out.ack == api::AckStatus::kStored) {
     fuzz::Check(m.episode_id == lease.episode_id, "stored a result under another episode id");
     fuzz::Check(m.status == api::ResultStatus::kOk, "stored a result that is not ok");

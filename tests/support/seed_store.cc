@@ -2,6 +2,10 @@
 
 #include "api/job_spec.h"
 #include "api/provenance.h"
+#include "server/store/ingest.h"
+#include "server/store/jobs.h"
+#include "server/store/leases.h"
+#include "server/store/worker_store.h"
 #include "tests/support/synthetic_result.h"
 #include "workers/sim/episode_config.h"
 
@@ -18,17 +22,17 @@ std::string SeedJob(server::Store& store, const std::string& spec_yaml, std::int
   meta.labels = job.labels;
   meta.provenance = {{"enavi_version", api::BuildVersion()}, {"git_commit", api::BuildCommit()},
                      {"clock", job.clock}, {"cost", job.cost}};
-  const std::string id = store.CreateJob(job.name, spec_yaml, api::ExpandJob(job), now_ms, meta);
+  const std::string id = store.jobs().CreateJob(job.name, spec_yaml, api::ExpandJob(job), now_ms, meta);
   api::WorkerStatus status;
   status.worker_id = worker;
   status.host = worker.substr(0, worker.rfind('-'));
   status.slots = 4;
   status.version = api::BuildVersion();
   status.calibration_id = "reference";
-  store.RecordWorker(status, now_ms);
+  store.workers().RecordWorker(status, now_ms);
   // Lease and answer in batches, as a farm would.
   while (true) {
-    const auto leases = store.LeaseEpisodes(worker, 500, {}, now_ms + 60000, now_ms);
+    const auto leases = store.leases().LeaseEpisodes(worker, 500, {}, now_ms + 60000, now_ms);
     if (leases.empty()) break;
     std::vector<api::ResultMessage> batch;
     for (const auto& l : leases) {
@@ -46,7 +50,7 @@ std::string SeedJob(server::Store& store, const std::string& spec_yaml, std::int
       }
       batch.push_back(std::move(m));
     }
-    store.Ingest(batch, ++now_ms);
+    store.ingest().Ingest(batch, ++now_ms);
   }
   return id;
 }

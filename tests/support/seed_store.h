@@ -1,7 +1,7 @@
 #pragma once
 // Fills a farm database with a finished job without running a farm: the job spec is parsed and
 // expanded as `enavi submit` does, every episode is leased and answered with its synthetic
-// result (synthetic_result.h) through Store::Ingest, as the scheduler would. An episode whose
+// result (synthetic_result.h) through ResultIngest::Ingest, as the scheduler would. An episode whose
 // spec has the override `fake.exit_code` gets an error instead (failed with max_attempts 1).
 
 #include <cstdint>

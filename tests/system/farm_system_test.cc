@@ -1,6 +1,8 @@
 // The farm end to end: real `enavi serve` / `enavi worker` processes over DDS, fake episodes.
 #include <signal.h>
 
+#include "server/store/jobs.h"
+#include "server/store/queries.h"
 #include "server/store/store.h"
 #include "tests/system/farm_harness.h"
 
@@ -119,10 +121,10 @@ TEST_F(FarmFixture, EvalStoresEveryResultAndPrintsThePaperTable) {
   EXPECT_NE(table.find("E-Navi vs baseline"), std::string::npos) << table;
 
   server::Store store(db);
-  const auto jobs = store.ListJobs(0);
+  const auto jobs = store.jobs().ListJobs(0);
   ASSERT_EQ(jobs.size(), 1u);
   EXPECT_EQ(jobs[0].done, 4);
-  EXPECT_EQ(store.Results(jobs[0].id).size(), 4u);
+  EXPECT_EQ(store.queries().Results(jobs[0].id).size(), 4u);
 }
 
 TEST_F(FarmFixture, EvalPresetPaperRunsThePapersMatrixAndPrintsOursBesideIt) {
@@ -144,9 +146,9 @@ TEST_F(FarmFixture, EvalPresetPaperRunsThePapersMatrixAndPrintsOursBesideIt) {
     EXPECT_NE(out.find(std::string("\n") + board, reductions), std::string::npos) << board << "\n" << out;
   }
   server::Store store(db);
-  const auto jobs = store.ListJobs(0);
+  const auto jobs = store.jobs().ListJobs(0);
   ASSERT_EQ(jobs.size(), 1u);
-  EXPECT_EQ(store.Results(jobs[0].id).size(), 50u) << "5 boards x 5 scenarios x 2 methods x 1 seed";
+  EXPECT_EQ(store.queries().Results(jobs[0].id).size(), 50u) << "5 boards x 5 scenarios x 2 methods x 1 seed";
 }
 
 // Runs `enavi ARGS...`, which must refuse the request: exit 2 and `message` on stderr.
@@ -174,9 +176,9 @@ TEST_F(FarmFixture, EvalSetOverridesReachTheEpisodesTheyName) {
   const std::string header = "with --set " + every + " --set " + enavi_only;
   EXPECT_EQ(table.rfind(header, 0), 0u) << table;
   server::Store store(db);
-  const auto jobs = store.ListJobs(0);
+  const auto jobs = store.jobs().ListJobs(0);
   ASSERT_EQ(jobs.size(), 1u);
-  const auto episodes = store.Episodes(jobs[0].id);
+  const auto episodes = store.jobs().Episodes(jobs[0].id);
   ASSERT_EQ(episodes.size(), 2u);
   for (const auto& e : episodes) {
     EXPECT_EQ(e.spec.overrides.at("fake.sleep_s"), 0.1) << e.spec.method;

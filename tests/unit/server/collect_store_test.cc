@@ -13,6 +13,10 @@
 #include "navstack/rl/rollout.h"
 #include "server/scheduler/collection.h"
 #include "server/store/sqlite.h"
+#include "server/store/collect_store.h"
+#include "server/store/ingest.h"
+#include "server/store/jobs.h"
+#include "server/store/leases.h"
 #include "server/store/store.h"
 
 namespace enavi::server {
@@ -68,7 +72,7 @@ class CollectStoreTest : public ::testing::Test {
     fs::remove_all(dir_);
   }
   std::string CollectionJob(int episodes) {
-    store_->PutPolicy(kHash, "{}", kNow);
+    store_->collect().PutPolicy(kHash, "{}", kNow);
     std::vector<api::EpisodeSpec> specs(static_cast<std::size_t>(episodes));
     for (int i = 0; i < episodes; ++i) {
       specs[i].world = "empty";
@@ -76,7 +80,7 @@ class CollectStoreTest : public ::testing::Test {
       specs[i].seed = static_cast<std::uint64_t>(i + 1);
       specs[i].policy = "sha256:" + kHash;
     }
-    return store_->CreateJob("collect", "yaml", specs, kNow, {}, CollectionInfo{kHash, true});
+    return store_->jobs().CreateJob("collect", "yaml", specs, kNow, {}, CollectionInfo{kHash, true});
   }
   fs::path dir_;
   std::unique_ptr<Store> store_;
@@ -84,19 +88,19 @@ class CollectStoreTest : public ::testing::Test {
 
 TEST_F(CollectStoreTest, ReRunAttemptStoresExactlyOneRollout) {
   const std::string job = CollectionJob(1);
-  ASSERT_EQ(store_->Collection(job)->policy_hash, kHash);
-  const Lease first = store_->LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow).at(0);
+  ASSERT_EQ(store_->collect().Collection(job)->policy_hash, kHash);
+  const Lease first = store_->leases().LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow).at(0);
   // w1 goes silent: its lease expires and w2 runs attempt 2.
-  ASSERT_EQ(store_->ExpireLeases(kNow + kLease + 1).size(), 1u);
-  const Lease second = store_->LeaseEpisodes("w2", 1, {}, kNow + 3 * kLease, kNow + kLease + 2).at(0);
+  ASSERT_EQ(store_->leases().ExpireLeases(kNow + kLease + 1).size(), 1u);
+  const Lease second = store_->leases().LeaseEpisodes("w2", 1, {}, kNow + 3 * kLease, kNow + kLease + 2).at(0);
   ASSERT_EQ(second.attempt, 2);
-  auto out = store_->Ingest({Ok(second, "w2", kHash, RolloutBytes(5, 1.0))}, kNow + kLease + 3);
+  auto out = store_->ingest().Ingest({Ok(second, "w2", kHash, RolloutBytes(5, 1.0))}, kNow + kLease + 3);
   EXPECT_EQ(out.at(0).ack, api::AckStatus::kStored);
   // w1's late result of attempt 1 (a different rollout) is a duplicate: nothing changes.
-  out = store_->Ingest({Ok(first, "w1", kHash, RolloutBytes(7, 2.0))}, kNow + kLease + 4);
+  out = store_->ingest().Ingest({Ok(first, "w1", kHash, RolloutBytes(7, 2.0))}, kNow + kLease + 4);
   EXPECT_EQ(out.at(0).ack, api::AckStatus::kDuplicate);
 
-  const auto rollouts = store_->Rollouts(job);
+  const auto rollouts = store_->collect().Rollouts(job);
   ASSERT_EQ(rollouts.size(), 1u);
   EXPECT_EQ(rollouts[0].attempt, 2);
   EXPECT_EQ(rollouts[0].worker, "w2");
@@ -106,25 +110,25 @@ TEST_F(CollectStoreTest, ReRunAttemptStoresExactlyOneRollout) {
 
 TEST_F(CollectStoreTest, StaleOrMissingRolloutIsRefusedAndTheEpisodeRunsAgain) {
   const std::string job = CollectionJob(1);
-  Lease l = store_->LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow).at(0);
-  auto out = store_->Ingest({Ok(l, "w1", kOtherHash, RolloutBytes(3, 1.0))}, kNow + 1);
+  Lease l = store_->leases().LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow).at(0);
+  auto out = store_->ingest().Ingest({Ok(l, "w1", kOtherHash, RolloutBytes(3, 1.0))}, kNow + 1);
   EXPECT_EQ(out.at(0).ack, api::AckStatus::kRecorded);
   EXPECT_EQ(out.at(0).event, "requeued");
-  EXPECT_TRUE(store_->Rollouts(job).empty());
-  const auto episodes = store_->Episodes(job);
+  EXPECT_TRUE(store_->collect().Rollouts(job).empty());
+  const auto episodes = store_->jobs().Episodes(job);
   EXPECT_EQ(episodes.at(0).state, "pending");
   EXPECT_NE(episodes.at(0).last_error.find("stale policy"), std::string::npos) << episodes.at(0).last_error;
 
-  l = store_->LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow + 2).at(0);
-  out = store_->Ingest({Ok(l, "w1", kHash, "")}, kNow + 3);
+  l = store_->leases().LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow + 2).at(0);
+  out = store_->ingest().Ingest({Ok(l, "w1", kHash, "")}, kNow + 3);
   EXPECT_EQ(out.at(0).ack, api::AckStatus::kRecorded);
-  EXPECT_NE(store_->Episodes(job).at(0).last_error.find("without a rollout"), std::string::npos);
+  EXPECT_NE(store_->jobs().Episodes(job).at(0).last_error.find("without a rollout"), std::string::npos);
 
-  l = store_->LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow + 4).at(0);
-  out = store_->Ingest({Ok(l, "w1", kHash, RolloutBytes(3, 1.0))}, kNow + 5);
+  l = store_->leases().LeaseEpisodes("w1", 1, {}, kNow + kLease, kNow + 4).at(0);
+  out = store_->ingest().Ingest({Ok(l, "w1", kHash, RolloutBytes(3, 1.0))}, kNow + 5);
   EXPECT_EQ(out.at(0).ack, api::AckStatus::kStored);
-  EXPECT_EQ(store_->Rollouts(job).size(), 1u);
-  EXPECT_EQ(store_->ActivePolicies().size(), 0u) << "the job is done";
+  EXPECT_EQ(store_->collect().Rollouts(job).size(), 1u);
+  EXPECT_EQ(store_->collect().ActivePolicies().size(), 0u) << "the job is done";
 }
 
 // A job that flies a policy file (not a collection) has the file loaded once at submit: a file
@@ -157,9 +161,9 @@ TEST_F(CollectStoreTest, DatabaseFromBeforeCollectionGainsTheTables) {
   }
   store_ = std::make_unique<Store>(dir_ / "farm.db");
   const std::string job = CollectionJob(2);
-  EXPECT_TRUE(store_->Collection(job).has_value());
-  EXPECT_EQ(store_->ActivePolicies().count(kHash), 1u);
-  EXPECT_FALSE(store_->Collection("j-nope").has_value());
+  EXPECT_TRUE(store_->collect().Collection(job).has_value());
+  EXPECT_EQ(store_->collect().ActivePolicies().count(kHash), 1u);
+  EXPECT_FALSE(store_->collect().Collection("j-nope").has_value());
 }
 
 }  // namespace

@@ -8,7 +8,7 @@
 namespace enavi::server {
 namespace {
 
-// Result objects as Store::Results returns them: the flat record plus episode_id.
+// Result objects as ResultQueries::Results returns them: the flat record plus episode_id.
 nlohmann::json Job(const std::string& prefix, const std::vector<std::string>& boards, int seeds,
                    double v_max_on_tx2 = 0, const std::string& clock = "virtual") {
   nlohmann::json list = nlohmann::json::array();

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "server/store/collect_store.h"
+#include "server/store/queries.h"
 #include "tests/unit/api/farm_test_util.h"
 
 namespace enavi::server {
@@ -119,7 +121,7 @@ TEST_F(FarmServerTest, AssignsPendingEpisodesUpToTheWorkersSlots) {
   // Keep heartbeating a while: no third assignment while both slots are leased.
   Drive(w, [] { return false; }, 500ms);
   EXPECT_EQ(w.assignments.size(), 2u);
-  EXPECT_EQ(store_->Progress(job, NowMs())->leased, 2);
+  EXPECT_EQ(store_->jobs().Progress(job, NowMs())->leased, 2);
   EXPECT_EQ(w.assignments[0].attempt, 1);
   EXPECT_EQ(w.assignments[0].job_id, job);
 }
@@ -132,12 +134,12 @@ TEST_F(FarmServerTest, ResultIsStoredBeforeItIsAcknowledgedAndDuplicatesAreAcked
   const api::ResultMessage m = w.Finish(w.assignments[0]);
   ASSERT_TRUE(Drive(w, [&] { return !w.acks.empty(); }));
   EXPECT_EQ(w.acks[0].status, api::AckStatus::kStored);
-  EXPECT_EQ(store_->Results(job).size(), 1u) << "acknowledged means stored";
-  EXPECT_EQ(store_->Progress(job, NowMs())->state, "done");
+  EXPECT_EQ(store_->queries().Results(job).size(), 1u) << "acknowledged means stored";
+  EXPECT_EQ(store_->jobs().Progress(job, NowMs())->state, "done");
   w.bus.Publish(m);  // re-sent, e.g. after a lost ack
   ASSERT_TRUE(Drive(w, [&] { return w.acks.size() >= 2; }));
   EXPECT_EQ(w.acks[1].status, api::AckStatus::kDuplicate);
-  EXPECT_EQ(store_->Results(job).size(), 1u);
+  EXPECT_EQ(store_->queries().Results(job).size(), 1u);
   EXPECT_EQ(server_->stats().duplicates, 1u);
 }
 
@@ -160,8 +162,8 @@ TEST_F(FarmServerTest, ResultAboveTheSizeLimitIsRefusedAndNotStored) {
   w.bus.Publish(m);
   ASSERT_TRUE(Drive(w, [&] { return !w.acks.empty(); }));
   EXPECT_EQ(w.acks[0].status, api::AckStatus::kRecorded) << "the worker may forget it";
-  EXPECT_TRUE(store_->Results(job).empty()) << "an oversized result must not be stored";
-  const auto episodes = store_->Episodes(job);
+  EXPECT_TRUE(store_->queries().Results(job).empty()) << "an oversized result must not be stored";
+  const auto episodes = store_->jobs().Episodes(job);
   ASSERT_EQ(episodes.size(), 1u);
   EXPECT_NE(episodes[0].last_error.find("result of 1600 bytes, above the server's limit of 1024"),
             std::string::npos)
@@ -187,9 +189,9 @@ TEST_F(FarmServerTest, RolloutAboveTheSizeLimitIsRefusedAndNotStored) {
   w.bus.Publish(m);
   ASSERT_TRUE(Drive(w, [&] { return !w.acks.empty(); }));
   EXPECT_EQ(w.acks[0].status, api::AckStatus::kRecorded);
-  EXPECT_TRUE(store_->Results(job).empty());
-  EXPECT_TRUE(store_->Rollouts(job).empty());
-  const auto episodes = store_->Episodes(job);
+  EXPECT_TRUE(store_->queries().Results(job).empty());
+  EXPECT_TRUE(store_->collect().Rollouts(job).empty());
+  const auto episodes = store_->jobs().Episodes(job);
   ASSERT_EQ(episodes.size(), 1u);
   EXPECT_NE(episodes[0].last_error.find("rollout of 2000 bytes, above the server's limit of 1024"),
             std::string::npos)
@@ -210,7 +212,7 @@ TEST_F(FarmServerTest, VanishedWorkersEpisodeIsRunAgainElsewhere) {
   EXPECT_EQ(w2.assignments[0].attempt, 2) << "the lost lease counted as an attempt";
   w2.Finish(w2.assignments[0]);
   ASSERT_TRUE(Drive(w2, [&] { return !w2.acks.empty(); }));
-  EXPECT_EQ(store_->Progress(job, NowMs())->done, 1);
+  EXPECT_EQ(store_->jobs().Progress(job, NowMs())->done, 1);
 }
 
 TEST_F(FarmServerTest, HeartbeatsKeepALeaseAliveAndSilenceAboutItLosesIt) {
@@ -220,7 +222,7 @@ TEST_F(FarmServerTest, HeartbeatsKeepALeaseAliveAndSilenceAboutItLosesIt) {
   ASSERT_TRUE(Drive(w, [&] { return !w.assignments.empty(); }));
   // Three lease lengths of heartbeats that list the episode: still leased to w1.
   Drive(w, [] { return false; }, 3 * options_.lease);
-  EXPECT_TRUE(store_->HoldsLease(w.assignments[0].episode_id, 1, "w1"));
+  EXPECT_TRUE(store_->leases().HoldsLease(w.assignments[0].episode_id, 1, "w1"));
   // The worker keeps heartbeating but no longer lists it (it lost the episode): the lease
   // expires and the episode is assigned again.
   w.running.clear();
@@ -231,7 +233,7 @@ TEST_F(FarmServerTest, HeartbeatsKeepALeaseAliveAndSilenceAboutItLosesIt) {
     return w.assignments.size() >= 2;
   }));
   EXPECT_EQ(w.assignments[1].attempt, 2);
-  EXPECT_EQ(store_->Progress(job, NowMs())->leased, 1);
+  EXPECT_EQ(store_->jobs().Progress(job, NowMs())->leased, 1);
 }
 
 TEST_F(FarmServerTest, CancelTellsWorkersToStop) {
@@ -245,7 +247,7 @@ TEST_F(FarmServerTest, CancelTellsWorkersToStop) {
       return e.kind == "cancelled" && e.job_id == job;
     });
   }));
-  EXPECT_EQ(store_->Progress(job, NowMs())->state, "cancelled");
+  EXPECT_EQ(store_->jobs().Progress(job, NowMs())->state, "cancelled");
   EXPECT_FALSE(server_->Cancel("jnothing"));
 }
 
@@ -258,13 +260,13 @@ TEST_F(FarmServerTest, ARestartedServerKeepsLeasesItsWorkersStillRun) {
   StartServer();    // same database
   // The heartbeat renews the lease under the new server; the result is accepted.
   Drive(w, [] { return false; }, 2 * options_.lease);
-  EXPECT_TRUE(store_->HoldsLease(w.assignments[0].episode_id, 1, "w1"));
+  EXPECT_TRUE(store_->leases().HoldsLease(w.assignments[0].episode_id, 1, "w1"));
   w.Finish(w.assignments[0]);
   ASSERT_TRUE(Drive(w, [&] { return w.assignments.size() == 2; })) << "the second episode";
   w.Finish(w.assignments[1]);
-  ASSERT_TRUE(Drive(w, [&] { return store_->Progress(job, NowMs())->state == "done"; }));
-  EXPECT_EQ(store_->Results(job).size(), 2u);
-  EXPECT_EQ(store_->Progress(job, NowMs())->failed, 0);
+  ASSERT_TRUE(Drive(w, [&] { return store_->jobs().Progress(job, NowMs())->state == "done"; }));
+  EXPECT_EQ(store_->queries().Results(job).size(), 2u);
+  EXPECT_EQ(store_->jobs().Progress(job, NowMs())->failed, 0);
 }
 
 // The server died before its worker received an assignment: the restarted server re-sends it,
@@ -285,8 +287,8 @@ TEST_F(FarmServerTest, ARestartedServerResendsAnAssignmentItsWorkerNeverReceived
   EXPECT_EQ(w.assignments[0].episode_id, lost.episode_id);
   EXPECT_EQ(w.assignments[0].attempt, 1) << "no attempt spent";
   w.Finish(w.assignments[0]);
-  ASSERT_TRUE(Drive(w, [&] { return store_->Progress(job, NowMs())->state == "done"; }));
-  EXPECT_EQ(store_->Episodes(job)[0].attempts, 1);
+  ASSERT_TRUE(Drive(w, [&] { return store_->jobs().Progress(job, NowMs())->state == "done"; }));
+  EXPECT_EQ(store_->jobs().Episodes(job)[0].attempts, 1);
 }
 
 }  // namespace

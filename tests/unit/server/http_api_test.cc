@@ -9,6 +9,7 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include "server/store/jobs.h"
 #include "api/client.h"
 #include "tests/unit/api/farm_test_util.h"
 
@@ -195,7 +196,7 @@ TEST_F(HttpApiTest, BodiesAboveTheLimitsAreRefusedWith413NamingTheLimit) {
   // A policy between the two limits reaches its own route's check.
   std::tie(status, body) = Post(url, "/api/policies", std::string(5000, '{'));
   EXPECT_EQ(status, 400) << body.dump();  // not refused for size: for not being a policy
-  EXPECT_TRUE(store_->ListJobs(0).empty()) << "a refused request must store nothing";
+  EXPECT_TRUE(store_->jobs().ListJobs(0).empty()) << "a refused request must store nothing";
 }
 
 TEST_F(HttpApiTest, JobWithMoreEpisodesThanTheLimitIsRefusedWith413) {
@@ -208,7 +209,7 @@ TEST_F(HttpApiTest, JobWithMoreEpisodesThanTheLimitIsRefusedWith413) {
   EXPECT_NE(body["error"].get<std::string>().find("4 episodes, above the server's limit of 3"),
             std::string::npos)
       << body.dump();
-  EXPECT_TRUE(store_->ListJobs(0).empty());
+  EXPECT_TRUE(store_->jobs().ListJobs(0).empty());
   limits.max_job_episodes = 4;
   api_.reset();
   api::FarmClient client(Serve("", limits));
@@ -228,7 +229,7 @@ TEST_F(HttpApiTest, ClientSubmittingTooManyJobsInAMinuteIsRefusedWith429) {
   EXPECT_NE(body["error"].get<std::string>().find("more than 2 jobs in one minute"),
             std::string::npos)
       << body.dump();
-  EXPECT_EQ(store_->ListJobs(0).size(), 2u);
+  EXPECT_EQ(store_->jobs().ListJobs(0).size(), 2u);
 }
 
 TEST(RateLimiterTest, AllowsLimitPerWindowPerKeyAndForgetsOldEvents) {

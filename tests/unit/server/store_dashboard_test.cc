@@ -10,7 +10,10 @@
 
 #include <gtest/gtest.h>
 
+#include "server/store/jobs.h"
+#include "server/store/queries.h"
 #include "server/store/store.h"
+#include "server/store/worker_store.h"
 #include "tests/support/seed_store.h"
 
 namespace enavi::server {
@@ -59,22 +62,22 @@ TEST_F(StoreDashboardTest, LabelsAndProvenanceAreStoredAndQueryable) {
   const std::string a = testing::SeedJob(*store_, kJob, 1000);
   const std::string b = testing::SeedJob(
       *store_, "name: other\nlabels: {suite: weekly}\nboards: [tx2]\nscenarios: [s1]\nmethods: [baseline]\nseeds: 1\n", 2000);
-  const auto nightly = store_->ListJobs(3000, {{"suite", "nightly"}});
+  const auto nightly = store_->jobs().ListJobs(3000, {{"suite", "nightly"}});
   ASSERT_EQ(nightly.size(), 1u);
   EXPECT_EQ(nightly[0].id, a);
   EXPECT_EQ(nightly[0].labels.at("commit"), "1a2b3c");
   EXPECT_EQ(nightly[0].provenance.at("clock"), "virtual");
   EXPECT_FALSE(nightly[0].provenance.at("git_commit").empty());
-  EXPECT_EQ(store_->ListJobs(3000, {{"suite", "nightly"}, {"commit", "1a2b3c"}}).size(), 1u);
-  EXPECT_TRUE(store_->ListJobs(3000, {{"suite", "nightly"}, {"commit", "ffff"}}).empty());
-  EXPECT_EQ(store_->ListJobs(3000, {{"suite", "weekly"}}).at(0).id, b);
-  EXPECT_EQ(store_->ListJobs(3000).size(), 2u);
+  EXPECT_EQ(store_->jobs().ListJobs(3000, {{"suite", "nightly"}, {"commit", "1a2b3c"}}).size(), 1u);
+  EXPECT_TRUE(store_->jobs().ListJobs(3000, {{"suite", "nightly"}, {"commit", "ffff"}}).empty());
+  EXPECT_EQ(store_->jobs().ListJobs(3000, {{"suite", "weekly"}}).at(0).id, b);
+  EXPECT_EQ(store_->jobs().ListJobs(3000).size(), 2u);
 }
 
 TEST_F(StoreDashboardTest, SummaryStatisticsMatchTheResults) {
   const std::string job = testing::SeedJob(*store_, kJob, 1000);
-  const nlohmann::json all = store_->Results(job);
-  const nlohmann::json summary = store_->JobSummary(job, {});
+  const nlohmann::json all = store_->queries().Results(job);
+  const nlohmann::json summary = store_->queries().JobSummary(job, {});
   ASSERT_EQ(summary["total"], 4);
   ASSERT_EQ(summary["cells"].size(), 4u);
   // Recompute one cell by hand: pi4b baseline (cells are sorted by board, scenario, method).
@@ -101,7 +104,7 @@ TEST_F(StoreDashboardTest, SummaryStatisticsMatchTheResults) {
   EXPECT_EQ(cell["success_only"]["flight_time_s"]["n"], 6);
   EXPECT_NEAR(cell["metrics"]["success"]["mean"].get<double>(), 6.0 / 7.0, 1e-12);
   // Paging: a page of cells.
-  const nlohmann::json page = store_->JobSummary(job, {2, 1});
+  const nlohmann::json page = store_->queries().JobSummary(job, {2, 1});
   ASSERT_EQ(page["cells"].size(), 1u);
   EXPECT_EQ(page["cells"][0]["board"], "tx2");
   EXPECT_EQ(page["cells"][0]["method"], "baseline");
@@ -115,7 +118,7 @@ TEST_F(StoreDashboardTest, FailuresResultsPageAndTrend) {
   const std::string job = testing::SeedJob(
       *store_, std::string(kJob) + "episode_overrides:\n  - match: {board: tx2, method: enavi, seed: 3}\n"
                                    "    overrides: {fake.exit_code: 9}\n", 1000);
-  const nlohmann::json failures = store_->JobFailures(job, {});
+  const nlohmann::json failures = store_->queries().JobFailures(job, {});
   // Four collisions (seed 7 of each cell) and the episode that failed.
   ASSERT_EQ(failures["total"], 5);
   bool found = false;
@@ -126,19 +129,19 @@ TEST_F(StoreDashboardTest, FailuresResultsPageAndTrend) {
     }
   }
   EXPECT_TRUE(found);
-  EXPECT_EQ(store_->JobSummary(job, {})["cells"][2]["failed_episodes"], 0);
-  EXPECT_EQ(store_->JobSummary(job, {})["cells"][3]["failed_episodes"], 1);
-  const nlohmann::json page = store_->ResultsPage(job, {10, 5});
+  EXPECT_EQ(store_->queries().JobSummary(job, {})["cells"][2]["failed_episodes"], 0);
+  EXPECT_EQ(store_->queries().JobSummary(job, {})["cells"][3]["failed_episodes"], 1);
+  const nlohmann::json page = store_->queries().ResultsPage(job, {10, 5});
   EXPECT_EQ(page["total"], 27);
   ASSERT_EQ(page["results"].size(), 5u);
   EXPECT_EQ(page["results"][0]["worker_host"], "seed-host");
   testing::SeedJob(*store_, kJob, 5000);
-  const nlohmann::json trend = store_->Trend("suite", "nightly", "nav_cpu_util_pct", {});
+  const nlohmann::json trend = store_->queries().Trend("suite", "nightly", "nav_cpu_util_pct", {});
   EXPECT_EQ(trend["total"], 2);
   ASSERT_EQ(trend["points"].size(), 8u);  // 2 jobs x 2 boards x 2 methods
   EXPECT_EQ(trend["points"][0]["board"], "pi4b");
   EXPECT_EQ(trend["points"][0]["method"], "baseline");
-  EXPECT_THROW(store_->Trend("suite", "nightly", "x'); DROP TABLE jobs; --", {}), std::invalid_argument);
+  EXPECT_THROW(store_->queries().Trend("suite", "nightly", "x'); DROP TABLE jobs; --", {}), std::invalid_argument);
 }
 
 // A trend point's spread is the seeds' draw within each scenario, pooled; the difference between
@@ -149,7 +152,7 @@ TEST_F(StoreDashboardTest, TrendPoolsTheSpreadOverSeedsWithinEachScenario) {
   std::map<std::string, std::vector<double>> by_scenario;
   double sum = 0;
   int n = 0;
-  for (const auto& r : store_->Results(job)) {
+  for (const auto& r : store_->queries().Results(job)) {
     const double v = r["flight_time_s"].get<double>();
     by_scenario[r["scenario"].get<std::string>()].push_back(v);
     sum += v;
@@ -167,7 +170,7 @@ TEST_F(StoreDashboardTest, TrendPoolsTheSpreadOverSeedsWithinEachScenario) {
   // s3 flights 100 s longer: a scenario difference, which every job of a series flies alike.
   Sql("UPDATE results SET metrics_json = json_set(metrics_json, '$.flight_time_s', "
       "json_extract(metrics_json, '$.flight_time_s') + 100) WHERE scenario = 's3'");
-  const nlohmann::json trend = store_->Trend("suite", "nightly", "flight_time_s", {});
+  const nlohmann::json trend = store_->queries().Trend("suite", "nightly", "flight_time_s", {});
   ASSERT_EQ(trend["points"].size(), 1u);
   const nlohmann::json& p = trend["points"][0];
   EXPECT_EQ(p["n"], 8);
@@ -176,7 +179,7 @@ TEST_F(StoreDashboardTest, TrendPoolsTheSpreadOverSeedsWithinEachScenario) {
   EXPECT_NEAR(p["seed_std"].get<double>(), std::sqrt(ss / 6), 1e-6);
   // One seed per scenario: no spread to estimate.
   testing::SeedJob(*store_, "name: one\nlabels: {suite: single}\nboards: [tx2]\nscenarios: [s1, s3]\nmethods: [baseline]\nseeds: 1\n", 2000);
-  const nlohmann::json single = store_->Trend("suite", "single", "flight_time_s", {});
+  const nlohmann::json single = store_->queries().Trend("suite", "single", "flight_time_s", {});
   ASSERT_EQ(single["points"].size(), 1u);
   EXPECT_EQ(single["points"][0]["df"], 0);
   EXPECT_TRUE(single["points"][0]["seed_std"].is_null());
@@ -188,9 +191,9 @@ TEST_F(StoreDashboardTest, ReadOnlyStoreReadsAndNeverWrites) {
   StoreOptions ro;
   ro.read_only = true;
   Store reader(db(), ro);
-  EXPECT_EQ(reader.Results(job).size(), 28u);
-  EXPECT_EQ(reader.KnownWorkers().size(), 1u);
-  EXPECT_THROW(reader.CreateJob("x", "y", {api::EpisodeSpec{}}, 1), std::runtime_error);
+  EXPECT_EQ(reader.queries().Results(job).size(), 28u);
+  EXPECT_EQ(reader.workers().KnownWorkers().size(), 1u);
+  EXPECT_THROW(reader.jobs().CreateJob("x", "y", {api::EpisodeSpec{}}, 1), std::runtime_error);
   StoreOptions missing = ro;
   EXPECT_THROW({ Store s(dir_ / "nope.db", missing); }, std::runtime_error);
   EXPECT_FALSE(fs::exists(dir_ / "nope.db"));
@@ -208,14 +211,14 @@ TEST_F(StoreDashboardTest, OlderDatabaseIsMigratedInPlace) {
     StoreOptions ro;
     ro.read_only = true;
     Store reader(db(), ro);
-    EXPECT_EQ(reader.JobSummary(job, {})["cells"][0]["metrics"]["flight_time_s"]["n"], 7);
-    EXPECT_TRUE(reader.KnownWorkers().empty());
+    EXPECT_EQ(reader.queries().JobSummary(job, {})["cells"][0]["metrics"]["flight_time_s"]["n"], 7);
+    EXPECT_TRUE(reader.workers().KnownWorkers().empty());
   }
   store_ = std::make_unique<Store>(db());
-  EXPECT_EQ(store_->Results(job).size(), 28u);
-  EXPECT_EQ(store_->JobSummary(job, {})["cells"][0]["metrics"]["flight_time_s"]["n"], 7);
-  EXPECT_TRUE(store_->Progress(job, 2000)->labels.empty());
-  EXPECT_EQ(store_->ListJobs(2000, {{"suite", "nightly"}}).size(), 0u);
+  EXPECT_EQ(store_->queries().Results(job).size(), 28u);
+  EXPECT_EQ(store_->queries().JobSummary(job, {})["cells"][0]["metrics"]["flight_time_s"]["n"], 7);
+  EXPECT_TRUE(store_->jobs().Progress(job, 2000)->labels.empty());
+  EXPECT_EQ(store_->jobs().ListJobs(2000, {{"suite", "nightly"}}).size(), 0u);
 }
 
 }  // namespace
