@@ -1,12 +1,16 @@
 #!/usr/bin/env python3
 """The dependency rules of the build (README, "How it is built"), checked two ways:
 
-  sources: every #include in api/, worlds/, navstack/ and workers/ against the layer rules, and
-           every project header a library's sources include against the library's link closure
-           (a target includes only its own headers and those of targets it links);
-  depfiles: the compiler's dependency output (*.o.d under the build tree) of every navstack and
-           workers object, which also sees headers reached through other headers (a unity
-           build's object counts for the sources it includes).
+  sources: every #include in api/, worlds/, navstack/, workers/ and server/ against the layer
+           rules, every project header a library's sources include against the library's link
+           closure (a target includes only its own headers and those of targets it links), and
+           no target outside bench/ links one of bench/;
+  depfiles: the compiler's dependency output (*.o.d under the build tree) of every navstack,
+           workers and server object, which also sees headers reached through other headers (a
+           unity build's object counts for the sources it includes).
+
+bench/ is the top of the tree: its programs may use any layer, server/ included, and no layer
+includes or links bench/ code.
 
 Exits 1 listing each violation as FILE:LINE: rule, 2 on bad arguments, 0 when the tree is clean.
 """
@@ -39,8 +43,9 @@ FORBIDDEN = {
         (EMBREE, "navstack includes an Embree header"),
         (CYCLONE, "navstack includes a Cyclone DDS header"),
     ],
-    # Bench code (bench/) is never compiled into a library an episode links.
     "workers": [(re.compile(r"^(server|bench)/"), "workers includes server/ or bench/")],
+    # bench/ sits above server/: its programs measure server code too (ingest, the dashboard).
+    "server": [(re.compile(r"^bench/"), "server includes bench/")],
 }
 
 # The generated file a CMake unity build compiles in place of a target's sources.
@@ -158,6 +163,19 @@ def check_unused_links(root):
     return problems
 
 
+def check_bench_links(root):
+    """No target outside bench/ links a target defined in bench/ (bench/ is the top layer)."""
+    targets = cmake_targets(root)
+    in_bench = {name for name, t in targets.items() if t["dir"].split("/", 1)[0] == "bench"}
+    problems = []
+    for name, t in sorted(targets.items()):
+        if name in in_bench:
+            continue
+        for dep in sorted(t["links"] & in_bench):
+            problems.append(f"{t['dir']}/CMakeLists.txt: {name} links {dep} of bench/, the top layer")
+    return problems
+
+
 # --- The compiler's dependency output ---
 
 def depfile_deps(path):
@@ -197,7 +215,7 @@ def check_depfile(path, source_root, build_root):
                     if p.endswith((".cc", ".cpp")))
         rel_source = next((r for r in included if layer_of(r)), rel_source)
     layer = layer_of(rel_source)
-    if layer not in ("navstack", "workers"):
+    if layer not in ("navstack", "workers", "server"):
         return []
     problems = []
     for p in resolved[1:]:
@@ -207,6 +225,8 @@ def check_depfile(path, source_root, build_root):
             dep_layer = layer_of(rel)
             if rel.split("/", 1)[0] == "bench":
                 problems.append(f"{rel_source}: {layer} depends on bench code {rel}")
+            elif layer == "server":
+                continue
             elif layer == "navstack" and dep_layer in ("workers", "server"):
                 problems.append(f"{rel_source}: navstack depends on {rel}")
             elif layer == "workers" and dep_layer == "server":
@@ -248,6 +268,7 @@ def main():
     if args.only != "depfiles":
         problems += check_layers(args.source_dir)
         problems += check_targets(args.source_dir) + check_unused_links(args.source_dir)
+        problems += check_bench_links(args.source_dir)
     if args.only != "sources":
         dep_problems, depfiles = check_depfiles(args.source_dir, args.build_dir, args.depfile)
         problems += dep_problems

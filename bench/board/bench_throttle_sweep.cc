@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "bench/board/throttle_bench.h"
+#include "server/bench/throttle_bench.h"
 
 int main(int argc, char** argv) {
-  using namespace enavi::board;
+  using namespace enavi::bench;
   bool json = false, quick = false, deadline = false;
   std::vector<long> periods{20'000};
   std::vector<double> dilations{0.0};

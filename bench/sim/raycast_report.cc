@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "bench/sim/raycast_bench.h"
+#include "server/bench/raycast_bench.h"
 #include "tests/unit/sim/mesh_builders.h"
 
 namespace {
@@ -23,6 +23,7 @@ int ParseCount(const char* arg, const char* name) {
 
 int main(int argc, char** argv) {
   using namespace enavi::sim;
+  using namespace enavi::bench;
   try {
     if (argc > 3) throw std::invalid_argument("usage: bench_sim_raycast [frames] [bullet_frames]");
     RaycastBenchOptions options;

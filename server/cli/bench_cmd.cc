@@ -5,8 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "bench/board/throttle_bench.h"
-#include "bench/sim/raycast_bench.h"
+#include "server/bench/raycast_bench.h"
+#include "server/bench/throttle_bench.h"
 #include "server/cli/commands.h"
 #include "server/cli/registry_help.h"
 #include "workers/board/board_profile.h"
@@ -30,12 +30,12 @@ void RunRaycast(const RaycastArgs& args) {
   request.world = args.world;
   request.seed = args.seed;
   const worlds::World world = worlds::ResolveWorld(request);
-  sim::RaycastBenchOptions options;
+  bench::RaycastBenchOptions options;
   options.frames = args.frames;
   options.bullet_frames = args.bullet_frames;
-  const sim::RaycastBenchResult r =
-      sim::RunRaycastBench(worlds::BuildWorldMesh(world), world.start, world.goal, options);
-  nlohmann::json j = sim::ToJson(r);
+  const bench::RaycastBenchResult r =
+      bench::RunRaycastBench(worlds::BuildWorldMesh(world), world.start, world.goal, options);
+  nlohmann::json j = bench::ToJson(r);
   j["world"] = args.world;
   j["seed"] = args.seed;
   if (args.json) {
@@ -84,16 +84,16 @@ void RunThrottle(const ThrottleArgs& args) {
   if (speed > 1.0 + board::kFasterBoardTolerance)
     throw std::invalid_argument("bench throttle: board '" + args.board + "' has cores faster than this host's (" +
                                 std::to_string(speed) + " x); a throttle can only slow down");
-  board::ThrottleBenchOptions options;
+  bench::ThrottleBenchOptions options;
   options.dilation = args.dilation;
   options.period_us = args.period_us;
   options.work_seconds = args.work_seconds;
   options.deadline_servers = args.deadline;
   options.extra_phases = !args.primary_only;
-  const board::ThrottleBenchResult r =
-      board::RunThrottleBench(args.board, {profile.cores, std::min(1.0, speed)}, options);
+  const bench::ThrottleBenchResult r =
+      bench::RunThrottleBench(args.board, {profile.cores, std::min(1.0, speed)}, options);
   if (!r.ok) throw std::invalid_argument("bench throttle: " + r.message);
-  nlohmann::json j = board::ToJson(r);
+  nlohmann::json j = bench::ToJson(r);
   j["speed_source"] = speed_source;
   if (args.json) {
     std::printf("%s\n", j.dump(2).c_str());
@@ -104,7 +104,7 @@ void RunThrottle(const ThrottleArgs& args) {
               r.board.c_str(), r.quota.cores, r.quota.core_speed, r.quota.dilation, r.mode.c_str(),
               r.phases.front().threads, r.expected_slowdown, r.measured_slowdown, 100.0 * r.relative_error);
   for (std::size_t i = 1; i < r.phases.size(); ++i) {
-    const board::ThrottlePhase& p = r.phases[i];
+    const bench::ThrottlePhase& p = r.phases[i];
     std::printf("  %-24s %2d thread(s): expected %.3f x, measured %.3f x, error %+.1f %% (worst thread %+.1f %%)\n",
                 p.name.c_str(), p.threads, p.expected_slowdown, p.measured_slowdown, 100.0 * p.relative_error,
                 100.0 * p.max_thread_error);

@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
-"""scripts/check_deps.py fails on a planted upward include in a navstack probe and passes on a
-clean one, through both of its routes: the source scan and the compiler's dependency output
-(the probe is run through the compiler with -M, as the build does with -MD), the latter also
-with the probe compiled through a generated file that includes it, as in a unity build.
+"""scripts/check_deps.py fails on a planted upward include in a navstack probe (and on a server
+probe that includes bench/, the top layer) and passes on a clean one, through both of its
+routes: the source scan and the compiler's dependency output (the probe is run through the
+compiler with -M, as the build does with -MD), the latter also with the probe compiled through a
+generated file that includes it, as in a unity build.
 
 Usage: check_deps_probe_test.py --checker PY --compiler CXX --source-dir REPO [--system-include DIR]...
 """
@@ -16,24 +17,24 @@ import tempfile
 LAYERS = ("api", "worlds", "navstack", "workers", "server", "bench")  # the folders a probe tree links in
 
 
-def make_tree(root, repo, probe_text):
-    """A tree laid out like the repository: its layers linked in, navstack/probe/probe.cc added."""
+def make_tree(root, repo, probe_text, probe_layer):
+    """A tree laid out like the repository: its layers linked in, <probe_layer>/probe/probe.cc added."""
     for layer in LAYERS:
-        if layer != "navstack":
+        if layer != probe_layer:
             os.symlink(os.path.join(repo, layer), os.path.join(root, layer))
-    os.makedirs(os.path.join(root, "navstack", "probe"))
-    for entry in os.listdir(os.path.join(repo, "navstack")):
-        os.symlink(os.path.join(repo, "navstack", entry), os.path.join(root, "navstack", entry))
-    with open(os.path.join(root, "navstack", "probe", "probe.cc"), "w") as f:
+    os.makedirs(os.path.join(root, probe_layer, "probe"))
+    for entry in os.listdir(os.path.join(repo, probe_layer)):
+        os.symlink(os.path.join(repo, probe_layer, entry), os.path.join(root, probe_layer, entry))
+    with open(os.path.join(root, probe_layer, "probe", "probe.cc"), "w") as f:
         f.write(probe_text)
 
 
-def depfile_of(root, compiler, system_includes, unity):
+def depfile_of(root, compiler, system_includes, unity, probe_layer):
     """The compiler's dependency output for the probe (headers it cannot find count as generated);
     unity: compiled through a generated file that includes it, as a CMake unity build does."""
-    source = os.path.join(root, "navstack", "probe", "probe.cc")
+    source = os.path.join(root, probe_layer, "probe", "probe.cc")
     if unity:
-        unity_dir = os.path.join(root, "build", "navstack", "CMakeFiles", "probe.dir", "Unity")
+        unity_dir = os.path.join(root, "build", probe_layer, "CMakeFiles", "probe.dir", "Unity")
         os.makedirs(unity_dir)
         with open(os.path.join(unity_dir, "unity_0_cxx.cxx"), "w") as f:
             f.write(f'#include "{source}"\n')
@@ -45,6 +46,21 @@ def depfile_of(root, compiler, system_includes, unity):
     cmd.append(source)
     subprocess.run(cmd, check=True, cwd=root)
     return out
+
+
+def make_link_tree(root, repo, link_bench):
+    """A tree with a library in bench/probe and one in server/probe that links it (link_bench) or not."""
+    for layer in LAYERS:
+        if layer not in ("server", "bench"):
+            os.symlink(os.path.join(repo, layer), os.path.join(root, layer))
+    for layer, body in (("bench", "add_library(enavi_bench_probe probe.cc probe.h)\n"),
+                        ("server", "add_library(enavi_server_probe probe.cc)\n" +
+                         ("target_link_libraries(enavi_server_probe PRIVATE enavi_bench_probe)\n"
+                          if link_bench else ""))):
+        os.makedirs(os.path.join(root, layer, "probe"))
+        for name, text in (("CMakeLists.txt", body), ("probe.h", ""), ("probe.cc", "")):
+            with open(os.path.join(root, layer, "probe", name), "w") as f:
+                f.write(text)
 
 
 def run_checker(checker, root, only, depfile=None):
@@ -63,31 +79,49 @@ def main():
     args = parser.parse_args()
     repo = os.path.abspath(args.source_dir)
 
-    # (probe, expected exit code, text the report must contain)
+    # (layer of the probe, probe, expected exit code, text the report must contain)
     cases = [
-        ('#include "workers/sim/episode.h"\n', 1, "workers/sim/episode.h"),
-        ('#include "server/cli/commands.h"\n', 1, "server/cli/commands.h"),
-        ('#include "bench/sim/raycast_bench.h"\n', 1, "bench/sim/raycast_bench.h"),
-        ("#include <btBulletDynamicsCommon.h>\n", 1, "Bullet"),
-        ("#include <embree3/rtcore.h>\n", 1, "Embree"),
-        ('#include "api/dds.h"\n', 1, "api/dds.h"),
-        ('#include "navstack/runtime/task.h"\n#include "api/episode.h"\n', 0, "clean"),
+        ("navstack", '#include "workers/sim/episode.h"\n', 1, "workers/sim/episode.h"),
+        ("navstack", '#include "server/cli/commands.h"\n', 1, "server/cli/commands.h"),
+        ("navstack", '#include "bench/farm/farm_processes.h"\n', 1, "bench/farm/farm_processes.h"),
+        ("navstack", "#include <btBulletDynamicsCommon.h>\n", 1, "Bullet"),
+        ("navstack", "#include <embree3/rtcore.h>\n", 1, "Embree"),
+        ("navstack", '#include "api/dds.h"\n', 1, "api/dds.h"),
+        ("navstack", '#include "navstack/runtime/task.h"\n#include "api/episode.h"\n', 0, "clean"),
+        # bench/ is the top layer: the CLI's bench cores live in server/bench, not bench/.
+        ("server", '#include "bench/farm/farm_processes.h"\n', 1, "bench/farm/farm_processes.h"),
+        ("server", '#include "server/bench/raycast_bench.h"\n#include "workers/sim/episode.h"\n', 0, "clean"),
     ]
     failures = []
     routes = (("sources", False), ("depfiles", False), ("unity", True))
-    for probe, expected, needle in cases:
+    for layer, probe, expected, needle in cases:
         for route, unity in routes:
             with tempfile.TemporaryDirectory() as root:
-                make_tree(root, repo, probe)
+                make_tree(root, repo, probe, layer)
                 only = "sources" if route == "sources" else "depfiles"
-                depfile = depfile_of(root, args.compiler, args.system_include, unity) if only == "depfiles" else None
+                depfile = (depfile_of(root, args.compiler, args.system_include, unity, layer)
+                           if only == "depfiles" else None)
                 r = run_checker(args.checker, root, only, depfile)
                 report = r.stdout + r.stderr
                 ok = r.returncode == expected and needle in report
-                print(f"{'ok  ' if ok else 'FAIL'} {route:8} exit {r.returncode} (want {expected}) for {probe.strip()!r}")
+                print(f"{'ok  ' if ok else 'FAIL'} {route:8} exit {r.returncode} (want {expected}) "
+                      f"for {layer} {probe.strip()!r}")
                 if not ok:
-                    failures.append(f"{route}: {probe.strip()!r}: exit {r.returncode}, wanted {expected} "
+                    failures.append(f"{route}: {layer} {probe.strip()!r}: exit {r.returncode}, wanted {expected} "
                                     f"and '{needle}' in:\n{report}")
+    # A library outside bench/ linking one of bench/ (without including it) breaks the rule too.
+    for link_bench, expected in ((True, 1), (False, 0)):
+        with tempfile.TemporaryDirectory() as root:
+            make_link_tree(root, repo, link_bench)
+            r = run_checker(args.checker, root, "sources")
+            report = r.stdout + r.stderr
+            needle = "links enavi_bench_probe of bench/" if expected else "clean"
+            ok = r.returncode == expected and needle in report
+            print(f"{'ok  ' if ok else 'FAIL'} cmake    exit {r.returncode} (want {expected}) for a server "
+                  f"library {'linking' if link_bench else 'not linking'} a bench/ library")
+            if not ok:
+                failures.append(f"cmake link probe ({link_bench}): exit {r.returncode}, wanted {expected} "
+                                f"and '{needle}' in:\n{report}")
     for f in failures:
         print(f, file=sys.stderr)
     return 1 if failures else 0

@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "bench/sim/raycast_bench.h"
+#include "server/bench/raycast_bench.h"
 #include "tests/unit/sim/mesh_builders.h"
 #include "workers/sim/depth_camera.h"
 
@@ -15,6 +15,7 @@ namespace {
 
 using navstack::CameraIntrinsics;
 using navstack::DepthImage;
+using namespace bench;  // the raycast core of `enavi bench raycast` (server/bench)
 
 //   top view, camera at the origin looking +x over a floor:
 //        [box]    (cyl)      [tilted box]

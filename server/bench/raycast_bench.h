@@ -14,7 +14,7 @@
 #include "workers/sim/depth_camera.h"
 #include "worlds/mesh.h"
 
-namespace enavi::sim {
+namespace enavi::bench {
 
 struct RaycastBenchOptions {
   navstack::CameraIntrinsics intrinsics = navstack::CameraIntrinsics::Default();
@@ -23,9 +23,9 @@ struct RaycastBenchOptions {
   /// Of those frames, this many (evenly spaced, first and last included) are also rendered by
   /// Bullet; throughput and disagreement are measured on them. 0 skips Bullet.
   int bullet_frames = 10;
-  EmbreeRayMode mode = EmbreeRayMode::kPacket16;  ///< the mode the headline figure is for
+  sim::EmbreeRayMode mode = sim::EmbreeRayMode::kPacket16;  ///< the mode the headline figure is for
   /// Further modes timed on the same frames for comparison (reported in `modes`).
-  std::vector<EmbreeRayMode> compare_modes;
+  std::vector<sim::EmbreeRayMode> compare_modes;
 };
 
 struct RaycastModeTiming {
@@ -58,7 +58,7 @@ struct RaycastBenchResult {
   std::int64_t one_sided_pixels = 0;    ///< exactly one renderer returned (grazing edges)
   double embree_valid_fraction = 0.0;  ///< share of Embree pixels with a return (all frames)
   std::string embree_mode;
-  EmbreeDeviceInfo embree;
+  sim::EmbreeDeviceInfo embree;
   std::vector<RaycastModeTiming> modes;  ///< headline mode first, then compare_modes
 };
 
@@ -92,4 +92,4 @@ RaycastBenchResult RunRaycastBench(const worlds::TriangleMesh& mesh, const Eigen
 nlohmann::json ToJson(const RaycastBenchResult& result);
 
 
-}  // namespace enavi::sim
+}  // namespace enavi::bench

@@ -24,7 +24,7 @@
 #include "workers/emulation/board_quota.h"
 #include "workers/emulation/cgroup_manager.h"
 
-namespace enavi::board {
+namespace enavi::bench {
 
 struct ThrottleBenchOptions {
   /// k; 0 = the smallest that fits the board into the host's free CPUs (MinimumDilation).
@@ -86,4 +86,4 @@ nlohmann::json ToJson(const ThrottleBenchResult& result);
 /// on every iteration (so it cannot be optimised away).
 std::uint64_t ThrottleWorkload(std::int64_t units);
 
-}  // namespace enavi::board
+}  // namespace enavi::bench

@@ -1,4 +1,4 @@
-#include "bench/board/throttle_bench.h"
+#include "server/bench/throttle_bench.h"
 
 #include <signal.h>
 #include <sys/mman.h>
@@ -16,7 +16,7 @@
 
 #include "navstack/runtime/sched_deadline.h"
 
-namespace enavi::board {
+namespace enavi::bench {
 namespace {
 
 constexpr int kMaxThreads = 64;
@@ -321,4 +321,4 @@ nlohmann::json ToJson(const ThrottleBenchResult& r) {
           {"phases", phases}};
 }
 
-}  // namespace enavi::board
+}  // namespace enavi::bench

@@ -1,4 +1,4 @@
-#include "bench/sim/raycast_bench.h"
+#include "server/bench/raycast_bench.h"
 
 #include <algorithm>
 #include <chrono>
@@ -11,7 +11,7 @@
 #include "workers/sim/bullet_raycaster.h"
 #include "workers/sim/static_world.h"
 
-namespace enavi::sim {
+namespace enavi::bench {
 namespace {
 
 double WallSeconds() {
@@ -41,7 +41,7 @@ std::vector<Eigen::Isometry3d> FramePoses(const Eigen::Vector3d& start,
     X_WB.translation() = start + s * (goal - start);
     X_WB.translation().z() = start.z();
     X_WB.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    poses.push_back(CameraPoseInWorld(X_WB, vehicle));
+    poses.push_back(sim::CameraPoseInWorld(X_WB, vehicle));
   }
   return poses;
 }
@@ -114,7 +114,7 @@ RaycastBenchResult RunRaycastBench(const worlds::TriangleMesh& mesh, const Eigen
   if (!start.allFinite() || !goal.allFinite()) {
     throw std::invalid_argument("RunRaycastBench: start and goal must be finite");
   }
-  CheckIntrinsics(options.intrinsics);
+  sim::CheckIntrinsics(options.intrinsics);
   const navstack::CameraIntrinsics& k = options.intrinsics;
   const std::vector<Eigen::Isometry3d> poses =
       FramePoses(start, goal, options.frames, options.vehicle);
@@ -126,14 +126,14 @@ RaycastBenchResult RunRaycastBench(const worlds::TriangleMesh& mesh, const Eigen
   r.height = k.height;
   r.frames = options.frames;
   r.bullet_frames = options.bullet_frames;
-  r.embree_mode = ToString(options.mode);
-  r.embree = EmbreeDevice::Get().Info();
+  r.embree_mode = sim::ToString(options.mode);
+  r.embree = sim::EmbreeDevice::Get().Info();
 
   double t0 = WallSeconds();
-  const EmbreeScene scene(mesh);
+  const sim::EmbreeScene scene(mesh);
   r.embree_build_s = WallSeconds() - t0;
   t0 = WallSeconds();
-  auto static_world = std::make_shared<const StaticCollisionWorld>(mesh);
+  auto static_world = std::make_shared<const sim::StaticCollisionWorld>(mesh);
   r.bullet_build_s = WallSeconds() - t0;
 
   // Frames shared with Bullet: evenly spaced, first and last included.
@@ -148,12 +148,12 @@ RaycastBenchResult RunRaycastBench(const worlds::TriangleMesh& mesh, const Eigen
 
   // Embree: every frame in the headline mode (keeping the shared frames), then other modes.
   std::vector<navstack::DepthImage> embree_images(shared.size());
-  std::vector<EmbreeRayMode> modes{options.mode};
+  std::vector<sim::EmbreeRayMode> modes{options.mode};
   modes.insert(modes.end(), options.compare_modes.begin(), options.compare_modes.end());
   std::int64_t valid = 0;
   navstack::DepthImage image;
   for (std::size_t m = 0; m < modes.size(); ++m) {
-    const DepthCamera camera(k, DepthNoise{}, modes[m]);
+    const sim::DepthCamera camera(k, sim::DepthNoise{}, modes[m]);
     double cpu = 0.0;
     std::size_t next_shared = 0;
     for (int i = 0; i < options.frames; ++i) {
@@ -167,7 +167,7 @@ RaycastBenchResult RunRaycastBench(const worlds::TriangleMesh& mesh, const Eigen
       }
     }
     const std::int64_t rays = pixels * options.frames;
-    r.modes.push_back({ToString(modes[m]), cpu, MraysPerSecond(rays, cpu)});
+    r.modes.push_back({sim::ToString(modes[m]), cpu, MraysPerSecond(rays, cpu)});
   }
   r.embree_rays = pixels * options.frames;
   r.embree_cpu_s = r.modes.front().cpu_s;
@@ -178,7 +178,7 @@ RaycastBenchResult RunRaycastBench(const worlds::TriangleMesh& mesh, const Eigen
   r.speedup_vs_bullet = std::numeric_limits<double>::quiet_NaN();
   r.bullet_mrays_per_s_per_core = std::numeric_limits<double>::quiet_NaN();
   if (!shared.empty()) {
-    BulletRayCaster bullet(static_world, k);
+    sim::BulletRayCaster bullet(static_world, k);
     double cpu = 0.0;
     DepthComparison agreement;
     for (std::size_t j = 0; j < shared.size(); ++j) {
@@ -240,4 +240,4 @@ nlohmann::json ToJson(const RaycastBenchResult& r) {
   };
 }
 
-}  // namespace enavi::sim
+}  // namespace enavi::bench
