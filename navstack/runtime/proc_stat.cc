@@ -1,10 +1,12 @@
 #include "navstack/runtime/proc_stat.h"
 
 #include <dirent.h>
+#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -168,6 +170,15 @@ std::vector<ThreadUtilisation> ThreadCpuMonitor::Sample() {
   }
   previous_ = std::move(current);
   return out;
+}
+
+std::string DescribeWaitStatus(int wstatus) {
+  if (WIFEXITED(wstatus)) return "exit code " + std::to_string(WEXITSTATUS(wstatus));
+  if (WIFSIGNALED(wstatus)) {
+    const char* name = strsignal(WTERMSIG(wstatus));
+    return "killed by signal " + std::to_string(WTERMSIG(wstatus)) + " (" + (name ? name : "?") + ")";
+  }
+  return "status " + std::to_string(wstatus);
 }
 
 }  // namespace enavi::navstack

@@ -56,6 +56,10 @@ pid_t ThreadGroupOf(pid_t tid);
 /// exited). Throws std::runtime_error if the stat line cannot be parsed (a kernel contract).
 std::optional<ThreadCpuTimes> ReadThreadCpu(pid_t pid, pid_t tid);
 
+/// How a process ended, from its waitpid status: "exit code 3", "killed by signal 11
+/// (Segmentation fault)".
+std::string DescribeWaitStatus(int wstatus);
+
 /// Thread ids of a process (/proc/<pid>/task), ascending; empty if the process is gone.
 std::vector<pid_t> ListThreads(pid_t pid);
 

@@ -23,9 +23,6 @@ using cgroupfs::ReadPids;
 using cgroupfs::ReadTrimmed;
 using cgroupfs::Subdirs;
 
-namespace {
-
-// Thread ids in `dir` and its t-* children.
 std::vector<pid_t> TasksBelow(const CgroupContext& ctx, const std::string& dir) {
   std::vector<pid_t> tids = ReadPids(Join(dir, TaskFile(ctx)));
   for (const std::string& child : Subdirs(dir)) {
@@ -34,8 +31,6 @@ std::vector<pid_t> TasksBelow(const CgroupContext& ctx, const std::string& dir) 
   }
   return tids;
 }
-
-}  // namespace
 
 std::optional<EpisodeName> ParseEpisodeName(const std::string& name) {
   unsigned long pid = 0, n = 0;
@@ -107,38 +102,41 @@ CgroupStatus RemoveDir(const CgroupContext& ctx, const std::string& dir) {
   return {};
 }
 
+bool EmptyEpisodeDirs(const CgroupContext& ctx, const std::vector<HierarchyDir>& dirs, int attempts) {
+  if (ctx.plain_files) return true;
+  const pid_t self = getpid();
+  std::set<pid_t> killed;
+  for (int attempt = 0; attempt < attempts; ++attempt) {
+    bool empty = true;
+    for (const HierarchyDir& h : dirs) {
+      for (pid_t tid : TasksBelow(ctx, h.dir)) {
+        empty = false;
+        const pid_t tgid = navstack::ThreadGroupOf(tid);
+        if (tgid == self) {
+          // v1 moves single threads; in v2 only the whole process can leave a threaded subtree.
+          if (ctx.layout.version == CgroupVersion::kV2) {
+            WriteValue(ctx, Join(h.home, "cgroup.procs"), std::to_string(self));
+          } else {
+            WriteValue(ctx, Join(h.home, "tasks"), std::to_string(tid));
+          }
+        } else if (tgid > 0 && killed.insert(tgid).second) {
+          kill(tgid, SIGKILL);
+        }
+      }
+    }
+    if (empty) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
 CgroupStatus RemoveEpisodeDirs(const CgroupContext& ctx, const std::vector<HierarchyDir>& dirs) {
   CgroupStatus status;
   auto fail = [&status](const std::string& message) {
     status.ok = false;
     status.message += (status.message.empty() ? "" : "; ") + message;
   };
-  if (!ctx.plain_files) {
-    const pid_t self = getpid();
-    std::set<pid_t> killed;
-    bool empty = false;
-    for (int attempt = 0; attempt < 500 && !empty; ++attempt) {  // <= ~5 s
-      empty = true;
-      for (const HierarchyDir& h : dirs) {
-        for (pid_t tid : TasksBelow(ctx, h.dir)) {
-          empty = false;
-          const pid_t tgid = navstack::ThreadGroupOf(tid);
-          if (tgid == self) {
-            // v1 moves single threads; in v2 only the whole process can leave a threaded subtree.
-            if (ctx.layout.version == CgroupVersion::kV2) {
-              WriteValue(ctx, Join(h.home, "cgroup.procs"), std::to_string(self));
-            } else {
-              WriteValue(ctx, Join(h.home, "tasks"), std::to_string(tid));
-            }
-          } else if (tgid > 0 && killed.insert(tgid).second) {
-            kill(tgid, SIGKILL);
-          }
-        }
-      }
-      if (!empty) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    if (!empty) fail("tasks still inside after SIGKILL and 5 s of waiting");
-  }
+  if (!EmptyEpisodeDirs(ctx, dirs, 500)) fail("tasks still inside after SIGKILL and 5 s of waiting");  // <= ~5 s
   for (const HierarchyDir& h : dirs) {
     for (const std::string& child : Subdirs(h.dir)) {
       if (!IsThreadDirName(child)) continue;

@@ -55,9 +55,14 @@ std::vector<HierarchyDir> EpisodeDirs(const CgroupContext& ctx, const std::strin
 std::vector<std::string> ParentDirs(const CgroupContext& ctx);
 /// The file listing a group's threads: cgroup.threads (v2) or tasks (v1).
 const char* TaskFile(const CgroupContext& ctx);
+/// Thread ids in `dir` and its t-* children.
+std::vector<pid_t> TasksBelow(const CgroupContext& ctx, const std::string& dir);
 
 /// One value into a control file (a plain-file tree gets a plain file).
 CgroupStatus WriteValue(const CgroupContext& ctx, const std::string& path, const std::string& value);
+/// Empties an episode's directories without removing them: threads of this process go home,
+/// other processes are killed, for up to `attempts` rounds 10 ms apart. True when empty.
+bool EmptyEpisodeDirs(const CgroupContext& ctx, const std::vector<HierarchyDir>& dirs, int attempts);
 /// Empties and removes an episode's directories: threads of this process go home, other
 /// processes are killed (they are the episode's navstack, or orphans of a crashed worker).
 CgroupStatus RemoveEpisodeDirs(const CgroupContext& ctx, const std::vector<HierarchyDir>& dirs);

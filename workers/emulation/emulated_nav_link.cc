@@ -34,70 +34,21 @@
 #include "navstack/runtime/sched_deadline.h"
 #include "navstack/stack/nav_stack.h"
 #include "workers/board/host_calibration.h"
-#include "workers/emulation/board_quota.h"
-#include "workers/emulation/cgroup_manager.h"
+#include "workers/emulation/board_slot.h"
 #include "workers/emulation/emulated_child.h"
 #include "workers/emulation/emulated_wire.h"
 #include "workers/emulation/shm_channel.h"
+#include "workers/emulation/termination_signals.h"
 
 namespace enavi::emulation {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 using navstack::TaskId;
-
-
 using api::Fixed;
 
 std::int64_t ToNs(Clock::time_point t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
-}
-
-// --- Signals: SIGINT/SIGTERM end the episode cleanly (child and cgroup removed first).
-
-std::atomic<int> g_signal{0};
-std::mutex g_signal_mutex;
-int g_signal_users = 0;
-struct sigaction g_old_int{}, g_old_term{};
-bool g_installed_int = false, g_installed_term = false;
-
-extern "C" void OnTerminationSignal(int sig) { g_signal.store(sig); }
-
-void InstallSignalHandlers() {
-  std::lock_guard l(g_signal_mutex);
-  if (g_signal_users++ > 0) return;
-  g_signal.store(0);
-  struct sigaction sa{};
-  sa.sa_handler = OnTerminationSignal;
-  sigemptyset(&sa.sa_mask);
-  // Only where nobody else handles the signal: a host process with its own shutdown keeps it.
-  struct sigaction current{};
-  if (sigaction(SIGINT, nullptr, &current) == 0 && current.sa_handler == SIG_DFL) {
-    g_installed_int = sigaction(SIGINT, &sa, &g_old_int) == 0;
-  }
-  if (sigaction(SIGTERM, nullptr, &current) == 0 && current.sa_handler == SIG_DFL) {
-    g_installed_term = sigaction(SIGTERM, &sa, &g_old_term) == 0;
-  }
-}
-
-// Restores the old dispositions; returns the signal that arrived while installed (0: none).
-int RemoveSignalHandlers() {
-  std::lock_guard l(g_signal_mutex);
-  if (--g_signal_users > 0) return 0;
-  if (g_installed_int) sigaction(SIGINT, &g_old_int, nullptr);
-  if (g_installed_term) sigaction(SIGTERM, &g_old_term, nullptr);
-  g_installed_int = g_installed_term = false;
-  return g_signal.exchange(0);
-}
-
-
-std::string DescribeWait(int status) {
-  if (WIFEXITED(status)) return "exit code " + std::to_string(WEXITSTATUS(status));
-  if (WIFSIGNALED(status)) {
-    const char* name = strsignal(WTERMSIG(status));
-    return "killed by signal " + std::to_string(WTERMSIG(status)) + " (" + (name ? name : "?") + ")";
-  }
-  return "status " + std::to_string(status);
 }
 
 }  // namespace
@@ -114,17 +65,15 @@ struct EmulatedNavLink::Impl {
   board::BoardProfile board;
   EmulationOptions emulation;
   double speed = 1.0, dilation = 1.0;
-  emulation::BoardQuota quota;
   std::map<std::string, std::string> notes;
 
   // Resources, released in reverse order by Shutdown().
-  bool signals_installed = false;
+  std::optional<ScopedTerminationSignals> signals;
   // The simulator's own scheduling while the episode runs (restored by Shutdown()).
   bool sim_fifo = false;
   int sim_old_policy = SCHED_OTHER;
   sched_param sim_old_param{};
-  std::unique_ptr<emulation::CgroupManager> manager;
-  std::unique_ptr<emulation::EpisodeCgroup> group;
+  std::unique_ptr<BoardSlot> slot;
   std::optional<emulation::ShmChannel> channel;
   LinkShared* shared = nullptr;
   pid_t child = -1;
@@ -167,8 +116,6 @@ struct EmulatedNavLink::Impl {
 
   ~Impl() { Shutdown(); }
 
-  /// This host's speed for the episode: the calibration's, or moved by the speed probe's drift.
-  double HostSpeedNow(const board::HostCalibration& cal);
   void Start();
   void Shutdown();
   void SetEpoch();
@@ -178,7 +125,7 @@ struct EmulatedNavLink::Impl {
   void PublisherLoop();
   void StopPublisher();
   void CheckSignal(const char* where) const {
-    if (const int sig = g_signal.load()) {
+    if (const int sig = PendingTerminationSignal()) {
       throw std::runtime_error(std::string("emulated clock: interrupted by ") + strsignal(sig) + " " + where);
     }
   }
@@ -187,113 +134,22 @@ struct EmulatedNavLink::Impl {
   void SampleProc() const;
 };
 
-double EmulatedNavLink::Impl::HostSpeedNow(const board::HostCalibration& cal) {
-  if (!emulation.probe_host_speed) {
-    notes["emulation.speed_probe"] = "none: the calibration's speed " + Fixed(cal.relative_speed, 3) + " stands";
-    return cal.relative_speed;
-  }
-  const board::SpeedProbe probe = emulation.probe_host_speed();
-  const board::SpeedDrift d = board::DriftSinceCalibration(cal, probe.speed);
-  const board::DriftText text = board::DescribeDrift(cal, probe);
-  const double used = emulation.use_probed_speed ? d.host_speed : cal.relative_speed;
-  notes["emulation.speed_probe"] =
-      text.drift + "; " + text.spread + "; " + Fixed(probe.wall_s, 1) + " s, " + std::to_string(probe.jobs) + " jobs" +
-      (emulation.use_probed_speed ? ": host speed " + Fixed(used, 3) + " used"
-                                  : ": not used (the calibration's " + Fixed(used, 3) + " is)");
-  if (std::abs(d.ratio - 1) > board::kSpeedDriftWarning) {
-    std::fprintf(stderr, "enavi: warning: %s; %s; `enavi calibrate` refits this host's costs\n", text.drift.c_str(),
-                 emulation.use_probed_speed ? "the board is emulated at the speed now"
-                                            : "the board is emulated at the calibration's speed, off by as much");
-  }
-  if (probe.Spread() > board::kSpeedDriftWarning) {
-    std::fprintf(stderr,
-                 "enavi: warning: %s: a VM whose vCPUs share physical cores with other guests; the board runs "
-                 "at the speed of whichever its threads land on\n",
-                 text.spread.c_str());
-  }
-  return used;
-}
-
 void EmulatedNavLink::Impl::Start() {
-  // 1. This host's speed (calibration) -> the board's speed relative to it.
-  const std::string path = board::CalibrationPath(emulation.calibration_file);
-  const board::CalibrationCheck check = board::CheckHostCalibration(path);
-  if (!check.ok()) throw std::invalid_argument("--clock emulated needs a valid host calibration: " + check.message);
-  const board::HostCalibration& cal = *check.calibration;
-  const double host_speed = HostSpeedNow(cal);
-  speed = board::SpeedVsHost(board, host_speed);
-  const double raw_speed = speed;
-  if (speed > 1.0 + board::kFasterBoardTolerance) {
-    throw std::invalid_argument("--clock emulated: board '" + board.id + "' has cores " + Fixed(speed, 3) +
-                                " x as fast as this host's (board " + Fixed(board.per_core_speed, 3) + ", host " +
-                                Fixed(host_speed, 3) +
-                                " x the reference core); a CPU throttle can only slow down, use the virtual clock");
-  }
-  speed = std::min(1.0, speed);
-  notes["emulation.speed"] = Fixed(speed, 4) + " of a host core per board core (board " +
-                             Fixed(board.per_core_speed, 3) + " / host " + Fixed(host_speed, 3) +
-                             " x the reference core; calibration " + path + ", " + cal.date + ")" +
-                             (raw_speed > 1.0 ? "; the board is " + Fixed(100 * (raw_speed - 1), 1) +
-                                                    " % faster than the host: emulated at full host speed"
-                                              : "");
+  // 1. The board on this host: speed, dilation, quotas, the episode's cgroups.
+  signals.emplace();
+  slot = std::make_unique<BoardSlot>(board, dilation, emulation);
+  speed = slot->speed();
+  dilation = slot->dilation();
+  notes.insert(slot->notes().begin(), slot->notes().end());
+  EpisodeCgroup* group = &slot->group();
 
-  // 2. cgroups: detect, reap stale groups, admit.
-  InstallSignalHandlers();
-  signals_installed = true;
-  emulation::CgroupOptions cg;
-  auto open = emulation::CgroupManager::Open(cg);
-  if (!open.ok()) {
-    throw std::invalid_argument("--clock emulated needs a writable cgroup hierarchy (run as root, cgroup v2 with "
-                                "cpu/cpuset/memory delegated or v1 cpu/cpuset/memory mounted read-write): " +
-                                open.error + "; the virtual clock (--clock virtual) needs none of this");
-  }
-  manager = std::move(open.manager);
-  if (!open.reaped.empty()) {
-    std::string list;
-    for (const auto& r : open.reaped) list += (list.empty() ? "" : ", ") + r;
-    notes["emulation.reaped"] = list;
-  }
-  const emulation::BoardCpu cpu{board.cores, speed};
-  const double host_cpus = manager->HostCpus();
-  const double reserved = manager->ReservedCpus();
-  const double free_cpus = host_cpus - cg.host_reserve_cpus - reserved;
-  if (dilation <= 0) {
-    if (free_cpus < 0.05) {
-      throw std::invalid_argument("--clock emulated: admission refused: no host CPU free (host " +
-                                  Fixed(host_cpus, 0) + " CPUs, " + Fixed(reserved, 3) +
-                                  " held by running emulations, " + Fixed(cg.host_reserve_cpus, 2) +
-                                  " kept for the simulator)");
-    }
-    dilation = emulation::MinimumDilation(cpu, free_cpus);
-    notes["emulation.dilation"] = Fixed(dilation, 2) + " (auto: smallest multiple of 0.25 at which " +
-                                  std::to_string(board.cores) + " x " + Fixed(speed, 3) + " = " +
-                                  Fixed(board.cores * speed, 3) + " host CPUs fit the " + Fixed(free_cpus, 2) +
-                                  " free)";
-  } else {
-    notes["emulation.dilation"] = Fixed(dilation, 2) + " (requested)";
-  }
-  emulation::QuotaOptions qo;
-  qo.dilation = dilation;
-  qo.period_us = emulation.cfs_period_us;
-  quota = emulation::ComputeBoardQuota(cpu, qo);
-  emulation::EpisodeLimits limits;
-  limits.cpus = emulation.cpus;
-  auto created = manager->CreateEpisode(quota, limits);
-  if (!created.ok()) throw std::invalid_argument("--clock emulated: " + created.refusal);
-  group = std::move(created.group);
-  notes["emulation.cgroup"] =
-      std::string(manager->layout().version == emulation::CgroupVersion::kV2 ? "v2 " : "v1 ") + group->name() +
-      ": board quota " + std::to_string(quota.board_quota_us) + " us / " + std::to_string(quota.period_us) + " us (" +
-      Fixed(quota.BoardCpus(), 3) + " host CPUs), per thread " + std::to_string(quota.core_quota_us) + " us (" +
-      Fixed(quota.CoreCpus(), 3) + ")" + (emulation.cpus.empty() ? "" : ", cpuset " + emulation.cpus);
-
-  // 3. Shared memory.
+  // 2. Shared memory.
   channel.emplace(emulation::ShmChannel::Create({options.camera.width, options.camera.height}));
   void* mem = mmap(nullptr, sizeof(LinkShared), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
   if (mem == MAP_FAILED) throw std::runtime_error(std::string("emulated clock: mmap: ") + std::strerror(errno));
   shared = new (mem) LinkShared();
 
-  // 4. The navstack process: forked, waits until it is inside the board's groups.
+  // 3. The navstack process: forked, waits until it is inside the board's groups.
   int go[2];
   if (pipe2(go, O_CLOEXEC) != 0) throw std::runtime_error(std::string("emulated clock: pipe: ") + std::strerror(errno));
   ChildArgs args;
@@ -344,7 +200,7 @@ void EmulatedNavLink::Impl::Start() {
                                "), simulator outside the throttled groups";
   if (emulation.on_navstack_started) emulation.on_navstack_started(child);
 
-  // 5. Wait until its workers run (and asked for SCHED_DEADLINE), then give every thread its group.
+  // 4. Wait until its workers run (and asked for SCHED_DEADLINE), then give every thread its group.
   const auto give_up = Clock::now() + std::chrono::seconds(30);
   while (shared->child_state.load(std::memory_order_acquire) == kStarting) {
     CheckSignal("while the navstack process started");
@@ -460,7 +316,7 @@ void EmulatedNavLink::Impl::CheckChild() {
   const pid_t r = waitpid(child, &status, WNOHANG);
   if (r == child) {
     child = -1;
-    child_exit = DescribeWait(status);
+    child_exit = navstack::DescribeWaitStatus(status);
     if (shared->child_state.load(std::memory_order_acquire) == kFailed) {
       throw std::runtime_error(std::string("emulated clock: the navstack process failed: ") + shared->error);
     }
@@ -507,15 +363,11 @@ void EmulatedNavLink::Impl::Shutdown() {
       kill(child, SIGKILL);
       r = waitpid(child, &status, 0);
     }
-    if (r == child) child_exit = DescribeWait(status);
+    if (r == child) child_exit = navstack::DescribeWaitStatus(status);
     child = -1;
   }
-  std::string cleanup_error;
-  if (group) {
-    if (emulation::CgroupStatus s = group->Remove(); !s.ok) cleanup_error = s.message;
-    group.reset();
-  }
-  manager.reset();  // removes the `enavi` parent unless other episodes live in it
+  const std::string cleanup_error = slot ? slot->Release() : std::string();
+  slot.reset();
   channel.reset();
   if (shared != nullptr) {
     shared->~LinkShared();
@@ -523,15 +375,7 @@ void EmulatedNavLink::Impl::Shutdown() {
     shared = nullptr;
   }
   if (!cleanup_error.empty()) std::fprintf(stderr, "enavi: emulated clock clean-up: %s\n", cleanup_error.c_str());
-  if (signals_installed) {
-    signals_installed = false;
-    if (const int sig = RemoveSignalHandlers()) {
-      // The episode was interrupted: now that nothing is left behind, die as the signal asked.
-      std::fprintf(stderr, "enavi: %s: navstack process stopped and its cgroup removed\n", strsignal(sig));
-      signal(sig, SIG_DFL);
-      raise(sig);
-    }
-  }
+  signals.reset();  // re-raises a SIGINT/SIGTERM that arrived during the episode, now that nothing is left
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -630,7 +474,7 @@ void EmulatedNavLink::AdvanceTo(double t) {
   }
   if (after >= m.next_sweep) {  // threads the stack may have started since
     m.next_sweep = after + std::chrono::seconds(1);
-    m.group->SweepThreads();
+    m.slot->group().SweepThreads();
   }
 }
 

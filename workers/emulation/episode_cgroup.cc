@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -73,23 +74,35 @@ int EpisodeCgroup::SweepThreads(CgroupStatus* status) {
   const CgroupContext& ctx = *context_;
   int placed = 0;
   CgroupStatus total;
-  for (pid_t tid : ReadPids(Join(cpu_dir_, TaskFile(ctx)))) {
+  auto place = [&](pid_t tid) {
     if (CgroupStatus s = AddThread(tid); s.ok) {
       ++placed;
     } else if (total.ok) {
       total = s;
     }
-  }
-  // Groups of threads that exited.
+  };
+  for (pid_t tid : ReadPids(Join(cpu_dir_, TaskFile(ctx)))) place(tid);
+  // A thread started by a thread that already has its group lands in that group, sharing its
+  // one board core; it gets its own. Groups of threads that exited are removed.
   if (!ctx.plain_files) {
     for (const std::string& child : Subdirs(cpu_dir_)) {
+      if (!IsThreadDirName(child)) continue;
       const std::string dir = Join(cpu_dir_, child);
-      if (IsThreadDirName(child) && ReadPids(Join(dir, TaskFile(ctx))).empty()) rmdir(dir.c_str());
+      const std::vector<pid_t> tids = ReadPids(Join(dir, TaskFile(ctx)));
+      if (tids.empty()) {
+        rmdir(dir.c_str());
+        continue;
+      }
+      const std::string owner = child.substr(2);  // t-<tid>
+      for (pid_t tid : tids)
+        if (std::to_string(tid) != owner) place(tid);
     }
   }
   if (status != nullptr) *status = total;
   return placed;
 }
+
+std::vector<pid_t> EpisodeCgroup::Tasks() const { return TasksBelow(*context_, cpu_dir_); }
 
 CpuStat EpisodeCgroup::ReadCpuStat() const {
   CpuStat stat;
@@ -105,12 +118,17 @@ CpuStat EpisodeCgroup::ReadCpuStat() const {
   return stat;
 }
 
-CgroupStatus EpisodeCgroup::Remove() {
+bool EpisodeCgroup::KillTasks(double timeout_s) {
+  if (removed_ || !context_) return true;
+  return EmptyEpisodeDirs(*context_, EpisodeDirs(*context_, name_), std::max(1, static_cast<int>(timeout_s * 100)));
+}
+
+CgroupStatus EpisodeCgroup::Remove(bool with_parent) {
   if (removed_ || !context_) return {};
   removed_ = true;
   HostLock lock(context_->options.lock_file);
   CgroupStatus status = RemoveEpisodeDirs(*context_, EpisodeDirs(*context_, name_));
-  if (!context_->manager_alive) RemoveParentsIfUnused(*context_);
+  if (with_parent || !context_->manager_alive) RemoveParentsIfUnused(*context_);
   return status;
 }
 

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "workers/emulation/board_quota.h"
 #include "workers/emulation/cgroup_layout.h"
@@ -47,17 +48,25 @@ class EpisodeCgroup {
   /// Gives thread `tid` its own child group with the per-core quota and moves it there. The
   /// thread's process must already be in the episode (AddProcess), v2 requires it.
   CgroupStatus AddThread(pid_t tid);
-  /// Gives every thread still directly in the board group its own child group (threads that
-  /// the navstack created after AddProcess inherit their creator's group), and removes the
+  /// Gives every thread its own child group: those still directly in the board group and those
+  /// that share another thread's group (a thread inherits its creator's group), and removes the
   /// groups of threads that exited. Call after the navstack started its threads and then
   /// periodically (it is a directory read when nothing changed). Returns threads placed.
   int SweepThreads(CgroupStatus* status = nullptr);
 
   CpuStat ReadCpuStat() const;
+  /// Every thread inside the board group and its per-thread groups (cpu hierarchy).
+  std::vector<pid_t> Tasks() const;
+
+  /// Kills every task of other processes inside (processes that fork while being killed
+  /// included), for up to `timeout_s`; the groups stay. False if tasks remain.
+  bool KillTasks(double timeout_s = 5.0);
 
   /// Kills tasks of other processes still inside, moves threads of this process back to the
   /// worker's own groups, removes the directories. Idempotent; the destructor calls it.
-  CgroupStatus Remove();
+  /// `with_parent`: also the `enavi` parent when no episode is left in it, whether or not its
+  /// manager lives (a process that outlived the worker that made the group cleans up after it).
+  CgroupStatus Remove(bool with_parent = false);
 
  private:
   friend class CgroupManager;
