@@ -1,6 +1,7 @@
 #include "api/episode.h"
 
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -88,6 +89,10 @@ void ReadSpec(const Fields& f, EpisodeSpec& s) {
   f.Optional("up", s.up);
   f.Optional("recenter", s.recenter);
   f.Optional("model_path", s.model_path);
+  if (const nlohmann::json* ros = f.Find("ros")) s.ros = ros->get<RosStack>();
+  f.Optional("rosbag_dir", s.rosbag_dir);
+  if (s.ros && s.ros->name != s.method)
+    throw std::invalid_argument("episode spec: method '" + s.method + "' is not its ROS stack's name '" + s.ros->name + "'");
 }
 
 nlohmann::json SpecFields(const EpisodeSpec& s) {
@@ -105,6 +110,8 @@ nlohmann::json SpecFields(const EpisodeSpec& s) {
   if (s.recenter) j["recenter"] = true;
   if (!s.model_path.empty()) j["model_path"] = s.model_path;
   if (s.speed_probe != "check") j["speed_probe"] = s.speed_probe;
+  if (s.ros) j["ros"] = *s.ros;
+  if (!s.rosbag_dir.empty()) j["rosbag_dir"] = s.rosbag_dir;
   return j;
 }
 

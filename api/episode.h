@@ -12,6 +12,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "api/ros_stack.h"
+
 namespace enavi::api {
 
 using Vec3 = std::array<double, 3>;
@@ -76,6 +78,11 @@ struct EpisodeSpec {
   double timeout_s = 0.0;     ///< 0: derived from the start-goal distance
   std::string policy;         ///< E-Navi policy file; empty: the shipped default
   std::map<std::string, double> overrides;  ///< named tunables (validated by the runner)
+  /// The method is a user's ROS 1 stack (docs/ros.md): how to start it and its topics; `method`
+  /// is its name. Absent for the registered methods.
+  std::optional<RosStack> ros;
+  /// ROS methods: record the episode's topics into episode.bag in this directory (empty: none).
+  std::string rosbag_dir;
 };
 
 /// Per-task CPU utilisation, % of one board core (psutil convention).

@@ -38,10 +38,16 @@ class Context {
   const YamlReader& reader() const { return reader_; }
   const std::vector<fs::path>& roots() const { return roots_; }
   const Catalog& catalog() const { return catalog_; }
+  /// The job's ROS methods (ros_methods:), known before `methods` is read.
+  std::vector<std::string>& ros_methods() const { return ros_methods_; }
+  bool IsRosMethod(const std::string& m) const {
+    return std::find(ros_methods_.begin(), ros_methods_.end(), m) != ros_methods_.end();
+  }
 
  private:
   YamlReader reader_;
   const Catalog& catalog_;
+  mutable std::vector<std::string> ros_methods_;
   std::vector<fs::path> roots_;
 };
 
@@ -55,6 +61,13 @@ std::string Join(const auto& items) {
 }
 
 std::vector<std::string> MethodNames(const Context& ctx) {
+  std::vector<std::string> names;
+  for (const MethodEntry& m : ctx.catalog().methods) names.push_back(m.name);
+  names.insert(names.end(), ctx.ros_methods().begin(), ctx.ros_methods().end());
+  return names;
+}
+
+std::vector<std::string> RegisteredMethodNames(const Context& ctx) {
   std::vector<std::string> names;
   for (const MethodEntry& m : ctx.catalog().methods) names.push_back(m.name);
   return names;
@@ -189,6 +202,10 @@ void CheckTunable(const Context& ctx, const YAML::Node& at, const std::string& f
   for (const std::string& prefix : ctx.catalog().unchecked_prefixes)
     if (key.rfind(prefix, 0) == 0) return;
   for (const std::string& method : methods) {
+    if (ctx.IsRosMethod(method))
+      ctx.Fail(at, field + "." + key,
+               "method " + method + " is a ROS stack: it has no tunables (its launch arguments are ros_methods." +
+                   method + ".args)");
     const MethodEntry* m = ctx.catalog().Find(method);
     if (!m) continue;  // reported where the method was named
     const auto t = std::find_if(m->tunables.begin(), m->tunables.end(),
@@ -387,6 +404,44 @@ bool Matches(const EpisodeOverride& o, const EpisodeSpec& e) {
          in(o.seeds, e.seed);
 }
 
+// ros_methods: name -> a stack file under the allowed roots (its errors name that file) or the
+// stack inline (they name the job spec).
+std::map<std::string, RosStack> RosMethods(const Context& ctx, const YAML::Node& n) {
+  if (!n.IsMap() || n.size() == 0) ctx.Fail(n, "ros_methods", "expected a map of method name: stack file or stack");
+  CheckKeys(ctx, n, "ros_methods", {});
+  std::map<std::string, RosStack> out;
+  const std::vector<std::string> reserved = RegisteredMethodNames(ctx);
+  for (const auto& kv : n) {
+    const std::string name = Scalar(ctx, kv.first, "ros_methods");
+    const std::string field = "ros_methods." + name;
+    RosStack stack;
+    if (kv.second.IsScalar()) {
+      const std::string file = ResolveFile(ctx, kv.second, field, Scalar(ctx, kv.second, field), {".yaml", ".yml"});
+      try {
+        stack = LoadRosStack(file, reserved);
+      } catch (const RosStackError& e) {
+        throw JobSpecError(e.what());
+      }
+      // The job's key names the method, whatever the file calls it.
+      stack.name = name;
+      if (std::find(reserved.begin(), reserved.end(), name) != reserved.end())
+        ctx.Fail(kv.first, field, "'" + name + "' is a registered method's name");
+    } else {
+      YamlReader::Thrower thrower = [](const std::string& source, int line, const std::string& f, const std::string& reason) {
+        throw JobSpecError(source + ":" + std::to_string(line > 0 ? line : 1) + ": " + f + ": " + reason);
+      };
+      const YamlReader nested(ctx.reader().source(), [field, thrower](const std::string& source, int line,
+                                                                      const std::string& f, const std::string& reason) {
+        thrower(source, line, YamlReader::Join(field, f), reason);
+      });
+      stack = ParseRosStack(nested, kv.second, ctx.roots().front().string(), name, reserved);
+    }
+    out.emplace(name, std::move(stack));
+    ctx.ros_methods().push_back(name);
+  }
+  return out;
+}
+
 }  // namespace
 
 JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
@@ -402,7 +457,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   CheckKeys(ctx, root, "",
             {"name", "boards", "scenarios", "methods", "seeds", "clock", "cost", "dilation", "speed_probe",
              "timeout_s", "policy", "world_params", "overrides", "episode_overrides", "episodes",
-             "collect", "sample", "labels"});
+             "collect", "sample", "labels", "ros_methods", "rosbag"});
   // Either the matrix or an explicit episode list.
   if (root["episodes"]) {
     for (const char* matrix : {"boards", "scenarios", "seeds"}) {
@@ -422,6 +477,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   } else {
     job.name = fs::path(file_name).stem().string();
   }
+  if (root["ros_methods"]) job.ros_methods = RosMethods(ctx, root["ros_methods"]);
   job.methods = Choices(ctx, root["methods"], "methods", MethodNames(ctx), "method");
   if (const YAML::Node list = root["episodes"]) {
     if (!list.IsSequence() || list.size() == 0) ctx.Fail(list, "episodes", "expected a non-empty list");
@@ -450,6 +506,24 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
     job.speed_probe = Choices(ctx, probe, "speed_probe", kSpeedProbeModes, "speed probe mode").front();
     if (job.clock != "emulated")
       ctx.Fail(probe, "speed_probe", "the emulated clock's (this job's clock is " + job.clock + ")");
+  }
+  // A ROS stack runs in real time inside the board's cgroup: only the emulated clock does that.
+  for (const std::string& m : job.methods) {
+    if (ctx.IsRosMethod(m) && job.clock != "emulated") {
+      ctx.Fail(root["clock"] ? root["clock"] : root["methods"], "clock",
+               "method '" + m + "' is a ROS stack: it runs on the emulated clock only (its processes run in real time "
+               "inside the board's cgroup); set clock: emulated");
+    }
+  }
+  for (const auto& [name, stack] : job.ros_methods) {
+    if (std::find(job.methods.begin(), job.methods.end(), name) == job.methods.end())
+      ctx.Fail(root["ros_methods"], "ros_methods." + name, "defined but not listed in methods");
+  }
+  if (const YAML::Node bag = root["rosbag"]) {
+    if (job.ros_methods.empty()) ctx.Fail(bag, "rosbag", "records the topics of ROS methods; this job has none");
+    const std::string dir = Scalar(ctx, bag, "rosbag");
+    const fs::path given(dir);
+    job.rosbag_dir = fs::weakly_canonical(given.is_absolute() ? given : ctx.roots().front() / given).string();
   }
   if (root["timeout_s"]) job.timeout_s = Number(ctx, root["timeout_s"], "timeout_s", 0, kMaxTimeoutS);
   if (root["policy"]) {
@@ -562,6 +636,10 @@ std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
           e.timeout_s = job.timeout_s;
           e.policy = job.policy;
           e.overrides = job.overrides;
+          if (const auto ros = job.ros_methods.find(method); ros != job.ros_methods.end()) {
+            e.ros = ros->second;
+            e.rosbag_dir = job.rosbag_dir;
+          }
           for (const auto& o : job.episode_overrides) {
             if (!Matches(o, e)) continue;
             if (o.timeout_s) e.timeout_s = *o.timeout_s;

@@ -10,7 +10,11 @@
 //     - {world: meshes/yard.obj, start: [0, 0, 1], goal: [30, 0, 1], params: {k: v}}
 //     - {world: meshes/block.glb, units: mm, up: z, recenter: true, start: [0, 0, 5], goal: [40, 0, 5]}
 //     - {world: gazebo/yard.world, model_path: [gazebo/models], start: [0, 0, 2], goal: [20, 0, 2]}
-//   methods: [baseline, fixed, enavi]  # the registered methods
+//   methods: [baseline, fixed, enavi]  # the registered methods, and the job's ROS methods
+//   ros_methods:                  # users' ROS 1 stacks as methods (api/ros_stack.h, docs/ros.md)
+//     ego: stacks/ego.yaml        # a stack file under an allowed root, or the stack inline:
+//     mine: {launch: launch/mine.launch, topics: {command: /cmd}}
+//   rosbag: bags                  # ROS methods: record each episode's topics into a bag there
 //   seeds: 3                      # a count (1..N) or a list [1, 7, 9]
 //   clock: virtual                # a registered clock: virtual | emulated
 //   cost: model                   # model | measured
@@ -133,6 +137,9 @@ struct JobSpec {
   std::vector<EpisodePick> episodes;  ///< explicit list instead of the matrix (when non-empty)
   std::optional<CollectSpec> collect;
   std::map<std::string, std::string> labels;  ///< free tags (branch, commit, suite, ...)
+  /// The job's ROS methods by name (each also listed in `methods`).
+  std::map<std::string, RosStack> ros_methods;
+  std::string rosbag_dir;  ///< canonical directory for the ROS episodes' bags; empty: none
 
   std::size_t MatrixSize() const {
     if (!episodes.empty()) return episodes.size() * methods.size();

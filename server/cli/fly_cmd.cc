@@ -12,6 +12,7 @@
 #include "api/atomic_file.h"
 #include "api/episode.h"
 #include "api/job_spec.h"
+#include "api/ros_stack.h"
 #include "navstack/methods/registry.h"
 #include "server/cli/cli_values.h"
 #include "server/cli/commands.h"
@@ -51,10 +52,23 @@ struct FlyArgs {
   double dilation = 0.0;  // emulated clock; 0 (absent): the smallest that fits the host
   std::string calibration;
   emulation::EmulationOptions emulation;  // experiments: hidden flags
+  std::string ros_stack;  // a ROS stack file: the method
+  bool rosbag = false;
+  bool method_given = false, clock_given = false;
 };
 
 void Run(FlyArgs args) {
   api::EpisodeSpec spec = args.spec;
+  if (!args.ros_stack.empty()) {
+    spec.ros = api::LoadRosStack(args.ros_stack, navstack::MethodNames());
+    if (args.method_given && spec.method != spec.ros->name)
+      throw api::RosStackError("--method: '" + spec.method + "' is not the ROS stack's name '" + spec.ros->name +
+                               "' (--ros-stack names the method)");
+    spec.method = spec.ros->name;
+    if (!args.clock_given) spec.clock = "emulated";  // the only clock a ROS stack runs on
+  } else if (args.rosbag) {
+    throw std::invalid_argument("--rosbag: records the topics of a ROS stack (--ros-stack FILE)");
+  }
   if (!args.start.empty()) spec.start = ParsePoint("--start", args.start);
   if (!args.goal.empty()) spec.goal = ParsePoint("--goal", args.goal);
   spec.world_params = ParseNameValues("--param", args.params);
@@ -73,6 +87,13 @@ void Run(FlyArgs args) {
       std::fprintf(stderr, "\r  sim %6.1f s, %5.1f m to goal", t, distance);
       std::fflush(stderr);
     };
+  }
+  if (spec.ros) {
+    if (!args.out_dir.empty()) options.ros_output_dir = (std::filesystem::path(args.out_dir) / "ros").string();
+    if (args.rosbag)
+      options.ros_bag_file = std::filesystem::absolute(args.out_dir.empty() ? std::filesystem::path(spec.method + ".bag")
+                                                                            : std::filesystem::path(args.out_dir) / "episode.bag")
+                                 .string();
   }
   std::vector<sim::EciFrame> eci_frames;
   if (!args.out_dir.empty()) options.eci_observer = [&eci_frames](const sim::EciFrame& f) { eci_frames.push_back(f); };
@@ -147,10 +168,18 @@ void RegisterFlyCommand(CLI::App& app) {
   for (const navstack::MethodInfo& m : navstack::Methods()) methods += "\n    " + m.name + ": " + m.summary;
   fly->add_option("--method", args->spec.method, methods)
       ->capture_default_str()
-      ->check(CLI::IsMember(navstack::MethodNames()));
+      ->check(CLI::IsMember(navstack::MethodNames()))
+      ->each([args](const std::string&) { args->method_given = true; });
+  fly->add_option("--ros-stack", args->ros_stack,
+                  "a ROS 1 stack file (docs/ros.md): fly the user's ROS stack as the method (its name), on the "
+                  "emulated clock")
+      ->check(CLI::ExistingFile);
+  fly->add_flag("--rosbag", args->rosbag,
+                "ROS stacks: record the episode's topics into a bag (DIR/episode.bag with --out, else NAME.bag)");
   fly->add_option("--clock", args->spec.clock, "clock:" + ClocksHelp())
       ->capture_default_str()
-      ->check(CLI::IsMember(sim::FarmCatalog().clocks));
+      ->check(CLI::IsMember(sim::FarmCatalog().clocks))
+      ->each([args](const std::string&) { args->clock_given = true; });
   fly->add_option("--dilation", args->dilation,
                   "emulated clock: 1 sim second = K wall seconds, quota divided by K (default: the smallest "
                   "multiple of 0.25 at which the board fits this host)")
@@ -185,7 +214,7 @@ void RegisterFlyCommand(CLI::App& app) {
   fly->add_option("--set", args->overrides, tunables);
   fly->add_option("--out", args->out_dir,
                   "write result.json, timeseries.csv (10 Hz), eci_frames.csv (every depth frame) and plots "
-                  "(PNG) here");
+                  "(PNG) here; a ROS stack's logs in DIR/ros");
   fly->add_flag("--json", args->json, "print one JSON object with the results on stdout");
   fly->callback([args] { Run(*args); });
 }

@@ -6,11 +6,17 @@
 #include <CLI/CLI.hpp>
 
 #include "server/cli/commands.h"
+#ifdef ENAVI_WITH_ROS
+#include "workers/ros/ros_nav_link.h"
+#endif
 
 int main(int argc, char** argv) {
   using namespace enavi::cli;
   CLI::App app{"E-Navi Farm: a simulation farm for UAV navigation stacks on weak onboard computers"};
   app.require_subcommand(1);
+#ifdef ENAVI_WITH_ROS
+  enavi::ros::RegisterRosLink();  // ROS methods fly here (docs/ros.md)
+#endif
   RegisterWorldCommands(app);
   RegisterFlyCommand(app);
   RegisterEpisodeCommand(app);

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "api/fixed.h"
 #include "navstack/common/cpu_time.h"
 #include "navstack/control/controller.h"
 #include "navstack/eci/eci.h"
@@ -51,9 +52,14 @@ emulation::EmulationOptions WithSpeedProbe(const api::EpisodeSpec& spec, emulati
   return e;
 }
 
-// Navigation-task busy time: the four tasks the paper counts as navigation workload.
+// Navigation busy time: the four tasks the paper counts as navigation workload, or every process
+// of a stack that runs as processes (the paper's figure is the planner process's CPU).
 double NavBusy(const NavAccounting& acc) {
   double busy = 0;
+  if (!acc.process_cpu_board_s.empty()) {
+    for (const auto& [name, board_s] : acc.process_cpu_board_s) busy += board_s;
+    return busy;
+  }
   for (int i = 0; i < navstack::kTaskCount; ++i)
     if (navstack::IsNavigationTask(static_cast<TaskId>(i))) busy += acc.tasks[i].busy_s;
   return busy;
@@ -116,6 +122,11 @@ const std::vector<ClockEntry>& ClockEntries() {
   return entries;
 }
 
+RosLinkFactory& RosFactory() {
+  static RosLinkFactory factory;
+  return factory;
+}
+
 std::unique_ptr<NavLink> MakeNavLink(const api::EpisodeSpec& spec, const EpisodeConfig& config,
                                      const board::BoardProfile& board, const navstack::VehicleState& initial,
                                      const EpisodeOptions& options) {
@@ -129,6 +140,10 @@ std::unique_ptr<NavLink> MakeNavLink(const api::EpisodeSpec& spec, const Episode
 }
 
 }  // namespace
+
+void SetRosLinkFactory(RosLinkFactory factory) { RosFactory() = std::move(factory); }
+
+bool RosLinkAvailable() { return static_cast<bool>(RosFactory()); }
 
 const std::vector<ClockInfo>& Clocks() {
   static const std::vector<ClockInfo> infos = [] {
@@ -153,14 +168,15 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   result.straight_line_m = (world.goal - world.start).norm();
   result.notes["clock"] = spec.clock;
   result.notes["board_cores"] = std::to_string(board.cores);
-  result.notes["scheduler"] =
+  if (!spec.ros) result.notes["scheduler"] =
       std::string(config.scheduler.policy == navstack::SchedulingPolicy::kGlobalEdf ? "global EDF" : "FIFO, no preemption") +
       " on " + std::to_string(config.scheduler.threads > 0 ? std::min(config.scheduler.threads, board.cores) : board.cores) +
       " thread(s)";
   result.notes["triangles"] = std::to_string(prepared.triangles);
   if (!world.metadata.import_note.empty()) result.notes["world_import"] = world.metadata.import_note;
   result.notes["depth_stream"] = std::to_string(config.nav.camera.width) + "x" + std::to_string(config.nav.camera.height);
-  result.notes.merge(EpisodeProvenance(spec, board, config.method->cost_family, config.nav.strategy.has_value()));
+  result.notes.merge(EpisodeProvenance(spec, board, config.method ? config.method->cost_family : "",
+                                       config.nav.strategy.has_value()));
 
   // Vehicle: hovering at the start, facing the goal.
   const navstack::VehicleParams vehicle;
@@ -176,7 +192,30 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   config.nav.goal = world.goal;
   config.nav.flight_bounds = world.bounds;
   config.nav.planner.robot_radius = std::max(config.nav.planner.robot_radius, vehicle.collision_radius);
-  const std::unique_ptr<NavLink> nav = MakeNavLink(spec, config, board, quad.State(), options);
+  std::unique_ptr<NavLink> nav;
+  if (spec.ros) {
+    if (!RosFactory())
+      throw std::invalid_argument("method: '" + spec.method + "' is a ROS stack, and this enavi was built without "
+                                  "the ROS bridge (Debian's ROS packages: scripts/install-deps.sh, then rebuild)");
+    RosLinkRequest request;
+    request.spec = &spec;
+    request.board = &board;
+    request.start = world.start;
+    request.goal = world.goal;
+    request.start_yaw = std::atan2(to_goal.y(), to_goal.x());
+    request.bounds = world.bounds;
+    request.camera = config.nav.camera;
+    request.X_BC = CameraPoseInWorld(Eigen::Isometry3d::Identity(), vehicle);
+    request.initial = quad.State();
+    request.options = &options;
+    request.bag_file = options.ros_bag_file;
+    if (request.bag_file.empty() && !spec.rosbag_dir.empty())
+      request.bag_file = spec.rosbag_dir + "/" + result.scenario + "-" + spec.board + "-" + spec.method + "-s" +
+                         std::to_string(spec.seed) + ".bag";
+    nav = RosFactory()(request);
+  } else {
+    nav = MakeNavLink(spec, config, board, quad.State(), options);
+  }
 
   const double timeout = spec.timeout_s > 0 ? spec.timeout_s
                                             : 20.0 + 6.0 * result.straight_line_m / config.nav.planner.v_max;
@@ -253,6 +292,13 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
       if (result.events.size() < 5000) result.events.push_back({e.t, e.kind, e.detail});
     }
 
+    // A stack that runs as processes may end the episode itself (it exited, misbehaved).
+    if (const std::optional<LinkFailure> failure = nav->failure()) {
+      result.end_reason = failure->reason;
+      result.notes["end_detail"] = failure->detail;
+      break;
+    }
+
     if (k % control_every == 0) {
       const navstack::TrajectorySample ref = nav->Reference(t);
       p_ref = ref.p;
@@ -321,13 +367,17 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   auto util = [&](TaskId id) { return T > 0 ? 100.0 * acc[id].busy_s / T : 0.0; };
   result.task_cpu_util_pct = {util(TaskId::kPerception), util(TaskId::kPlanning), util(TaskId::kCollision),
                               util(TaskId::kDifference)};
-  result.nav_cpu_util_pct = result.task_cpu_util_pct.Sum();
+  result.nav_cpu_util_pct = acc.process_cpu_board_s.empty() ? result.task_cpu_util_pct.Sum()
+                                                              : (T > 0 ? 100.0 * NavBusy(acc) / T : 0.0);
+  for (const auto& [name, board_s] : acc.process_cpu_board_s)
+    result.notes["process." + name] = api::Fixed(T > 0 ? 100.0 * board_s / T : 0.0, 2) + " % of a board core";
   for (int i = 0; i < navstack::kTaskCount; ++i) {
     const auto id = static_cast<TaskId>(i);
     if (!navstack::IsNavigationTask(id)) continue;
     const navstack::TaskStats& st = acc[id];
     result.jobs_released += st.released;
     result.deadline_misses += st.misses();
+    if (!config.method) continue;  // a stack of its own processes: no tasks of ours
     const std::string& label = config.method->task_labels[i];
     if (label != navstack::TaskName(id)) result.notes["task." + std::string(navstack::TaskName(id)) + ".is"] = label;
     result.notes["task." + std::string(navstack::TaskName(id))] =

@@ -11,7 +11,9 @@
 #include "navstack/eci/eci.h"
 #include "navstack/rl/rollout.h"
 #include "navstack/runtime/executor.h"
+#include "workers/board/board_profile.h"
 #include "workers/emulation/emulation_options.h"
+#include "workers/sim/nav_link.h"
 #include "worlds/resolve.h"
 #include "worlds/world.h"
 
@@ -59,7 +61,31 @@ struct EpisodeOptions {
   navstack::rl::Rollout* rollout = nullptr;
   /// The emulated clock (spec.clock == "emulated"): host calibration file and test knobs.
   emulation::EmulationOptions emulation;
+  /// ROS methods: where the episode's ROS logs go (empty: a temporary directory, removed), and
+  /// the bag to record (empty: spec.rosbag_dir's, or none).
+  std::string ros_output_dir;
+  std::string ros_bag_file;
 };
+
+/// What the ROS bridge's link is built from: the episode as the stack sees it.
+struct RosLinkRequest {
+  const api::EpisodeSpec* spec = nullptr;
+  const board::BoardProfile* board = nullptr;
+  Eigen::Vector3d start = Eigen::Vector3d::Zero(), goal = Eigen::Vector3d::Zero();
+  double start_yaw = 0;
+  Eigen::AlignedBox3d bounds;
+  navstack::CameraIntrinsics camera;
+  Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();  ///< the camera's optical frame in the body
+  navstack::VehicleState initial;
+  const EpisodeOptions* options = nullptr;
+  std::string bag_file;  ///< empty: no recording
+};
+/// Makes the link of a ROS method (spec.ros). The ROS bridge (workers/ros) sits above this
+/// library; the composition root registers it where it was built (RegisterRosLink).
+using RosLinkFactory = std::function<std::unique_ptr<NavLink>(const RosLinkRequest&)>;
+void SetRosLinkFactory(RosLinkFactory factory);
+/// Whether ROS methods can fly here: the bridge was built and registered.
+bool RosLinkAvailable();
 
 /// A clock the navigation stack can run on (docs/design.md, "Time: two clocks").
 struct ClockInfo {

@@ -132,6 +132,17 @@ std::shared_ptr<const navstack::rl::PolicyFile> LoadPolicy(const std::string& pa
 
 EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
   EpisodeConfig config;
+  if (spec.ros) {
+    // A user's ROS stack: no method of ours, no tunables (its launch arguments configure it); it
+    // reads the default depth stream, and its processes need the real time of the emulated clock.
+    if (!spec.overrides.empty())
+      throw std::invalid_argument("overrides: method '" + spec.method +
+                                  "' is a ROS stack: it has no tunables (its launch arguments are its stack's args)");
+    if (spec.clock != "emulated")
+      throw std::invalid_argument("clock: method '" + spec.method + "' is a ROS stack: it runs on the emulated clock only "
+                                  "(its processes run in real time inside the board's cgroup), not on '" + spec.clock + "'");
+    return config;
+  }
   config.method = navstack::FindMethod(spec.method);
   if (!config.method) {
     std::string known;

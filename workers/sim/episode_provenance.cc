@@ -31,6 +31,7 @@ std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spe
       note("policy") = spec.policy;
     }
   }
+  if (cost_family.empty()) return notes;  // a stack of its own processes: measured, no cost model
   // The digest covers exactly what prices a job of this method on this board: its cost family's
   // reference ns per unit and per job divided by the board's per-core speed, and the rule that
   // applies them.

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,8 +23,19 @@ struct NavAccounting {
   std::array<navstack::TaskStats, navstack::kTaskCount> tasks{};
   std::int64_t plan_failures = 0;
   std::map<std::string, std::string> notes;  ///< how the numbers were produced (fallbacks, quotas)
+  /// A stack that runs as processes of its own (a ROS stack): board seconds of CPU by process
+  /// (node) name, measured; its navigation CPU is their sum. Empty for the in-process methods,
+  /// whose CPU is their tasks'.
+  std::map<std::string, double> process_cpu_board_s;
 
   const navstack::TaskStats& operator[](navstack::TaskId id) const { return tasks[static_cast<int>(id)]; }
+};
+
+/// Why a stack that runs as processes ended the episode (it exited, misbehaved): the result's end
+/// reason and what the results say about it.
+struct LinkFailure {
+  std::string reason;  ///< stack_exited, stack_crashed, stack_not_ready, no_command, bad_command, ...
+  std::string detail;
 };
 
 class NavLink {
@@ -48,6 +60,8 @@ class NavLink {
   /// Board seconds of work done outside the stack's schedule (the metrics' eci of every frame).
   virtual double OffBoardSeconds(navstack::TaskId task, const navstack::WorkCounts& work,
                                  double host_cpu_s) const = 0;
+  /// The stack ended the episode (checked after every AdvanceTo); the in-process stacks never do.
+  virtual std::optional<LinkFailure> failure() const { return std::nullopt; }
 };
 
 }  // namespace enavi::sim
