@@ -17,6 +17,7 @@
 //
 // Usage: enavi_test_stack --mode MODE [--speed 1.0] [--command TOPIC] plus ROS remappings.
 
+#include <pthread.h>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <unistd.h>
@@ -76,7 +77,8 @@ Args Parse(int argc, char** argv) {
 
 std::atomic<bool> g_spin{true};
 
-void Spin() {
+void Spin(int i) {
+  pthread_setname_np(pthread_self(), ("busy-" + std::to_string(i)).c_str());
   volatile double x = 1;
   while (g_spin.load(std::memory_order_relaxed)) x = std::sqrt(x + 1.0);
 }
@@ -105,7 +107,7 @@ int main(int argc, char** argv) {
     }
   }
   std::vector<std::thread> spinners;
-  for (int i = 0; i < args.threads; ++i) spinners.emplace_back(Spin);
+  for (int i = 0; i < args.threads; ++i) spinners.emplace_back(Spin, i);
 
   ::ros::Publisher wrong, pos_cmd, pose_cmd, traj_cmd;
   if (args.mode == "wrong_type") wrong = nh.advertise<std_msgs::String>(args.command, 10);

@@ -137,6 +137,9 @@ struct RosNavLink::Impl {
   std::int64_t steps = 0, steps_late = 0;
   double lag_max_s = 0;
   std::map<std::string, double> final_cpu;  // host CPU seconds by process name, at the end
+  std::map<std::string, double> final_threads;  // and by thread
+  // The same at t = 0: what the stack spent starting up is not flight CPU (reported apart).
+  std::map<std::string, double> start_cpu, start_threads;
   bool finished = false;
 
   ~Impl() { Shutdown(); }
@@ -401,6 +404,7 @@ void RosNavLink::Impl::StopStack() {
   if (cpu && slot) {
     cpu->Sample();
     final_cpu = cpu->ByName();
+    final_threads = cpu->ByThread();
   }
   if (stack_running) {
     // roslaunch shuts its nodes down on SIGINT; what is left after 2 s is killed.
@@ -456,6 +460,9 @@ void RosNavLink::OnState(const navstack::VehicleState& state) {
   {
     std::lock_guard l(m.pub_mutex);
     if (!m.epoch_set) {
+      m.cpu->Sample();
+      m.start_cpu = m.cpu->ByName();
+      m.start_threads = m.cpu->ByThread();
       // Sim time 0 a little ahead, so the simulator has its lead from the start.
       m.epoch = Clock::now() + m.lead + std::chrono::milliseconds(5);
       m.epoch_set = true;
@@ -538,21 +545,43 @@ sim::NavAccounting RosNavLink::Accounting() const {
   const Impl& m = *impl_;
   sim::NavAccounting acc;
   acc.notes = m.notes;
-  // Host CPU of each process over the flight -> board seconds (x 1 / speed: a board core does
-  // `speed` of a host core's work per second).
+  // Host CPU of each process over the flight (since t = 0) -> board seconds (x 1 / speed: a
+  // board core does `speed` of a host core's work per second).
+  const auto since_start = [](const std::map<std::string, double>& now, const std::map<std::string, double>& start) {
+    std::map<std::string, double> out;
+    for (const auto& [name, cpu_s] : now) {
+      const auto s = start.find(name);
+      out[name] = std::max(0.0, cpu_s - (s == start.end() ? 0.0 : s->second));
+    }
+    return out;
+  };
   const std::map<std::string, double> host = m.finished ? m.final_cpu : m.cpu ? m.cpu->ByName() : std::map<std::string, double>{};
-  std::string per_node;
-  double total = 0;
-  for (const auto& [name, cpu_s] : host) {
-    acc.process_cpu_board_s[name] = cpu_s / m.speed;
-    total += cpu_s / m.speed;
-  }
   const double T = m.last_t;
-  for (const auto& [name, board_s] : acc.process_cpu_board_s)
-    per_node += (per_node.empty() ? "" : ", ") + name + " " + Fixed(T > 0 ? 100.0 * board_s / T : 0.0, 1) + " %";
-  acc.notes["ros.cpu"] = "the stack's processes " + Fixed(T > 0 ? 100.0 * total / T : 0.0, 1) +
-                         " % of a board core over the flight (/proc per process: " + per_node +
-                         "); start-up before t = 0 included";
+  const auto pct = [&](double host_s) { return Fixed(T > 0 ? 100.0 * host_s / m.speed / T : 0.0, 1) + " %"; };
+  std::string per_node, startup;
+  double total = 0, startup_total = 0;
+  for (const auto& [name, cpu_s] : since_start(host, m.start_cpu)) {
+    acc.process_cpu_board_s[name] = cpu_s / m.speed;
+    total += cpu_s;
+    per_node += (per_node.empty() ? "" : ", ") + name + " " + pct(cpu_s);
+  }
+  for (const auto& [name, cpu_s] : m.start_cpu) {
+    startup_total += cpu_s;
+    startup += (startup.empty() ? "" : ", ") + name + " " + Fixed(cpu_s / m.speed, 2) + " s";
+  }
+  // The busiest threads (up to 12), so that a user sees where inside a node the CPU goes.
+  const std::map<std::string, double> threads =
+      m.finished ? m.final_threads : m.cpu ? m.cpu->ByThread() : std::map<std::string, double>{};
+  std::vector<std::pair<double, std::string>> busiest;
+  for (const auto& [name, cpu_s] : since_start(threads, m.start_threads)) busiest.emplace_back(cpu_s, name);
+  std::sort(busiest.rbegin(), busiest.rend());
+  std::string per_thread;
+  for (std::size_t i = 0; i < busiest.size() && i < 12; ++i)
+    per_thread += (per_thread.empty() ? "" : ", ") + busiest[i].second + " " + pct(busiest[i].first);
+  acc.notes["ros.threads"] = "busiest threads over the flight, % of a board core: " + per_thread;
+  acc.notes["ros.cpu"] = "the stack's processes " + pct(total) + " of a board core over the flight (/proc per process: " +
+                         per_node + ")";
+  acc.notes["ros.startup_cpu"] = Fixed(startup_total / m.speed, 2) + " board core-seconds before t = 0 (" + startup + ")";
   std::string types;
   for (const auto& [type, n] : m.command_types) types += (types.empty() ? "" : ", ") + type + " " + std::to_string(n);
   acc.notes["ros.commands"] = std::to_string(m.commands) + " received" +

@@ -45,7 +45,14 @@ void StackCpuMonitor::Sample() {
   static const double tick = 1.0 / static_cast<double>(sysconf(_SC_CLK_TCK));
   std::set<pid_t> processes;
   for (pid_t tid : tasks_()) {
-    if (const pid_t tgid = navstack::ThreadGroupOf(tid); tgid > 0) processes.insert(tgid);
+    const pid_t tgid = navstack::ThreadGroupOf(tid);
+    if (tgid <= 0) continue;
+    processes.insert(tgid);
+    if (const auto t = navstack::ReadThreadCpu(tgid, tid)) {
+      Seen& th = threads_[{tgid, tid}];
+      th.name = t->comm;
+      th.cpu_s = t->CpuSeconds();
+    }
   }
   for (pid_t pid : processes) {
     std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
@@ -66,6 +73,17 @@ void StackCpuMonitor::Sample() {
 std::map<std::string, double> StackCpuMonitor::ByName() const {
   std::map<std::string, double> out;
   for (const auto& [key, s] : seen_) out[s.name] += s.cpu_s;
+  return out;
+}
+
+std::map<std::string, double> StackCpuMonitor::ByThread() const {
+  std::map<pid_t, std::string> process_names;
+  for (const auto& [key, s] : seen_) process_names[key.first] = s.name;
+  std::map<std::string, double> out;
+  for (const auto& [key, t] : threads_) {
+    const auto p = process_names.find(key.first);
+    out[(p == process_names.end() ? std::string("?") : p->second) + "/" + t.name] += t.cpu_s;
+  }
   return out;
 }
 

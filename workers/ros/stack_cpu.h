@@ -28,6 +28,9 @@ class StackCpuMonitor {
   void Sample();
   /// Host CPU seconds by display name (processes of the same name summed), since they started.
   std::map<std::string, double> ByName() const;
+  /// Host CPU seconds by thread, "process/thread" (the thread's name, pthread_setname_np),
+  /// threads of the same name summed: where inside a node the CPU goes.
+  std::map<std::string, double> ByThread() const;
   /// Host CPU seconds of every process seen.
   double Total() const;
   std::size_t processes() const { return seen_.size(); }
@@ -39,6 +42,7 @@ class StackCpuMonitor {
   };
   std::function<std::vector<pid_t>()> tasks_;
   std::map<std::pair<pid_t, unsigned long long>, Seen> seen_;  // (pid, start time) -> last reading
+  std::map<std::pair<pid_t, pid_t>, Seen> threads_;             // (pid, tid) -> last reading
 };
 
 }  // namespace enavi::ros
