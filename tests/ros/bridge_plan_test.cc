@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "api/fixed.h"
 #include "workers/ros/launch_plan.h"
 #include "workers/ros/setpoint.h"
 #include "workers/ros/stack_cpu.h"
@@ -15,7 +16,7 @@ namespace enavi::ros {
 namespace {
 
 TEST(LaunchPlanTest, OnlyTopLevelArgsOfALaunchFileAreDeclared) {
-  const std::string xml = R"(<launch>
+  const std::string xml = R"xml(<launch>
   <arg name="map_size_x" default="40"/>
   <arg   name='goal_x'/>
   <!-- <arg name="commented_out"/> -->
@@ -26,7 +27,7 @@ TEST(LaunchPlanTest, OnlyTopLevelArgsOfALaunchFileAreDeclared) {
     <param name="not_an_arg" value="1"/>
   </node>
   <group ns="g"><arg name="in_group" default="1"/></group>
-</launch>)";
+</launch>)xml";
   EXPECT_EQ(DeclaredLaunchArgs(xml), (std::set<std::string>{"map_size_x", "goal_x", "in_group"}));
 }
 

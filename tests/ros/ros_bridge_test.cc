@@ -244,14 +244,14 @@ TEST_F(RosBridgeTest, KillingTheSimulatorLeavesNothingBehind) {
 TEST_F(RosBridgeTest, ALaunchFileFromAPackageGetsTheEpisodesArgsAndABagIsRecorded) {
   const fs::path launch = dir_.path() / "teststack.launch";
   // A launch file as a user writes one: its own argument, and the episode's goal it declares.
-  std::ofstream(launch) << R"(<launch>
+  std::ofstream(launch) << R"xml(<launch>
   <arg name="speed" default="1.0"/>
   <arg name="enavi_goal_x"/>
   <node pkg="enavi_test" type="enavi_test_stack" name="planner" output="screen"
         args="--mode position --speed $(arg speed)"/>
   <param name="goal_x_seen" value="$(arg enavi_goal_x)"/>
 </launch>
-)";
+)xml";
   const std::string stack = Stack("name: launched\nlaunch: " + launch.string() + "\npackage_path: [" +
                                   std::string(ENAVI_BINARY_DIR) + "/tests/ros/pkg]\nargs: {speed: \"2.0\"}\n");
   const fs::path out = dir_.path() / "out";

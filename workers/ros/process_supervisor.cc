@@ -162,12 +162,25 @@ class Supervisor {
     kill(pids_[i], sig);
   }
 
-  // Ends process `i`: its stop signal, `grace_s`, then SIGKILL of its group and of the board.
+  // Waits until no process of group `pgid` is left (they may outlive its leader: rosbag's
+  // Python front end exits on SIGINT while its recorder still closes the bag); true if none is.
+  bool WaitForGroup(pid_t pgid, Clock::time_point until) {
+    for (;;) {
+      Reap();
+      if (kill(-pgid, 0) != 0) return true;
+      if (Clock::now() >= until) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+
+  // Ends process `i`: its stop signal to its group, up to `grace_s` for the whole group to end,
+  // then SIGKILL of the group and of everything in the board.
   void End(std::size_t i, double grace_s) {
     if (pids_[i] <= 0) return;
     if (!done_[i]) {
+      const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(grace_s));
       Kill(i, specs_[i].stop_signal);
-      if (!WaitFor(i, grace_s)) {
+      if (!WaitFor(i, grace_s) || !WaitForGroup(pids_[i], until)) {
         Kill(i, SIGKILL);
         WaitFor(i, 5.0);
       }
