@@ -18,6 +18,11 @@ packages=(
   iproute2 procps util-linux nftables
   munge slurmctld slurmd slurm-client python3-jsonschema python3-yaml
   chromium chromium-driver python3-selenium libxml2-utils
+  # The ROS 1 bridge (docs/ros.md): roscpp, the master, roslaunch, rosbag, message generation and
+  # the message packages it speaks. Optional for the core: without them the bridge is not built.
+  ros-core-dev libroscpp-dev python3-rosmaster python3-roslaunch python3-rosbag python3-rostopic python3-rosnode
+  python3-gencpp python3-genmsg catkin libtopic-tools-dev libstd-msgs-dev libgeometry-msgs-dev libsensor-msgs-dev
+  libnav-msgs-dev libtf2-msgs-dev libros-rosgraph-msgs-dev libtrajectory-msgs-dev
 )
 
 missing=()
