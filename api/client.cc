@@ -43,8 +43,13 @@ std::string FarmClient::RequestRaw(const std::string& method, const std::string&
   httplib::Result res = method == "GET" ? client.Get(path.c_str(), headers)
                                         : client.Post(path.c_str(), headers, body, content_type);
   if (!res) {
-    throw std::runtime_error("cannot reach the farm server at " + url_ + ": " +
-                             httplib::to_string(res.error()));
+    // httplib names its errors in a word ("Connection"): say what it means here.
+    const httplib::Error error = res.error();
+    const std::string why = error == httplib::Error::Connection
+                                ? "connection refused or timed out (is `enavi serve` running there? --server or "
+                                  "ENAVI_SERVER names another)"
+                                : httplib::to_string(error);
+    throw std::runtime_error("cannot reach the farm server at " + url_ + ": " + why);
   }
   if (res->status >= 400 && res->status < 500) {
     // The request was at fault (bad spec, unknown job, missing token): bad input.

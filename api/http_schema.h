@@ -7,7 +7,7 @@
 //   GET  /api/jobs[?label=k=v]     -> [JobProgress]  (every label filter must match)
 //   GET  /api/jobs/{id}            -> JobProgress                    404 {"error"}
 //   GET  /api/jobs/{id}/results    -> [result object]  (board, scenario, method, seed, metrics)
-//   GET  /api/jobs/{id}/episodes   -> [{"id", "state", "attempts", "last_error", ...}]
+//   GET  /api/jobs/{id}/episodes   -> [{"id", "state", "attempts", "last_error", "spec", ...}]
 //   POST /api/jobs/{id}/cancel     -> JobProgress
 //   GET  /api/episodes/{id}/result -> full result JSON (time series and events included)
 //   GET  /api/workers              -> [{"worker_id", "host", "slots", "free_slots", ...}]

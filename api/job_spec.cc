@@ -23,7 +23,7 @@ class Context {
   Context(std::string file, const JobSpecOptions& options)
       : reader_(std::move(file),
                 [](const std::string& source, int line, const std::string& field, const std::string& reason) {
-                  throw JobSpecError(source + ":" + std::to_string(line > 0 ? line : 1) + ": " + field + ": " + reason);
+                  throw JobSpecError(source, line > 0 ? line : 1, field, reason);
                 }),
         catalog_(options.catalog) {
     std::vector<fs::path> roots = options.allowed_roots;

@@ -70,6 +70,16 @@ inline constexpr std::size_t kMaxLabels = 32;
 class JobSpecError : public std::invalid_argument {
  public:
   using std::invalid_argument::invalid_argument;
+  /// "SOURCE:LINE: FIELD: REASON", its parts kept so that a caller that wrote the YAML itself
+  /// (`enavi eval` from its flags) can name what its user typed instead.
+  JobSpecError(const std::string& source, int line, std::string field, std::string reason)
+      : std::invalid_argument(source + ":" + std::to_string(line) + ": " + field + ": " + reason),
+        field_(std::move(field)), reason_(std::move(reason)) {}
+  const std::string& field() const { return field_; }  ///< empty when the message has no parts
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string field_, reason_;
 };
 
 struct JobSpecOptions {

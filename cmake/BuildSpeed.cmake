@@ -32,13 +32,15 @@ if(ENAVI_LLD)
 endif()
 
 # Sources that do not combine in a unity batch (each defines a file-local helper or constant that
-# another source of its target defines too): each is compiled on its own.
+# another source of its target defines too, or must include Eigen before another source's
+# httplib.h, whose <resolv.h> defines the macro `_res`): each is compiled on its own.
 function(enavi_unity_exclusions)
   set(exclusions
       enavi_adapt navstack/adapt/resolution_adapter.cc          # RequireNonNegative
       enavi_perception navstack/perception/occupancy_map.cc     # Require
       enavi_perception navstack/perception/points.cc            # Require
-      enavi_report server/report/top_down.cc)                   # kPi
+      enavi_report server/report/top_down.cc                    # kPi
+      enavi_http server/http/dashboard_routes.cc)               # Eigen before httplib.h
   while(exclusions)
     list(POP_FRONT exclusions target source)
     set_source_files_properties(${PROJECT_SOURCE_DIR}/${source} TARGET_DIRECTORY ${target}

@@ -10,6 +10,7 @@
 #include "api/client.h"
 #include "api/job_spec.h"
 #include "server/cli/commands.h"
+#include "server/eval/progress_pacer.h"
 #include "server/eval/tables.h"
 #include "workers/sim/episode_config.h"
 
@@ -94,15 +95,13 @@ void RunStatus(const StatusFlags& f) {
     return;
   }
   if (!f.labels.empty()) throw std::invalid_argument("--label: filters the job list; give no JOB with it");
-  auto last_plain = std::chrono::steady_clock::time_point{};
+  server::ProgressPacer lines;
   while (true) {
     const api::JobProgress p = client.Status(f.job);
     if (tty) {
       std::cout << "\r" << server::ProgressLine(p, true) << "\033[K" << std::flush;
-    } else if (!f.watch || p.terminal() ||
-               std::chrono::steady_clock::now() - last_plain >= std::chrono::seconds(10)) {
+    } else if (!f.watch || lines.Due(p.finished(), p.total, std::chrono::steady_clock::now()) || p.terminal()) {
       std::cout << server::ProgressLine(p, false) << "\n" << std::flush;
-      last_plain = std::chrono::steady_clock::now();
     }
     if (!f.watch || p.terminal()) {
       if (tty) std::cout << "\n";

@@ -20,6 +20,9 @@ inline constexpr int kExitFailure = 1;
 inline constexpr int kExitBadInput = 2;
 /// `enavi compare`: the candidate regressed (a CI job gates on this).
 inline constexpr int kExitRegression = 3;
+/// `enavi compare`: a metric changed for the worse beyond its threshold but the mode cannot
+/// judge it (paired mode with one seed pair: no interval). Never reported as "no regression".
+inline constexpr int kExitCannotJudge = 4;
 
 /// Thrown by a handler to end with a specific exit status after printing its output.
 struct ExitStatus {

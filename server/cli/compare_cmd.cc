@@ -3,11 +3,13 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <regex>
 
 #include "api/client.h"
 #include "api/job_spec.h"
 #include "server/cli/commands.h"
 #include "server/compare/compare.h"
+#include "server/compare/compare_sources.h"
 #include "server/eval/tables.h"
 #include "server/store/jobs.h"
 #include "server/store/queries.h"
@@ -25,12 +27,18 @@ struct CompareFlags {
   std::string mode = "auto";
 };
 
-// "FILE.db" (its only job) or "FILE.db:JOB" reads a database; anything else is a job id on the
-// server.
-nlohmann::json LoadResults(const std::string& source, const CompareFlags& f, const char* which) {
+// A job id as a farm makes them (server/store/jobs.cc): "j" and 12 hex digits.
+bool IsJobId(const std::string& text) {
+  static const std::regex kJobId("^j[0-9a-f]{12}$");
+  return std::regex_match(text, kJobId);
+}
+
+// "FILE.db" (its only job) or "FILE.db:JOB" reads a database; a job id asks the server. Anything
+// else is bad input, named as typed (it is neither a file here nor a job id).
+server::CompareInput LoadJob(const std::string& source, const CompareFlags& f, const char* which) {
   std::string path = source, job;
+  const auto colon = source.rfind(':');
   if (!std::filesystem::is_regular_file(path)) {
-    const auto colon = source.rfind(':');
     if (colon != std::string::npos && std::filesystem::is_regular_file(source.substr(0, colon))) {
       path = source.substr(0, colon);
       job = source.substr(colon + 1);
@@ -39,18 +47,24 @@ nlohmann::json LoadResults(const std::string& source, const CompareFlags& f, con
     }
   }
   if (path.empty()) {
-    if (source.find('/') != std::string::npos || source.size() > 64) {
-      throw std::invalid_argument(std::string(which) + ": '" + source +
-                                  "': no such database file, and not a job id");
+    if (!IsJobId(source)) {
+      const std::string file = colon == std::string::npos ? source : source.substr(0, colon);
+      throw std::invalid_argument(std::string(which) + ": '" + source + "': no such database file" +
+                                  (file == source ? "" : " '" + file + "'") +
+                                  ", and not a job id (j and 12 hex digits, as `enavi submit` prints)");
     }
     api::FarmClient client(f.server, f.token);
-    return client.Results(source);
+    try {
+      return server::CompareInputFromServer(client, source, source);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string(which) + ": " + e.what());  // the server's 4xx: unknown job
+    }
   }
   server::StoreOptions options;
   options.read_only = true;
   server::Store store(path, options);
-  const auto jobs = store.jobs().ListJobs(0);
   if (job.empty()) {
+    const auto jobs = store.jobs().ListJobs(0);
     if (jobs.size() != 1) {
       std::string ids;
       for (const auto& p : jobs) ids += " " + p.id;
@@ -62,16 +76,16 @@ nlohmann::json LoadResults(const std::string& source, const CompareFlags& f, con
   } else if (!store.jobs().Progress(job, 0)) {
     throw std::invalid_argument(std::string(which) + ": " + path + " has no job '" + job + "'");
   }
-  return store.queries().Results(job);
+  return server::CompareInputFromStore(store, job, source);
 }
 
 void RunCompare(const CompareFlags& f) {
   server::CompareOptions options;
   options.mode = f.mode;
   if (!f.thresholds.empty()) options.rules = server::LoadMetricRules(f.thresholds);
-  const nlohmann::json base = LoadResults(f.base, f, "BASE");
-  const nlohmann::json candidate = LoadResults(f.candidate, f, "CANDIDATE");
-  const server::CompareReport report = server::Compare(base, candidate, options, f.base, f.candidate);
+  const server::CompareInput base = LoadJob(f.base, f, "BASE");
+  const server::CompareInput candidate = LoadJob(f.candidate, f, "CANDIDATE");
+  const server::CompareReport report = server::Compare(base, candidate, options);
   if (f.format == "json") {
     std::cout << server::CompareJson(report).dump(2) << "\n";
   } else if (f.format == "junit") {
@@ -80,7 +94,9 @@ void RunCompare(const CompareFlags& f) {
     std::cout << server::CompareTable(report);
   }
   std::cout.flush();
-  if (report.regressions > 0) throw ExitStatus{kExitRegression};
+  const std::string verdict = report.verdict();
+  if (verdict == "regression") throw ExitStatus{kExitRegression};
+  if (verdict == "cannot_judge") throw ExitStatus{kExitCannotJudge};
 }
 
 struct TrendFlags {
@@ -90,16 +106,27 @@ struct TrendFlags {
 
 void RunTrend(const TrendFlags& f) {
   nlohmann::json trend;
-  if (!f.db.empty()) {
-    if (!std::filesystem::is_regular_file(f.db)) throw std::invalid_argument("--db: " + f.db + ": no such database file");
-    const auto [key, value] = api::ParseLabelFilter(f.label, "--label");
-    server::StoreOptions options;
-    options.read_only = true;
-    server::Store store(f.db, options);
-    trend = store.queries().Trend(key, value, f.metric, server::Page{0, 1000});
-    server::AddTrendIntervals(&trend);
-  } else {
-    trend = api::FarmClient(f.server).Trend(f.label, f.metric);
+  const auto [key, value] = api::ParseLabelFilter(f.label, "--label");
+  try {
+    if (!f.db.empty()) {
+      if (!std::filesystem::is_regular_file(f.db)) throw std::invalid_argument("--db: " + f.db + ": no such database file");
+      server::StoreOptions options;
+      options.read_only = true;
+      server::Store store(f.db, options);
+      trend = store.queries().Trend(key, value, f.metric, server::Page{0, 1000});
+      server::AddTrendIntervals(&trend);
+    } else {
+      trend = api::FarmClient(f.server).Trend(f.label, f.metric);
+    }
+  } catch (const std::invalid_argument& e) {
+    // The store and the API name the parameter `metric`; here the user typed --metric.
+    const std::string what = e.what();
+    throw std::invalid_argument(what.rfind("metric: ", 0) == 0 ? "--" + what : what);
+  }
+  // No job carries the label: nothing to show is not a trend that stayed flat.
+  if (trend.value("total", 0) == 0) {
+    throw std::invalid_argument("--label: '" + f.label + "': no job carries this label" +
+                                (f.db.empty() ? " on " + f.server : " in " + f.db));
   }
   if (f.format == "json") {
     std::cout << trend.dump(2) << "\n";
@@ -127,7 +154,8 @@ void RegisterTrendCommand(CLI::App& app) {
 void RegisterCompareCommand(CLI::App& app) {
   auto f = std::make_shared<CompareFlags>();
   CLI::App* sub = app.add_subcommand(
-      "compare", "Compare two jobs episode by episode; exit 3 when the candidate regressed");
+      "compare", "Compare two jobs episode by episode; exit 3 when the candidate regressed, 4 when the mode "
+                 "cannot judge (paired mode with one seed pair)");
   sub->add_option("base", f->base, "base job: a job id on --server, FILE.db or FILE.db:JOB")->required();
   sub->add_option("candidate", f->candidate, "candidate job (same forms)")->required();
   sub->add_option("--thresholds", f->thresholds,

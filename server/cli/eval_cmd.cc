@@ -151,6 +151,8 @@ void RegisterEvalCommand(CLI::App& app) {
   server::EvalOptions& o = f->options;
   CLI::App* sub = app.add_subcommand(
       "eval", "Evaluate a matrix on an embedded farm (local server + workers) and print the table");
+  sub->add_option("--name", o.name, "the job's name (the dashboard, `enavi status` and `enavi compare` show it)")
+      ->capture_default_str();
   sub->add_option("--boards", o.boards, "boards (comma-separated)")->delimiter(',')->capture_default_str();
   sub->add_option("--scenarios", o.scenarios, "scenarios or world files (comma-separated)")
       ->delimiter(',')

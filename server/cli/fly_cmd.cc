@@ -1,6 +1,7 @@
 // `enavi fly`: one episode, locally, no server.
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -17,6 +18,7 @@
 #include "server/cli/cli_values.h"
 #include "server/cli/commands.h"
 #include "server/cli/registry_help.h"
+#include "server/eval/progress_pacer.h"
 #include "server/report/flight_report.h"
 #include "workers/board/board_profile.h"
 #include "workers/board/calibration_flights.h"
@@ -82,10 +84,18 @@ void Run(FlyArgs args) {
   // the result's notes).
   if (spec.clock == "emulated" || args.dilation > 0) spec.dilation = args.dilation;
   const bool tty = isatty(STDERR_FILENO) && !args.json;
+  // On a terminal the line is redrawn in place; in a log it is a line every 10 s of wall time.
+  server::ProgressPacer lines;
   if (tty) {
     options.progress = [](double t, double distance) {
       std::fprintf(stderr, "\r  sim %6.1f s, %5.1f m to goal", t, distance);
       std::fflush(stderr);
+    };
+  } else if (!args.json) {
+    options.progress = [&lines](double t, double distance) {
+      if (t > 0 && lines.Due(0, 0, std::chrono::steady_clock::now())) {
+        std::fprintf(stderr, "  sim %.1f s, %.1f m to goal\n", t, distance);
+      }
     };
   }
   if (spec.ros) {

@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "api/provenance.h"
 #include "server/cli/commands.h"
 #ifdef ENAVI_WITH_ROS
 #include "workers/ros/ros_nav_link.h"
@@ -13,6 +14,8 @@
 int main(int argc, char** argv) {
   using namespace enavi::cli;
   CLI::App app{"E-Navi Farm: a simulation farm for UAV navigation stacks on weak onboard computers"};
+  app.set_version_flag("--version", "enavi " + enavi::api::BuildVersion() + " (commit " + enavi::api::BuildCommit() + ")",
+                       "print the version and the commit it was built from");
   app.require_subcommand(1);
 #ifdef ENAVI_WITH_ROS
   enavi::ros::RegisterRosLink();  // ROS methods fly here (docs/ros.md)

@@ -59,8 +59,10 @@ void RunServe(const ServeFlags& f) {
   http.job_spec.catalog.unchecked_prefixes = f.unchecked_override_prefixes;
   server::HttpApi api(&farm, http);
 
-  farm.Start();
+  // The port first: a server that cannot listen (another on the address) exits before its farm
+  // touches the database's leases or the workers' bus.
   api.Start();
+  farm.Start();
   spdlog::info("enavi serve: {} (db {}, DDS domain {}, partition {}, pid {})", api.url(), f.db,
                options.bus.domain_id, options.bus.partition, getpid());
   // Written once serving, atomically, so a script or test can wait for it and read the URL.

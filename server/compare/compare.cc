@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <map>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 #include <tuple>
 
@@ -89,6 +87,10 @@ double Mean(const std::vector<double>& v) {
   return v.empty() ? 0.0 : s / static_cast<double>(v.size());
 }
 
+bool Worse(Direction direction, double delta) {
+  return direction == Direction::kLower ? delta > 0 : direction == Direction::kHigher && delta < 0;
+}
+
 void Judge(const MetricRule& rule, bool exact, const std::vector<double>& base,
            const std::vector<double>& cand, MetricChange* m) {
   m->direction = rule.direction;
@@ -117,10 +119,14 @@ void Judge(const MetricRule& rule, bool exact, const std::vector<double>& base,
     const double half = StudentT975(n - 1) * se;
     m->ci_low = m->delta - half;
     m->ci_high = m->delta + half;
+    m->has_interval = true;
   }
-  const bool includes_zero = n >= 2 && m->ci_low <= 0 && m->ci_high >= 0;
+  const bool beyond = rule.direction != Direction::kNone && std::abs(m->delta) > m->threshold;
+  const bool includes_zero = m->has_interval && m->ci_low <= 0 && m->ci_high >= 0;
   if (!exact) {
-    if (n < 2) {
+    // Within the threshold a change is no regression whatever its interval; beyond it, paired
+    // mode needs the interval to tell a change from the draw, and one pair has none.
+    if (n < 2 && beyond) {
       m->verdict = "too_few_pairs";
       return;
     }
@@ -129,67 +135,109 @@ void Judge(const MetricRule& rule, bool exact, const std::vector<double>& base,
       return;
     }
   }
-  if (rule.direction == Direction::kNone || std::abs(m->delta) <= m->threshold) {
+  if (!beyond) {
     m->verdict = "change";
     return;
   }
-  const bool worse = rule.direction == Direction::kLower ? m->delta > 0 : m->delta < 0;
-  m->verdict = worse ? "regression" : "improvement";
+  m->verdict = Worse(rule.direction, m->delta) ? "regression" : "improvement";
   m->within_draw = exact && includes_zero;
 }
 
-std::string Num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-std::string Xml(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default:
-        // XML 1.0 forbids most control characters even as references.
-        if (static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\n' && c != '\r') {
-          out += '?';
-        } else {
-          out += c;
-        }
+// A spec's settings as name -> value text, nested maps flattened with '.' (overrides.NAME,
+// world_params.KEY); the pairing keys are left out.
+std::map<std::string, std::string> SpecSettings(const nlohmann::json& spec) {
+  std::map<std::string, std::string> out;
+  for (const auto& [key, value] : spec.items()) {
+    if (key == "board" || key == "world" || key == "method" || key == "seed") continue;
+    if (value.is_object()) {
+      for (const auto& [k, v] : value.items()) out[key + "." + k] = v.is_string() ? v.get<std::string>() : v.dump();
+    } else {
+      out[key] = value.is_string() ? value.get<std::string>() : value.dump();
     }
   }
   return out;
 }
 
-std::string CellName(const CellChange& c) { return c.board + "/" + c.scenario + "/" + c.method; }
+// Values of the names in either map, "(absent)" where a map lacks one, tallied per name; true
+// for each name whose two values differ.
+std::set<std::string> TallyDifferences(std::map<std::string, std::string> base,
+                                       std::map<std::string, std::string> candidate, const std::string& absent,
+                                       std::map<std::string, ProvenanceTally>* tally) {
+  for (const auto& kv : candidate) base.emplace(kv.first, absent);
+  for (const auto& kv : base) candidate.emplace(kv.first, absent);
+  std::set<std::string> differing;
+  for (const auto& [name, value] : base) {
+    (*tally)[name].base.insert(value);
+    (*tally)[name].candidate.insert(candidate[name]);
+    if (value != candidate[name]) differing.insert(name);
+  }
+  return differing;
+}
 
-std::string Describe(const MetricChange& m, bool exact) {
-  std::string s = m.name + " " + Num(m.base_mean) + " -> " + Num(m.candidate_mean) + " (" +
-                  (m.delta >= 0 ? "+" : "") + Num(m.delta);
-  if (m.base_mean != 0) {
-    char pct[32];
-    std::snprintf(pct, sizeof pct, ", %+.1f%%", 100.0 * m.delta / std::abs(m.base_mean));
-    s += pct;
+// The episodes' specs, paired as their results are (board, world, method, seed), so a job whose
+// episodes all failed still shows how it was asked to fly; a setting counts in each cell with a
+// pair whose values differ.
+void AddSpecChanges(const std::map<std::string, nlohmann::json>& base,
+                    const std::map<std::string, nlohmann::json>& candidate, CompareReport* report) {
+  using Cells = std::map<CellKey, std::map<std::uint64_t, const nlohmann::json*>>;
+  auto index = [](const std::map<std::string, nlohmann::json>& specs) {
+    Cells cells;
+    for (const auto& [id, spec] : specs) {
+      cells[{spec.value("board", ""), spec.value("world", ""), spec.value("method", "")}]
+           [spec.value("seed", std::uint64_t{0})] = &spec;
+    }
+    return cells;
+  };
+  const Cells b = index(base), c = index(candidate);
+  std::map<std::string, ProvenanceTally> tally;
+  for (const auto& [key, seeds] : b) {
+    const auto other = c.find(key);
+    if (other == c.end()) continue;
+    ++report->spec_cells;
+    std::set<std::string> differing;
+    for (const auto& [seed, spec] : seeds) {
+      const auto pair = other->second.find(seed);
+      if (pair == other->second.end()) continue;
+      for (const std::string& name : TallyDifferences(SpecSettings(*spec), SpecSettings(*pair->second), "(default)", &tally))
+        differing.insert(name);
+    }
+    for (const std::string& name : differing) ++tally[name].cells;
   }
-  s += ")";
-  if (!exact && m.verdict != "too_few_pairs") {
-    s += " 95% CI [" + Num(m.ci_low) + ", " + Num(m.ci_high) + "]";
+  for (const auto& [name, t] : tally) {
+    if (t.cells > 0) report->spec_changes.push_back({name, "spec", t.cells, {t.base.begin(), t.base.end()}, {t.candidate.begin(), t.candidate.end()}});
   }
-  if (m.within_draw) s += " within the seeds' draw (paired 95% CI [" + Num(m.ci_low) + ", " + Num(m.ci_high) + "])";
-  if (m.direction == Direction::kNone) {
-    s += ", not judged";
-  } else {
-    s += ", threshold " + Num(m.threshold) + ", " + DirectionName(m.direction) + " is better";
+}
+
+// The jobs' labels and the server build that took them (job provenance), when both are known.
+void AddJobChanges(const CompareInput& base, const CompareInput& candidate, CompareReport* report) {
+  auto prefixed = [](const std::map<std::string, std::string>& m, const std::string& prefix,
+                     std::initializer_list<const char*> only) {
+    std::map<std::string, std::string> out;
+    for (const auto& [k, v] : m) {
+      if (only.size() == 0 || std::find(only.begin(), only.end(), k) != only.end()) out[prefix + k] = v;
+    }
+    return out;
+  };
+  // Clock, cost and policy are in the episodes' specs; the build is the server's version and commit.
+  for (const auto& [kind, b, c] :
+       {std::tuple{"label", prefixed(base.labels, "label.", {}), prefixed(candidate.labels, "label.", {})},
+        std::tuple{"build", prefixed(base.provenance, "build.", {"enavi_version", "git_commit"}),
+                   prefixed(candidate.provenance, "build.", {"enavi_version", "git_commit"})}}) {
+    std::map<std::string, ProvenanceTally> tally;
+    for (const std::string& name : TallyDifferences(b, c, "(none)", &tally)) {
+      const ProvenanceTally& t = tally[name];
+      report->spec_changes.push_back({name, kind, 0, {t.base.begin(), t.base.end()}, {t.candidate.begin(), t.candidate.end()}});
+    }
   }
-  s += ", " + std::to_string(m.pairs) + " pairs";
-  return s;
 }
 
 }  // namespace
+
+std::string CompareReport::verdict() const {
+  if (regressions > 0) return "regression";
+  if (undecided > 0) return "cannot_judge";
+  return no_change() ? "no_change" : "no_regression";
+}
 
 void AddTrendIntervals(nlohmann::json* trend) {
   for (nlohmann::json& p : (*trend)["points"]) {
@@ -218,20 +266,39 @@ double StudentT975(int df) {
 CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidate,
                       const CompareOptions& options, const std::string& base_name,
                       const std::string& candidate_name) {
+  CompareInput b, c;
+  b.name = base_name;
+  b.results = base;
+  c.name = candidate_name;
+  c.results = candidate;
+  return Compare(b, c, options);
+}
+
+CompareReport Compare(const CompareInput& base_input, const CompareInput& candidate_input,
+                      const CompareOptions& options) {
+  const nlohmann::json& base = base_input.results;
+  const nlohmann::json& candidate = candidate_input.results;
   const Side b = Index(base), c = Index(candidate);
   CompareReport report;
-  report.base = base_name;
-  report.candidate = candidate_name;
+  report.base = base_input.name;
+  report.candidate = candidate_input.name;
+  report.base_job_name = base_input.job_name;
+  report.candidate_job_name = candidate_input.job_name;
   report.base_results = static_cast<int>(base.size());
   report.candidate_results = static_cast<int>(candidate.size());
+  report.exact_applies = b.exact_clock && c.exact_clock;
   if (options.mode == "auto") {
-    report.mode = b.exact_clock && c.exact_clock ? "exact" : "paired";
+    report.mode = report.exact_applies ? "exact" : "paired";
   } else if (options.mode == "exact" || options.mode == "paired") {
     report.mode = options.mode;
   } else {
     throw std::invalid_argument("mode: '" + options.mode + "': expected auto, exact or paired");
   }
   const bool exact = report.mode == "exact";
+  report.specs_compared = !base_input.specs.empty() && !candidate_input.specs.empty();
+  report.jobs_compared = base_input.job_known && candidate_input.job_known;
+  if (report.specs_compared) AddSpecChanges(base_input.specs, candidate_input.specs, &report);
+  if (report.jobs_compared) AddJobChanges(base_input, candidate_input, &report);
 
   std::map<std::string, ProvenanceTally> provenance;
   auto unpaired = [&](const std::string& side, const CellKey& key, const std::string& scenario,
@@ -266,14 +333,8 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
 
     std::set<std::string> differing;
     for (const auto& [br, cr] : pairs) {
-      std::map<std::string, std::string> bp = ProvenanceOf(*br), cp = ProvenanceOf(*cr);
-      for (const auto& kv : cp) bp.emplace(kv.first, "(none)");
-      for (const auto& kv : bp) cp.emplace(kv.first, "(none)");
-      for (const auto& [name, value] : bp) {
-        provenance[name].base.insert(value);
-        provenance[name].candidate.insert(cp[name]);
-        if (value != cp[name]) differing.insert(name);
-      }
+      for (const std::string& name : TallyDifferences(ProvenanceOf(*br), ProvenanceOf(*cr), "(none)", &provenance))
+        differing.insert(name);
     }
     for (const std::string& name : differing) ++provenance[name].cells;
 
@@ -307,6 +368,9 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
       Judge(rule, exact, bv, cv, &m);
       if (m.verdict == "regression") ++cell.regressions;
       if (m.verdict == "regression" && m.within_draw) ++report.regressions_within_draw;
+      if (m.verdict == "regression" && !m.has_interval) ++report.regressions_without_interval;
+      m.undecided = m.verdict == "too_few_pairs" && Worse(m.direction, m.delta);
+      if (m.undecided) ++cell.undecided;
       if (m.verdict == "improvement") ++cell.improvements;
       if (m.verdict != "same") ++report.changed_metrics;
       cell.metrics.push_back(std::move(m));
@@ -323,6 +387,8 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
     }
     report.regressions += cell.regressions;
     report.improvements += cell.improvements;
+    report.undecided += cell.undecided;
+    report.undecided_cells += cell.undecided > 0 ? 1 : 0;
     report.cells.push_back(std::move(cell));
   }
   for (const CellKey& key : c.order) {
@@ -335,179 +401,6 @@ CompareReport Compare(const nlohmann::json& base, const nlohmann::json& candidat
                                  {tally.candidate.begin(), tally.candidate.end()}, ProvenanceMeaning(name)});
   }
   return report;
-}
-
-nlohmann::json CompareJson(const CompareReport& r) {
-  nlohmann::json cells = nlohmann::json::array();
-  for (const CellChange& c : r.cells) {
-    nlohmann::json metrics = nlohmann::json::array();
-    for (const MetricChange& m : c.metrics) {
-      metrics.push_back({{"name", m.name}, {"direction", DirectionName(m.direction)},
-                         {"pairs", m.pairs}, {"base_mean", m.base_mean},
-                         {"candidate_mean", m.candidate_mean}, {"delta", m.delta},
-                         {"ci_low", m.ci_low}, {"ci_high", m.ci_high}, {"within_draw", m.within_draw},
-                         {"threshold", m.threshold},
-                         {"changed_pairs", m.changed_pairs}, {"verdict", m.verdict}});
-    }
-    nlohmann::json changed = nlohmann::json::array();
-    for (const ChangedEpisode& e : c.changed) {
-      changed.push_back({{"seed", e.seed}, {"base_episode", e.base_episode},
-                         {"candidate_episode", e.candidate_episode}, {"metrics", e.metrics}});
-    }
-    cells.push_back({{"board", c.board}, {"scenario", c.scenario}, {"method", c.method},
-                     {"pairs", c.pairs}, {"seeds", c.seeds}, {"base_episodes", c.base_episodes},
-                     {"candidate_episodes", c.candidate_episodes}, {"metrics", metrics},
-                     {"changed_episodes", changed}, {"regressions", c.regressions},
-                     {"improvements", c.improvements}});
-  }
-  nlohmann::json unpaired = nlohmann::json::array();
-  for (const Unpaired& u : r.unpaired) {
-    unpaired.push_back({{"side", u.side}, {"board", u.board}, {"scenario", u.scenario},
-                        {"method", u.method}, {"seed", u.seed}, {"episode_id", u.episode_id}});
-  }
-  nlohmann::json provenance = nlohmann::json::array();
-  for (const ProvenanceChange& p : r.provenance) {
-    provenance.push_back({{"name", p.name}, {"cells", p.cells}, {"base_values", p.base_values},
-                          {"candidate_values", p.candidate_values}, {"meaning", p.meaning}});
-  }
-  return {{"base", r.base}, {"candidate", r.candidate}, {"mode", r.mode}, {"provenance", provenance},
-          {"base_results", r.base_results}, {"candidate_results", r.candidate_results},
-          {"regressions", r.regressions}, {"improvements", r.improvements},
-          {"changed_metrics", r.changed_metrics}, {"regressions_within_draw", r.regressions_within_draw},
-          {"no_change", r.no_change()},
-          {"cells", cells}, {"unpaired", unpaired}};
-}
-
-std::string CompareTable(const CompareReport& r) {
-  const bool exact = r.mode == "exact";
-  std::ostringstream out;
-  out << "enavi compare: base " << r.base << " (" << r.base_results << " results) vs candidate "
-      << r.candidate << " (" << r.candidate_results << " results), "
-      << (exact ? "exact deltas (virtual clock, cost model: any difference is real)"
-                : "paired t-test over seeds, 95% confidence intervals")
-      << "\n";
-  if (!r.provenance.empty()) {
-    // A few values each: a job holds one cost model digest per board and cost family.
-    auto values = [](const std::vector<std::string>& v) {
-      std::string out;
-      for (std::size_t i = 0; i < v.size() && i < 3; ++i) out += (i ? ", " : "") + v[i];
-      return v.size() > 3 ? out + " (+" + std::to_string(v.size() - 3) + " more)" : out;
-    };
-    out << "\nprovenance that differs between paired episodes (result notes provenance.*):\n";
-    for (const ProvenanceChange& p : r.provenance) {
-      out << "  " << p.name << " in " << p.cells << " of " << r.cells.size() << " cells: " << values(p.base_values)
-          << " -> " << values(p.candidate_values) << "\n";
-      if (!p.meaning.empty()) out << "    " << p.meaning << "\n";
-    }
-  }
-  // Worst first: regressions, improvements, then changes of judged and of unjudged metrics.
-  auto rank = [](const MetricChange& m) {
-    if (m.verdict == "regression") return 0;
-    if (m.verdict == "improvement") return 1;
-    return m.direction == Direction::kNone ? 3 : 2;
-  };
-  for (const CellChange& c : r.cells) {
-    bool header = false;
-    std::vector<const MetricChange*> shown;
-    for (const MetricChange& m : c.metrics) {
-      if (m.verdict != "same") shown.push_back(&m);
-    }
-    std::stable_sort(shown.begin(), shown.end(),
-                     [&](const MetricChange* a, const MetricChange* b) { return rank(*a) < rank(*b); });
-    for (const MetricChange* mp : shown) {
-      const MetricChange& m = *mp;
-      if (!header) {
-        out << "\n" << CellName(c) << " (" << c.pairs << " pairs)\n";
-        header = true;
-      }
-      std::string tag = m.verdict;
-      std::transform(tag.begin(), tag.end(), tag.begin(), ::toupper);
-      char col[24];
-      std::snprintf(col, sizeof col, "  %-14s ", tag.c_str());
-      out << col << Describe(m, exact) << "\n";
-    }
-    if (exact && !c.changed.empty()) {
-      out << "  changed episodes:";
-      for (const ChangedEpisode& e : c.changed) {
-        out << " seed " << e.seed << " (" << e.base_episode << " -> " << e.candidate_episode << ")";
-      }
-      out << "\n";
-    }
-  }
-  if (!r.unpaired.empty()) {
-    out << "\nunpaired (in one job only):\n";
-    for (const Unpaired& u : r.unpaired) {
-      out << "  " << u.side << " only: " << u.board << "/" << u.scenario << "/" << u.method
-          << " seed " << u.seed << (u.episode_id.empty() ? "" : " (" + u.episode_id + ")") << "\n";
-    }
-  }
-  out << "\n";
-  if (r.no_change()) {
-    out << "no change: every metric of every paired episode is identical\n";
-  } else if (r.regressions > 0) {
-    int cells = 0;
-    for (const CellChange& c : r.cells) cells += c.regressions > 0 ? 1 : 0;
-    out << "REGRESSION: " << r.regressions << " metric(s) in " << cells << " cell(s) got worse";
-    out << (r.improvements ? ", " + std::to_string(r.improvements) + " improved" : "");
-    const bool repriced = std::any_of(r.provenance.begin(), r.provenance.end(),
-                                      [](const ProvenanceChange& p) { return p.name == "cost_model_sha256"; });
-    out << (repriced ? " (with another cost model: see provenance above)" : "") << "\n";
-    if (r.regressions_within_draw > 0) {
-      out << "  " << r.regressions_within_draw << " of the " << r.regressions
-          << " are within the seeds' draw: their paired 95% CI includes 0 (--mode paired calls them insignificant)\n";
-    }
-  } else {
-    out << "no regression: " << r.changed_metrics << " metric(s) changed, " << r.improvements
-        << " improved" << (r.unpaired.empty() ? "" : ", " + std::to_string(r.unpaired.size()) + " unpaired") << "\n";
-  }
-  return out.str();
-}
-
-std::string CompareJunit(const CompareReport& r) {
-  const bool exact = r.mode == "exact";
-  std::ostringstream body;
-  int tests = 0, failures = 0, skipped = 0;
-  for (const CellChange& c : r.cells) {
-    int t = 0, f = 0;
-    std::ostringstream cases;
-    const std::string classname = c.board + "." + c.scenario + "." + c.method;
-    for (const MetricChange& m : c.metrics) {
-      if (m.direction == Direction::kNone) continue;
-      ++t;
-      cases << "    <testcase classname=\"" << Xml(classname) << "\" name=\"" << Xml(m.name)
-            << "\" time=\"0\">";
-      if (m.verdict == "regression") {
-        ++f;
-        cases << "\n      <failure message=\"" << Xml(m.name + " regressed") << "\" type=\"regression\">"
-              << Xml(Describe(m, exact)) << "</failure>\n    ";
-      }
-      cases << "</testcase>\n";
-    }
-    body << "  <testsuite name=\"" << Xml(CellName(c)) << "\" tests=\"" << t << "\" failures=\""
-         << f << "\" errors=\"0\" skipped=\"0\" time=\"0\">\n"
-         << cases.str() << "  </testsuite>\n";
-    tests += t;
-    failures += f;
-  }
-  if (!r.unpaired.empty()) {
-    body << "  <testsuite name=\"unpaired\" tests=\"" << r.unpaired.size()
-         << "\" failures=\"0\" errors=\"0\" skipped=\"" << r.unpaired.size() << "\" time=\"0\">\n";
-    for (const Unpaired& u : r.unpaired) {
-      body << "    <testcase classname=\"" << Xml(u.board + "." + u.scenario + "." + u.method)
-           << "\" name=\"seed " << u.seed << "\" time=\"0\">\n      <skipped message=\""
-           << Xml("in the " + u.side + " job only") << "\"/>\n    </testcase>\n";
-    }
-    body << "  </testsuite>\n";
-    tests += static_cast<int>(r.unpaired.size());
-    skipped += static_cast<int>(r.unpaired.size());
-  }
-  std::ostringstream out;
-  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites name=\""
-      << Xml("enavi compare " + r.base + " " + r.candidate) << "\" tests=\"" << tests
-      << "\" failures=\"" << failures << "\" errors=\"0\" skipped=\"" << skipped
-      << "\" time=\"0\">\n"
-      << body.str() << "</testsuites>\n";
-  return out.str();
 }
 
 }  // namespace enavi::server

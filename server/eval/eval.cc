@@ -1,6 +1,9 @@
 #include "server/eval/eval.h"
 
+#include <algorithm>
 #include <charconv>
+#include <cstdlib>
+#include <iterator>
 #include <sstream>
 #include <thread>
 #include <type_traits>
@@ -9,8 +12,9 @@
 
 #include "api/yaml_read.h"
 #include "server/eval/local_farm.h"
-#include "server/http/http_api.h"
+#include "server/eval/progress_pacer.h"
 #include "server/eval/tables.h"
+#include "server/http/http_api.h"
 #include "server/scheduler/farm_server.h"
 #include "server/store/jobs.h"
 #include "server/store/queries.h"
@@ -44,11 +48,64 @@ std::string YamlMap(const std::map<std::string, Value>& values) {
   return out + "}";
 }
 
+std::string Joined(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& item : items) out += (out.empty() ? "" : ",") + item;
+  return out;
+}
+
+// The flag of `enavi eval` that wrote `field` of its job spec (EvalJobYaml), as its user typed
+// it; empty when no flag did.
+std::string FlagOf(const EvalOptions& o, const std::string& field) {
+  auto is = [&](const std::string& name) {
+    return field == name || field.rfind(name + "[", 0) == 0 || field.rfind(name + ".", 0) == 0;
+  };
+  if (is("boards")) return "--boards " + Joined(o.boards);
+  if (is("scenarios")) return "--scenarios " + Joined(o.scenarios);
+  if (is("methods")) return "--methods " + Joined(o.methods);
+  if (is("seeds")) return "--seeds " + std::to_string(o.seeds);
+  if (is("name")) return "--name " + o.name;
+  if (is("clock")) return "--clock " + o.clock;
+  if (is("cost")) return "--cost " + o.cost;
+  if (is("dilation")) return "--dilation " + o.dilation;
+  if (is("speed_probe")) return "--speed-probe " + o.speed_probe;
+  if (is("policy")) return "--policy " + o.policy;
+  if (field == "matrix") return "--boards x --scenarios x --methods x --seeds";
+  if (field.rfind("labels.", 0) == 0) {
+    const std::string key = field.substr(7);
+    const auto it = o.labels.find(key);
+    return "--label " + key + (it == o.labels.end() ? "" : "=" + it->second);
+  }
+  if (field.rfind("overrides.", 0) == 0) return "--set " + field.substr(10);
+  if (is("overrides")) return "--set";
+  // episode_overrides[i]: the i-th method of --set METHOD:NAME=VALUE, in EvalJobYaml's order.
+  if (field.rfind("episode_overrides[", 0) == 0 && !o.method_overrides.empty()) {
+    const std::size_t index = std::strtoul(field.c_str() + 18, nullptr, 10);
+    const auto method = std::next(o.method_overrides.begin(),
+                                  static_cast<long>(std::min(index, o.method_overrides.size() - 1)));
+    const std::size_t name = field.find("].overrides.");
+    return "--set " + method->first + ":" + (name == std::string::npos ? "" : field.substr(name + 12));
+  }
+  return "";
+}
+
 }  // namespace
+
+api::JobSpec ParseEvalJob(const EvalOptions& options, const std::string& yaml) {
+  try {
+    return api::ParseJobSpec(yaml, "enavi eval flags", options.job_spec);
+  } catch (const api::JobSpecError& e) {
+    // The YAML is ours, not the user's: name the flag they typed, never a line of it.
+    const std::string flag = FlagOf(options, e.field());
+    if (e.field().empty() || flag.empty()) throw std::invalid_argument("enavi eval: " + std::string(e.what()));
+    const bool item = e.field().find('[') != std::string::npos && flag.rfind("--set", 0) != 0;
+    throw std::invalid_argument(flag + ": " + (item ? e.field() + ": " : "") + e.reason());
+  }
+}
 
 std::string EvalJobYaml(const EvalOptions& o) {
   std::ostringstream y;
-  y << "name: eval\n"
+  y << "name: " << YamlQuoted(o.name) << "\n"
     << "boards: " << YamlList(o.boards) << "\n"
     << "scenarios: " << YamlList(o.scenarios) << "\n"
     << "methods: " << YamlList(o.methods) << "\n"
@@ -71,9 +128,9 @@ std::string EvalJobYaml(const EvalOptions& o) {
 }
 
 EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
-  // Validate the matrix exactly as a submitted job; errors name the line of the flag.
+  // Validate the matrix exactly as a submitted job; errors name the flag as typed.
   const std::string yaml = EvalJobYaml(options);
-  const api::JobSpec job = api::ParseJobSpec(yaml, "enavi eval flags", options.job_spec);
+  const api::JobSpec job = ParseEvalJob(options, yaml);
 
   LocalFarmOptions farm_options;
   farm_options.db = options.db;
@@ -96,13 +153,16 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out) {
   EvalReport report;
   report.job_id = farm.Submit(job, yaml);
   auto last_print = std::chrono::steady_clock::time_point{};
+  ProgressPacer lines(options.progress_line_period);
   while (true) {
     report.progress = *store.jobs().Progress(report.job_id, NowMs());
     const auto now = std::chrono::steady_clock::now();
-    // A bar redrawn in place on a terminal; piped, only the final line (README.md, "What it does").
-    if (report.progress.terminal() ||
-        (options.progress_bar && now - last_print >= options.progress_period)) {
-      const std::string line = ProgressLine(report.progress, options.progress_bar);
+    // A bar redrawn in place on a terminal; in a log, a line every period or tenth of the job,
+    // and the last one (docs/farm.md, "One command").
+    const api::JobProgress& p = report.progress;
+    if (options.progress_bar ? p.terminal() || now - last_print >= options.progress_period
+                             : lines.Due(p.finished(), p.total, now) || p.terminal()) {
+      const std::string line = ProgressLine(p, options.progress_bar);
       if (options.progress_bar) {
         progress_out << "\r" << line << "\033[K" << std::flush;
       } else {

@@ -17,6 +17,7 @@
 
 #include "api/http_schema.h"
 #include "api/job_spec.h"
+#include "server/eval/progress_pacer.h"
 #include "server/http/http_api.h"
 
 namespace enavi::server {
@@ -24,6 +25,7 @@ namespace enavi::server {
 struct EvalReport;
 
 struct EvalOptions {
+  std::string name = "eval";  ///< the job's name (`--name`): the dashboard and `enavi status` show it
   std::vector<std::string> boards = {"tx2"};
   std::vector<std::string> scenarios = {"s1"};
   std::vector<std::string> methods = {"baseline", "enavi"};
@@ -51,13 +53,14 @@ struct EvalOptions {
   std::filesystem::path enavi;
   std::optional<std::uint32_t> domain;  ///< empty: derived from the process id
   api::JobSpecOptions job_spec;
-  bool progress_bar = false;     ///< redraw a bar in place (terminal); else only the last line
+  bool progress_bar = false;     ///< redraw a bar in place (terminal); else lines (ProgressPacer)
   /// Serve the HTTP API and dashboard here while the job runs (`enavi eval --dashboard`).
   std::optional<HttpOptions> dashboard;
   /// With `dashboard`: called once the job is done and its results are read, while the
   /// dashboard still serves them; RunEval returns when it does (e.g. after Ctrl-C).
   std::function<void(const EvalReport&)> while_serving;
-  std::chrono::milliseconds progress_period{500};
+  std::chrono::milliseconds progress_period{500};  ///< the bar's redraw period
+  std::chrono::milliseconds progress_line_period{kProgressLinePeriod};  ///< lines: at least this often
 };
 
 struct EvalReport {
@@ -73,5 +76,10 @@ EvalReport RunEval(const EvalOptions& options, std::ostream& progress_out);
 
 /// The job spec YAML `enavi eval` submits for `options` (one flag per line).
 std::string EvalJobYaml(const EvalOptions& options);
+
+/// `yaml` (EvalJobYaml) checked as a submitted job is. @throws std::invalid_argument naming the
+/// flag as typed and the reason ("--set planner.v_maxx: not a tunable of method baseline ..."),
+/// never a line of the YAML the user did not write.
+api::JobSpec ParseEvalJob(const EvalOptions& options, const std::string& yaml);
 
 }  // namespace enavi::server

@@ -1,15 +1,14 @@
 #include "server/http/http_api.h"
 
 #include <arpa/inet.h>
+#include <sys/socket.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <map>
 #include <regex>
 #include <stdexcept>
-
-// Before httplib.h: it pulls in <resolv.h>, whose `_res` macro breaks Eigen's parameter names.
-#include "server/report/flight_report.h"
-#include "worlds/resolve.h"
 
 #include <httplib.h>
 #include <nlohmann/json.hpp>
@@ -17,9 +16,8 @@
 
 #include "api/farm_messages.h"
 #include "api/http_schema.h"
+#include "server/http/http_reply.h"
 #include "server/scheduler/collection.h"
-#include "api/provenance.h"
-#include "server/compare/compare.h"
 #include "server/store/collect_store.h"
 #include "server/store/jobs.h"
 #include "server/store/queries.h"
@@ -27,16 +25,6 @@
 
 namespace enavi::server {
 namespace {
-
-void Reply(httplib::Response& res, int status, const nlohmann::json& body) {
-  res.status = status;
-  // Stored strings came from workers and users as bytes: invalid UTF-8 is replaced, not a 500.
-  res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), "application/json");
-}
-
-void Error(httplib::Response& res, int status, const std::string& message) {
-  Reply(res, status, {{"error", message}});
-}
 
 // A refusal by one of the server's limits names it, so a client can tell which one to raise.
 void LimitError(httplib::Response& res, int status, const std::string& limit,
@@ -94,47 +82,6 @@ std::string CookieValue(const std::string& cookies, const std::string& name) {
   return "";
 }
 
-int ParseInt(const std::string& text, const std::string& field, std::int64_t lo, std::int64_t hi) {
-  std::size_t used = 0;
-  long long v = 0;
-  try {
-    v = std::stoll(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || v < lo || v > hi) {
-    throw std::invalid_argument(field + ": '" + text + "': expected an integer in [" +
-                                std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  }
-  return static_cast<int>(v);
-}
-
-// Every value of query parameter `name`, split at the first '=' only (httplib's parser cuts
-// "label=k=v" at the second '='), URL-decoded.
-std::vector<std::string> QueryValues(const httplib::Request& req, const std::string& name) {
-  std::vector<std::string> out;
-  const auto q = req.target.find('?');
-  if (q == std::string::npos) return out;
-  const std::string query = req.target.substr(q + 1);
-  std::size_t at = 0;
-  while (at <= query.size()) {
-    const auto end = std::min(query.find('&', at), query.size());
-    const std::string item = query.substr(at, end - at);
-    if (item.rfind(name + "=", 0) == 0) {
-      out.push_back(httplib::detail::decode_url(item.substr(name.size() + 1), true));
-    }
-    at = end + 1;
-  }
-  return out;
-}
-
-Page PageOf(const httplib::Request& req) {
-  Page p;
-  if (req.has_param("offset")) p.offset = ParseInt(req.get_param_value("offset"), "offset", 0, 1 << 30);
-  if (req.has_param("limit")) p.limit = ParseInt(req.get_param_value("limit"), "limit", 1, 1000);
-  return p;
-}
-
 // A connection in memory: reads the request bytes, collects the response.
 class MemoryStream final : public httplib::Stream {
  public:
@@ -180,9 +127,6 @@ class RoutingServer final : public httplib::Server {
 };
 
 }  // namespace
-
-// Generated from server/dashboard/* by cmake/EmbedFiles.cmake.
-const std::map<std::string, std::string>& DashboardAssets();
 
 AccessDecision CheckAccess(const HttpOptions& options, const AccessRequest& r) {
   AccessDecision d;
@@ -256,6 +200,13 @@ HttpApi::HttpApi(Store* store, FarmServer* farm, HttpOptions options)
     throw std::invalid_argument("--token: required when --http binds a non-loopback address ('" +
                                 options_.host + "')");
   }
+  // No SO_REUSEPORT (httplib's default sets it): with it a second server on a port in use
+  // started and the kernel split the connections between the two, each answering from its own
+  // database. SO_REUSEADDR stays, so a restarted server binds while old connections linger.
+  server_->set_socket_options([](socket_t sock) {
+    const int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   // httplib refuses a declared Content-Length above this before reading the body; the POST
   // handler applies the per-route limit to what was read.
   server_->set_payload_max_length(std::max(options_.max_body_bytes, options_.max_policy_bytes));
@@ -284,14 +235,19 @@ std::string HttpApi::url() const {
 }
 
 int HttpApi::Start() {
+  errno = 0;
   if (options_.port == 0) {
     port_ = server_->bind_to_any_port(options_.host.c_str());
   } else {
     port_ = server_->bind_to_port(options_.host.c_str(), options_.port) ? options_.port : -1;
   }
   if (port_ <= 0) {
-    throw std::runtime_error("--http: cannot listen on " + options_.host + ":" +
-                             std::to_string(options_.port));
+    const int error = errno;
+    throw std::runtime_error("--http: cannot listen on " + options_.host + ":" + std::to_string(options_.port) +
+                             (error == EADDRINUSE ? ": address already in use (another enavi serve or dashboard "
+                                                    "there? --http HOST:PORT picks another, port 0 any free one)"
+                              : error != 0       ? std::string(": ") + std::strerror(error)
+                                                 : std::string()));
   }
   thread_ = std::thread([this] { server_->listen_after_bind(); });
   return port_;
@@ -449,22 +405,6 @@ void HttpApi::Routes() {
     Reply(res, 200, store.queries().Results(req.matches[1]));
   });
 
-  s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/summary)", [&store](const httplib::Request& req,
-                                                          httplib::Response& res) {
-    if (!store.jobs().Progress(req.matches[1], NowMs())) {
-      return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
-    }
-    Reply(res, 200, store.queries().JobSummary(req.matches[1], PageOf(req)));
-  });
-
-  s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/failures)", [&store](const httplib::Request& req,
-                                                           httplib::Response& res) {
-    if (!store.jobs().Progress(req.matches[1], NowMs())) {
-      return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
-    }
-    Reply(res, 200, store.queries().JobFailures(req.matches[1], PageOf(req)));
-  });
-
   s.Get(R"(/api/jobs/([A-Za-z0-9_-]+)/episodes)", [&store](const httplib::Request& req,
                                                            httplib::Response& res) {
     if (!store.jobs().Progress(req.matches[1], NowMs())) {
@@ -475,7 +415,8 @@ void HttpApi::Routes() {
       list.push_back({{"id", e.id}, {"index", e.index}, {"state", e.state},
                       {"attempts", e.attempts}, {"lease_owner", e.lease_owner},
                       {"last_error", e.last_error}, {"board", e.spec.board},
-                      {"world", e.spec.world}, {"method", e.spec.method}, {"seed", e.spec.seed}});
+                      {"world", e.spec.world}, {"method", e.spec.method}, {"seed", e.spec.seed},
+                      {"spec", e.spec}});
     }
     Reply(res, 200, list);
   });
@@ -485,42 +426,6 @@ void HttpApi::Routes() {
     const auto r = store.queries().FullResult(req.matches[1]);
     if (!r) return Error(res, 404, "no result for episode '" + std::string(req.matches[1]) + "'");
     Reply(res, 200, *r);
-  });
-
-  s.Get(R"(/api/episodes/([A-Za-z0-9_-]+)/topdown.png)", [&store](const httplib::Request& req,
-                                                                  httplib::Response& res) {
-    const auto r = store.queries().FullResult(req.matches[1]);
-    if (!r) return Error(res, 404, "no result for episode '" + std::string(req.matches[1]) + "'");
-    const int width = req.has_param("width") ? ParseInt(req.get_param_value("width"), "width", 300, 2000) : 900;
-    worlds::WorldRequest w;
-    w.world = r->spec.world;
-    w.seed = r->spec.seed;
-    w.params = r->spec.world_params;
-    if (r->spec.start) w.start = Eigen::Vector3d((*r->spec.start)[0], (*r->spec.start)[1], (*r->spec.start)[2]);
-    if (r->spec.goal) w.goal = Eigen::Vector3d((*r->spec.goal)[0], (*r->spec.goal)[1], (*r->spec.goal)[2]);
-    const std::vector<std::uint8_t> png = report::FlightTopDownPng(*r, worlds::ResolveWorld(w), width);
-    res.set_content(std::string(png.begin(), png.end()), "image/png");
-  });
-
-  s.Get("/api/compare", [&store](const httplib::Request& req, httplib::Response& res) {
-    const std::string base = req.get_param_value("base"), candidate = req.get_param_value("candidate");
-    for (const auto& [name, id] : {std::pair{"base", base}, {"candidate", candidate}}) {
-      if (id.empty()) return Error(res, 400, std::string(name) + ": missing (a job id)");
-      if (!store.jobs().Progress(id, NowMs())) return Error(res, 404, std::string(name) + ": no job '" + id + "'");
-    }
-    CompareOptions options;
-    if (req.has_param("mode")) options.mode = req.get_param_value("mode");
-    Reply(res, 200, CompareJson(Compare(store.queries().Results(base), store.queries().Results(candidate), options, base, candidate)));
-  });
-
-  s.Get("/api/trend", [&store](const httplib::Request& req, httplib::Response& res) {
-    const auto labels = QueryValues(req, "label");
-    if (labels.size() != 1) return Error(res, 400, "label: give exactly one key=value");
-    const auto [key, value] = api::ParseLabelFilter(labels.front(), "label");
-    const std::string metric = req.has_param("metric") ? req.get_param_value("metric") : "flight_time_s";
-    nlohmann::json trend = store.queries().Trend(key, value, metric, PageOf(req));
-    AddTrendIntervals(&trend);
-    Reply(res, 200, trend);
   });
 
   s.Get("/api/workers", [this, &store](const httplib::Request&, httplib::Response& res) {
@@ -537,37 +442,7 @@ void HttpApi::Routes() {
     Reply(res, 200, list);
   });
 
-  s.Get("/api/info", [this](const httplib::Request&, httplib::Response& res) {
-    nlohmann::json rules = nlohmann::json::object();
-    for (const auto& [name, rule] : DefaultMetricRules()) {
-      rules[name] = {{"direction", DirectionName(rule.direction)}, {"abs", rule.abs},
-                     {"rel", rule.rel}, {"success_only", rule.success_only}};
-    }
-    Reply(res, 200, {{"read_only", farm_ == nullptr}, {"enavi_version", api::BuildVersion()},
-                     {"git_commit", api::BuildCommit()}, {"metric_rules", rules}});
-  });
-
   DashboardRoutes();
-}
-
-void HttpApi::DashboardRoutes() {
-  // The pages: one HTML shell, the script and the style sheet, all embedded in the binary.
-  auto asset = [](const std::string& name, const char* type) {
-    return [name, type](const httplib::Request&, httplib::Response& res) {
-      const auto& files = DashboardAssets();
-      const auto it = files.find(name);
-      if (it == files.end()) return Error(res, 404, "no dashboard asset " + name);
-      res.set_header("Cache-Control", "no-cache");
-      res.set_header("X-Content-Type-Options", "nosniff");
-      // Nothing but our own script and images: an injected tag could not load or run anything.
-      res.set_header("Content-Security-Policy",
-                     "default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'");
-      res.set_content(it->second, type);
-    };
-  };
-  server_->Get("/", asset("index.html", "text/html; charset=utf-8"));
-  server_->Get("/static/app.js", asset("app.js", "text/javascript; charset=utf-8"));
-  server_->Get("/static/style.css", asset("style.css", "text/css; charset=utf-8"));
 }
 
 }  // namespace enavi::server

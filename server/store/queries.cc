@@ -6,6 +6,7 @@
 #include <map>
 #include <stdexcept>
 #include <tuple>
+#include <vector>
 
 #include "server/store/connection.h"
 #include "server/store/schema.h"
@@ -48,6 +49,54 @@ nlohmann::json Stats(std::int64_t n, double mean, double min, double max, double
 
 nlohmann::json PageJson(const Page& page, std::int64_t total) {
   return {{"offset", page.offset}, {"limit", page.limit}, {"total", total}};
+}
+
+// The metric names of the results of the jobs labelled key=value: from the running sums, or from
+// the results themselves in a database written before them.
+std::vector<std::string> SeriesMetrics(Database& db, const std::string& key, const std::string& value) {
+  const bool sums = HasColumn(db, "cell_metrics", "n");
+  const std::string metrics = HasColumn(db, "results", "metrics_json") ? "r.metrics_json" : "r.result_json";
+  Statement& q = db.Prepare(
+      sums ? "SELECT DISTINCT c.name FROM cell_metrics c JOIN job_labels l ON l.job_id = c.job_id "
+             "WHERE l.key = ? AND l.value = ? ORDER BY c.name"
+           : "SELECT DISTINCT m.key FROM job_labels l JOIN results r ON r.job_id = l.job_id, json_each(" + metrics +
+                 ") m WHERE l.key = ? AND l.value = ? AND m.type IN ('integer', 'real', 'true', 'false') "
+                 "ORDER BY m.key");
+  q.Bind(1, key).Bind(2, value);
+  std::vector<std::string> out;
+  while (q.Step()) out.push_back(q.Text(0));
+  q.Reset();
+  return out;
+}
+
+// Levenshtein distance, for "did you mean".
+std::size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// "; did you mean flight_time_s?": the known names containing the typed one or within a few edits
+// of it (at most three), else where the names are listed.
+std::string Suggestion(const std::string& typed, const std::vector<std::string>& known) {
+  std::vector<std::string> close;
+  for (const std::string& name : known) {
+    const bool contains = name.find(typed) != std::string::npos || typed.find(name) != std::string::npos;
+    if (contains || EditDistance(typed, name) <= std::max<std::size_t>(2, typed.size() / 4)) close.push_back(name);
+  }
+  if (close.empty()) return " (`enavi results JOB --format json` shows a result's metrics)";
+  std::string out = "; did you mean ";
+  for (std::size_t i = 0; i < close.size() && i < 3; ++i) out += (i ? ", " : "") + close[i];
+  return out + "?";
 }
 
 }  // namespace
@@ -234,6 +283,15 @@ nlohmann::json ResultQueries::Trend(const std::string& key, const std::string& v
     out["points"].push_back(std::move(point));
   }
   q.Reset();
+  // No point although the series has results: a metric no result has is a name mistyped (a
+  // trend that is empty is not one that stayed flat).
+  if (out["points"].empty() && out["total"].get<std::int64_t>() > 0) {
+    const std::vector<std::string> known = SeriesMetrics(db, key, value);
+    if (!known.empty() && std::find(known.begin(), known.end(), metric) == known.end()) {
+      throw std::invalid_argument("metric: '" + metric + "': no result of the jobs labelled " + key + "=" + value +
+                                  " has it" + Suggestion(metric, known));
+    }
+  }
   return out;
 }
 

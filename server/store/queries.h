@@ -42,7 +42,8 @@ class ResultQueries {
   /// first: {"points": [{"job_id", "name", "created_ms", "board", "method", "n", "mean", "df",
   /// "seed_std"}], "total" (jobs), ...}. seed_std is the spread over seeds within each scenario,
   /// pooled over the scenarios (df = sum of n - 1 per scenario; null when df is 0).
-  /// @throws std::invalid_argument for a metric name with characters no metric has.
+  /// @throws std::invalid_argument naming the metric when no result of the series has it (with
+  /// the names closest to it) or it has characters no metric name has.
   nlohmann::json Trend(const std::string& key, const std::string& value,
                        const std::string& metric, const Page& page);
 

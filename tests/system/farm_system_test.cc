@@ -1,6 +1,10 @@
 // The farm end to end: real `enavi serve` / `enavi worker` processes over DDS, fake episodes.
 #include <signal.h>
 
+#include <sstream>
+#include <string>
+#include <vector>
+
 #include "server/store/jobs.h"
 #include "server/store/queries.h"
 #include "server/store/store.h"
@@ -90,14 +94,16 @@ episode_overrides:
   EXPECT_TRUE(Process("w1").running()) << "crashing episodes must not take the worker down";
 }
 
-// Runs `enavi eval ARGS...` with the fake episode on this test's domain. It must succeed.
-// Returns its stdout, the table. Its stderr is in DIR/NAME.log.
+// Runs `enavi eval ARGS...` with the fake episode (real_episodes: `enavi episode`, real flights)
+// on this test's domain. It must succeed. Returns its stdout, the table. Its stderr is in
+// DIR/NAME.log.
 std::string EvalOutput(const fs::path& dir, const std::string& name, std::vector<std::string> args,
-                       int domain, std::chrono::seconds limit) {
+                       int domain, std::chrono::seconds limit, bool real_episodes = false) {
   worker::SpawnOptions o;
   o.argv = {EnaviBinary().string(), "eval"};
   o.argv.insert(o.argv.end(), args.begin(), args.end());
-  o.argv.insert(o.argv.end(), {"--episode-cmd", EpisodeCommand(), "--domain", std::to_string(domain)});
+  if (!real_episodes) o.argv.insert(o.argv.end(), {"--episode-cmd", EpisodeCommand()});
+  o.argv.insert(o.argv.end(), {"--domain", std::to_string(domain)});
   o.stdout_file = dir / (name + ".out");
   o.stderr_file = dir / (name + ".log");
   worker::ChildProcess eval = worker::ChildProcess::Spawn(o);
@@ -191,7 +197,7 @@ TEST_F(FarmFixture, EvalSetRefusesAMethodNotFlownAndATunableNotAllTake) {
   ExpectRefused(dir_, {"eval", "--set", "fixed:planner.v_max=1"},
                 "--set fixed:planner.v_max: method 'fixed' is not among --methods (baseline,enavi)");
   ExpectRefused(dir_, {"eval", "--set", "strategy.least_load=1"},
-                "overrides.strategy.least_load: not a tunable of method baseline");
+                "--set strategy.least_load: not a tunable of method baseline");
   ExpectRefused(dir_, {"eval", "--set", "enavi:strategy.least_load=on"},
                 "--set enavi:strategy.least_load: 'on' is not a number");
 }
@@ -210,7 +216,61 @@ TEST_F(FarmFixture, EvalPresetPaperRefusesAnotherMatrix) {
 
 TEST_F(FarmFixture, EvalRefusesASpeedProbeOnTheVirtualClockByName) {
   ExpectRefused(dir_, {"eval", "--speed-probe", "use"},
-                "speed_probe: the emulated clock's (this job's clock is virtual)");
+                "--speed-probe use: the emulated clock's (this job's clock is virtual)");
+}
+
+// `enavi eval --name` names the job; in a log (stderr not a terminal) progress is a line at the
+// start, at each tenth of the job and at its end, not only the final line (issue 44).
+TEST_F(FarmFixture, EvalNamesTheJobAndPrintsProgressLinesInALog) {
+  const fs::path db = dir_ / "named.db";
+  EvalOutput(dir_, "named",
+             {"--name", "nightly-1", "--boards", "tx2", "--scenarios", "s1", "--methods", "baseline,enavi",
+              "--seeds", "5", "--db", db.string(), "--set", "fake.sleep_s=0.3", "--unchecked-overrides", "fake."},
+             domain_, std::chrono::seconds(180));
+  std::istringstream log(ReadText(dir_ / "named.log"));
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(log, line);) {
+    if (line.find("/10 done") != std::string::npos) lines.push_back(line);
+  }
+  ASSERT_GE(lines.size(), 3u) << ReadText(dir_ / "named.log");
+  EXPECT_NE(lines.front().find(" 0/10 done"), std::string::npos) << lines.front();
+  EXPECT_NE(lines.back().find(" 10/10 done"), std::string::npos) << lines.back();
+  EXPECT_EQ(lines.back().find('\r'), std::string::npos) << "lines, not a bar redrawn in place";
+  server::Store store(db);
+  const auto jobs = store.jobs().ListJobs(0);
+  ASSERT_EQ(jobs.size(), 1u);
+  EXPECT_EQ(jobs[0].name, "nightly-1");
+}
+
+// Issue 44's case on real flights: two one-seed evals of s1 on tx2, the second with
+// --set planner.v_max=1.0, compared in paired mode. It printed "no regression" and exited 0 with
+// flight time +131 %; now the mode says it cannot judge (exit 4) and names the override first.
+TEST_F(FarmFixture, PairedCompareOfTwoOneSeedEvalsCannotJudgeAndNamesTheOverride) {
+  const fs::path db = dir_ / "a.db";
+  const std::vector<std::string> matrix = {"--boards", "tx2", "--scenarios", "s1", "--seeds", "1", "--db", db.string()};
+  std::vector<std::string> slow = matrix;
+  slow.insert(slow.end(), {"--name", "slow", "--set", "planner.v_max=1.0"});
+  EvalOutput(dir_, "before", matrix, domain_, std::chrono::seconds(300), /*real_episodes=*/true);
+  EvalOutput(dir_, "slow", slow, domain_, std::chrono::seconds(300), /*real_episodes=*/true);
+  std::vector<std::string> ids;
+  {
+    server::Store store(db);
+    for (const auto& p : store.jobs().ListJobs(0)) ids.push_back(p.id);
+  }
+  ASSERT_EQ(ids.size(), 2u);
+  worker::SpawnOptions o;
+  o.argv = {EnaviBinary().string(), "compare", db.string() + ":" + ids[0], db.string() + ":" + ids[1], "--mode",
+            "paired"};
+  o.stdout_file = dir_ / "compare.out";
+  worker::ChildProcess compare = worker::ChildProcess::Spawn(o);
+  const auto status = compare.Wait(std::chrono::seconds(60));
+  ASSERT_TRUE(status.has_value());
+  const std::string out = ReadText(o.stdout_file);
+  EXPECT_EQ(status->code, 4) << status->Describe() << "\n" << out;
+  EXPECT_NE(out.find("overrides.planner.v_max in 2 of 2 cells: (default) -> 1.0"), std::string::npos) << out;
+  EXPECT_NE(out.find("TOO_FEW_PAIRS  flight_time_s"), std::string::npos) << out;
+  EXPECT_NE(out.find("CANNOT JUDGE: "), std::string::npos) << out;
+  EXPECT_EQ(out.find("no regression"), std::string::npos) << out;
 }
 
 TEST_F(FarmFixture, BadJobSpecIsRejectedByTheCliWithExitCodeTwo) {

@@ -253,6 +253,108 @@ TEST(CompareTest, JunitEscapesNamesAndCountsFailures) {
   EXPECT_NE(xml.find("failures=\"1\""), std::string::npos);
 }
 
+// Issue 44's case: one seed per cell, the candidate with planner.v_max 1.0 on tx2 (twice the
+// flight time), compared in paired mode. With one pair there is no interval: the report says the
+// mode cannot judge, never "no regression", and the verdict is its own (exit 4 at the CLI).
+TEST(CompareTest, PairedModeWithOnePairCannotJudgeAndSaysSo) {
+  CompareOptions paired;
+  paired.mode = "paired";
+  const CompareReport r = Compare(Job("a", {"tx2"}, 1), Job("b", {"tx2"}, 1, /*v_max_on_tx2=*/1.0), paired);
+  const MetricChange& ft = Metric(r, "tx2", "baseline", "flight_time_s");
+  EXPECT_EQ(ft.verdict, "too_few_pairs");
+  EXPECT_TRUE(ft.undecided);
+  EXPECT_FALSE(ft.has_interval);
+  EXPECT_EQ(r.regressions, 0);
+  EXPECT_GT(r.undecided, 0);
+  EXPECT_EQ(r.undecided_cells, 2);
+  EXPECT_EQ(r.verdict(), "cannot_judge");
+  EXPECT_TRUE(r.exact_applies);
+  const std::string text = CompareTable(r);
+  EXPECT_NE(text.find("CANNOT JUDGE: "), std::string::npos) << text;
+  EXPECT_NE(text.find("or compare with --mode exact"), std::string::npos) << text;
+  EXPECT_EQ(text.find("no regression"), std::string::npos) << text;
+  EXPECT_EQ(CompareJson(r)["verdict"], "cannot_judge");
+  EXPECT_EQ(CompareJson(r)["undecided"], r.undecided);
+  // JUnit: an error per metric the gate cannot judge, so a CI server fails the build.
+  const std::string xml = CompareJunit(r);
+  EXPECT_NE(xml.find("type=\"cannot_judge\""), std::string::npos) << xml;
+  EXPECT_NE(xml.find("errors=\"" + std::to_string(r.undecided) + "\""), std::string::npos) << xml;
+  // Exact mode, the default where it applies, calls the same change a regression; with one pair it
+  // says no interval exists rather than counting it as outside the draw.
+  const CompareReport exact = Compare(Job("a", {"tx2"}, 1), Job("b", {"tx2"}, 1, 1.0), {});
+  EXPECT_EQ(exact.mode, "exact");
+  EXPECT_EQ(exact.verdict(), "regression");
+  EXPECT_EQ(exact.regressions_within_draw, 0);
+  EXPECT_EQ(exact.regressions_without_interval, exact.regressions);
+  EXPECT_NE(CompareTable(exact).find("in cells of one seed pair: no interval"), std::string::npos);
+}
+
+// A change within its threshold is no regression whatever the interval: one pair suffices.
+TEST(CompareTest, PairedModeWithOnePairJudgesAChangeWithinTheThreshold) {
+  nlohmann::json a = Job("a", {"tx2"}, 1), b = a;
+  b[0]["flight_time_s"] = a[0]["flight_time_s"].get<double>() * 1.01;  // +1 %, threshold 5 %
+  CompareOptions paired;
+  paired.mode = "paired";
+  const CompareReport r = Compare(a, b, paired);
+  EXPECT_EQ(Metric(r, "tx2", "baseline", "flight_time_s").verdict, "change");
+  EXPECT_EQ(r.verdict(), "no_regression");
+}
+
+// How the jobs differ (specs per pair, labels, the server build) is listed before any metric, in
+// every form of the report.
+TEST(CompareTest, SpecLabelAndBuildDifferencesComeBeforeTheMetrics) {
+  auto input = [](const std::string& name, double v_max_on_tx2, const std::string& label, const std::string& commit) {
+    CompareInput in;
+    in.name = name;
+    in.results = Job(name, {"tx2", "pi4b"}, 2, v_max_on_tx2);
+    for (const auto& r : in.results) {
+      api::EpisodeSpec spec;
+      spec.world = "s1";
+      spec.board = r["board"];
+      spec.method = r["method"];
+      spec.seed = r["seed"];
+      if (v_max_on_tx2 > 0 && spec.board == "tx2") spec.overrides["planner.v_max"] = v_max_on_tx2;
+      in.specs[r["episode_id"]] = spec;
+    }
+    in.job_known = true;
+    in.job_name = name;
+    in.labels = {{"run", label}};
+    in.provenance = {{"git_commit", commit}, {"enavi_version", "0.1.0"}, {"clock", "virtual"}};
+    return in;
+  };
+  const CompareReport same = Compare(input("a", 0, "fast", "c1"), input("a", 0, "fast", "c1"), {});
+  EXPECT_TRUE(same.spec_changes.empty());
+  EXPECT_NE(CompareTable(same).find("the two jobs' specs, labels and server builds are the same"), std::string::npos);
+
+  const CompareReport r = Compare(input("a", 0, "fast", "c1"), input("b", 1.0, "slow", "c2"), {});
+  ASSERT_EQ(r.spec_changes.size(), 3u);
+  EXPECT_EQ(r.spec_changes[0].name, "overrides.planner.v_max");
+  EXPECT_EQ(r.spec_changes[0].kind, "spec");
+  EXPECT_EQ(r.spec_changes[0].cells, 2) << "tx2 baseline and tx2 enavi, not pi4b";
+  EXPECT_EQ(r.spec_changes[0].base_values, std::vector<std::string>{"(default)"});
+  EXPECT_EQ(r.spec_changes[0].candidate_values, std::vector<std::string>{"1.0"});
+  EXPECT_EQ(r.spec_changes[1].name, "label.run");
+  EXPECT_EQ(r.spec_changes[1].kind, "label");
+  EXPECT_EQ(r.spec_changes[2].name, "build.git_commit");
+  EXPECT_EQ(r.spec_changes[2].candidate_values, std::vector<std::string>{"c2"});
+  const std::string text = CompareTable(r);
+  const std::size_t differ = text.find("how the jobs differ");
+  ASSERT_NE(differ, std::string::npos) << text;
+  EXPECT_NE(text.find("overrides.planner.v_max in 2 of 4 cells: (default) -> 1.0"), std::string::npos) << text;
+  EXPECT_NE(text.find("label.run: fast -> slow"), std::string::npos) << text;
+  EXPECT_LT(differ, text.find("tx2/s1/baseline")) << text;
+  EXPECT_NE(text.find("('b', 8 results)"), std::string::npos) << text;
+  const nlohmann::json j = CompareJson(r);
+  EXPECT_EQ(j["spec_changes"][0]["name"], "overrides.planner.v_max");
+  EXPECT_EQ(j["spec_changes"][0]["candidate_values"][0], "1.0");
+  EXPECT_TRUE(j["specs_compared"]);
+  const std::string xml = CompareJunit(r);
+  EXPECT_LT(xml.find("<testsuite name=\"how the jobs differ\""), xml.find("<testsuite name=\"tx2/s1/baseline\""));
+  EXPECT_NE(xml.find("<property name=\"overrides.planner.v_max\" value=\"(default) -&gt; 1.0 (in 2 of 4 cells)\"/>"),
+            std::string::npos)
+      << xml;
+}
+
 TEST(CompareTest, StudentQuantilesMatchTheTable) {
   EXPECT_DOUBLE_EQ(StudentT975(1), 12.706);
   EXPECT_DOUBLE_EQ(StudentT975(9), 2.262);

@@ -97,5 +97,40 @@ TEST(EvalJobYamlTest, AnOverrideEveryMethodCannotTakeIsRefusedByName) {
   }
 }
 
+// `enavi eval` reports a bad flag as the flag its user typed, never as a line of the YAML it
+// wrote for them ("enavi eval flags:8").
+TEST(EvalJobYamlTest, ErrorsNameTheFlagAsTypedNotTheGeneratedYaml) {
+  auto refused = [](const EvalOptions& o) {
+    try {
+      ParseEvalJob(o, EvalJobYaml(o));
+    } catch (const api::JobSpecError&) {
+      return std::string("a JobSpecError, the YAML's own");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EvalOptions o;
+  o.job_spec = Options();
+  o.overrides = {{"planner.v_maxx", 1.0}};
+  std::string message = refused(o);
+  EXPECT_EQ(message.rfind("--set planner.v_maxx: not a tunable of method baseline", 0), 0u) << message;
+  EXPECT_EQ(message.find("eval flags"), std::string::npos) << message;
+  o.overrides.clear();
+  o.method_overrides = {{"enavi", {{"strategy.least_load", 2}}}};
+  message = refused(o);
+  EXPECT_EQ(message.rfind("--set enavi:strategy.least_load: ", 0), 0u) << message;
+  o.method_overrides.clear();
+  o.scenarios = {"s1", "s9"};
+  message = refused(o);
+  EXPECT_EQ(message.rfind("--scenarios s1,s9: ", 0), 0u) << message;
+  EXPECT_NE(message.find("'s9'"), std::string::npos) << message;
+  o.scenarios = {"s1"};
+  o.name = "";
+  EXPECT_EQ(refused(o), "--name : 1..128 characters");
+  o.name = "before";
+  EXPECT_EQ(ParseEvalJob(o, EvalJobYaml(o)).name, "before") << "--name names the job";
+}
+
 }  // namespace
 }  // namespace enavi::server

@@ -137,6 +137,25 @@ TEST_F(HttpApiTest, BadCompareModeAndTrendMetricAreRefusedNamingTheParameter) {
   EXPECT_NE(trend.find("\"points\":[]"), std::string::npos) << trend;  // no results yet
 }
 
+// The compare view's data says how the two jobs' specs differ (from the episodes' specs, which
+// the episode list carries) and what the mode could decide.
+TEST_F(HttpApiTest, CompareListsHowTheJobsSpecsDiffer) {
+  api::FarmClient client(Serve());
+  const std::string base = client.Submit(std::string(kJob) + "labels: {run: fast}\n", "a.yaml").job_id;
+  const std::string candidate =
+      client.Submit(std::string(kJob) + "labels: {run: slow}\noverrides: {planner.v_max: 1.0}\n", "b.yaml").job_id;
+  EXPECT_EQ(client.Episodes(candidate)[0]["spec"]["overrides"]["planner.v_max"], 1.0);
+  const std::string reply =
+      api_->HandleRaw("GET /api/compare?base=" + base + "&candidate=" + candidate + " HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
+  ASSERT_EQ(reply.rfind("HTTP/1.1 200", 0), 0u) << reply;
+  const nlohmann::json j = nlohmann::json::parse(reply.substr(reply.find("\r\n\r\n") + 4));
+  EXPECT_EQ(j["verdict"], "no_change") << "no results yet";
+  EXPECT_TRUE(j["specs_compared"]);
+  ASSERT_EQ(j["spec_changes"].size(), 2u) << j["spec_changes"].dump();
+  EXPECT_EQ(j["spec_changes"][1]["name"], "label.run");
+  EXPECT_EQ(j["spec_changes"][1]["base_values"][0], "fast");
+}
+
 TEST_F(HttpApiTest, TokenIsRequiredForStateChangesOnly) {
   const std::string url = Serve("s3cret");
   api::FarmClient anonymous(url);

@@ -142,6 +142,18 @@ TEST_F(StoreDashboardTest, FailuresResultsPageAndTrend) {
   EXPECT_EQ(trend["points"][0]["board"], "pi4b");
   EXPECT_EQ(trend["points"][0]["method"], "baseline");
   EXPECT_THROW(store_->queries().Trend("suite", "nightly", "x'); DROP TABLE jobs; --", {}), std::invalid_argument);
+  // A metric no result of the series has is refused by name with the closest ones, not an empty
+  // trend (which read as "no results"); a label no job carries is an empty series.
+  try {
+    store_->queries().Trend("suite", "nightly", "flight_time", {});
+    FAIL() << "an unknown metric gave a trend";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "metric: 'flight_time': no result of the jobs labelled suite=nightly has it; did you mean flight_time_s?");
+  }
+  const nlohmann::json none = store_->queries().Trend("suite", "weekly", "flight_time", {});
+  EXPECT_EQ(none["total"], 0);
+  EXPECT_TRUE(none["points"].empty());
 }
 
 // A trend point's spread is the seeds' draw within each scenario, pooled; the difference between

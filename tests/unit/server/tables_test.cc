@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "server/eval/paper_reference.h"
+#include "server/eval/progress_pacer.h"
 #include "workers/board/board_profile.h"
 #include "worlds/generators.h"
 
@@ -207,6 +208,26 @@ TEST(ProgressLineTest, ShowsCountsRateAndEta) {
   EXPECT_EQ(ProgressLine(p, true).rfind("[###############---------------] j1", 0), 0u);
   p.started_ms = 0;
   EXPECT_EQ(p.eta_s(), -1.0) << "unknown before the first lease";
+}
+
+// In a log, progress is a line at the start, each time another tenth is done, and every period
+// when nothing moves; polls in between print nothing.
+TEST(ProgressPacerTest, ALineEveryTenthOrEveryPeriod) {
+  using std::chrono::seconds;
+  const auto t0 = std::chrono::steady_clock::time_point{} + seconds(100);
+  ProgressPacer pacer(seconds(10));
+  EXPECT_TRUE(pacer.Due(0, 40, t0)) << "the first line";
+  EXPECT_FALSE(pacer.Due(3, 40, t0 + seconds(1))) << "7.5 %: not yet a tenth";
+  EXPECT_TRUE(pacer.Due(4, 40, t0 + seconds(2))) << "10 %";
+  EXPECT_FALSE(pacer.Due(5, 40, t0 + seconds(3)));
+  EXPECT_TRUE(pacer.Due(5, 40, t0 + seconds(12))) << "10 s since the last line";
+  EXPECT_FALSE(pacer.Due(5, 40, t0 + seconds(13)));
+  EXPECT_TRUE(pacer.Due(40, 40, t0 + seconds(14))) << "from 10 % to 100 % at once: one line";
+  EXPECT_FALSE(pacer.Due(40, 40, t0 + seconds(15)));
+  ProgressPacer unknown_total(seconds(10));
+  EXPECT_TRUE(unknown_total.Due(0, 0, t0));
+  EXPECT_FALSE(unknown_total.Due(0, 0, t0 + seconds(9)));
+  EXPECT_TRUE(unknown_total.Due(0, 0, t0 + seconds(10)));
 }
 
 }  // namespace
