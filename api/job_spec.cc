@@ -428,7 +428,7 @@ std::map<std::string, RosStack> RosMethods(const Context& ctx, const YAML::Node&
         ctx.Fail(kv.first, field, "'" + name + "' is a registered method's name");
     } else {
       YamlReader::Thrower thrower = [](const std::string& source, int line, const std::string& f, const std::string& reason) {
-        throw JobSpecError(source + ":" + std::to_string(line > 0 ? line : 1) + ": " + f + ": " + reason);
+        throw JobSpecError(source, line > 0 ? line : 1, f, reason);
       };
       const YamlReader nested(ctx.reader().source(), [field, thrower](const std::string& source, int line,
                                                                       const std::string& f, const std::string& reason) {
