@@ -14,14 +14,14 @@ namespace {
 using namespace std::chrono_literals;
 
 // Topic names carry the protocol version: binaries of different versions never match.
-constexpr const char* kStatusTopic = "enavi_v1_worker_status";
-constexpr const char* kAssignmentTopic = "enavi_v1_assignment";
-constexpr const char* kResultTopic = "enavi_v1_result";
-constexpr const char* kAckTopic = "enavi_v1_result_ack";
-constexpr const char* kEventTopic = "enavi_v1_job_event";
-constexpr const char* kPolicyTopic = "enavi_v1_policy";
-constexpr const char* kCollectTopic = "enavi_v1_collect_assignment";
-constexpr const char* kRolloutTopic = "enavi_v1_rollout_result";
+constexpr const char* kStatusTopic = "enavi_v2_worker_status";
+constexpr const char* kAssignmentTopic = "enavi_v2_assignment";
+constexpr const char* kResultTopic = "enavi_v2_result";
+constexpr const char* kAckTopic = "enavi_v2_result_ack";
+constexpr const char* kEventTopic = "enavi_v2_job_event";
+constexpr const char* kPolicyTopic = "enavi_v2_policy";
+constexpr const char* kCollectTopic = "enavi_v2_collect_assignment";
+constexpr const char* kRolloutTopic = "enavi_v2_rollout_result";
 
 // QoS per topic; the reasons are in api/README.md ("Topics and QoS").
 dds::Qos StatusQos(std::chrono::milliseconds lease) {
@@ -72,13 +72,14 @@ std::vector<double> Flatten(const std::vector<Vec3>& v) {
 
 struct StatusSample {
   enavi_farm_WorkerStatus c{};
-  std::vector<char*> boards, clocks;
+  std::vector<char*> boards, clocks, features;
   std::vector<enavi_farm_EpisodeRef> running;
 };
 
 void ToSample(const WorkerStatus& s, StatusSample* out) {
   for (const auto& b : s.boards) out->boards.push_back(Str(b));
   for (const auto& c : s.clocks) out->clocks.push_back(Str(c));
+  for (const auto& f : s.features) out->features.push_back(Str(f));
   for (const auto& r : s.running) out->running.push_back({Str(r.episode_id), r.attempt});
   enavi_farm_WorkerStatus& c = out->c;
   c.worker_id = Str(s.worker_id);
@@ -95,6 +96,7 @@ void ToSample(const WorkerStatus& s, StatusSample* out) {
   PointSeq(c.running, out->running);
   c.unacked_results = s.unacked_results;
   c.version = Str(s.version);
+  PointSeq(c.features, out->features);
 }
 
 WorkerStatus FromSample(const enavi_farm_WorkerStatus& c) {
@@ -107,6 +109,7 @@ WorkerStatus FromSample(const enavi_farm_WorkerStatus& c) {
   s.free_slots = c.free_slots;
   for (uint32_t i = 0; i < c.boards._length; ++i) s.boards.push_back(Str(c.boards._buffer[i]));
   for (uint32_t i = 0; i < c.clocks._length; ++i) s.clocks.push_back(Str(c.clocks._buffer[i]));
+  for (uint32_t i = 0; i < c.features._length; ++i) s.features.push_back(Str(c.features._buffer[i]));
   s.calibration_id = Str(c.calibration_id);
   s.draining = c.draining;
   s.seq = c.seq;

@@ -10,8 +10,8 @@
 
 namespace enavi::api {
 
-/// Bumped with every change to api/farm.idl; also part of the topic names (enavi_v1_*).
-inline constexpr int kFarmProtocolVersion = 1;
+/// Bumped with every change to api/farm.idl; also part of the topic names (enavi_v2_*).
+inline constexpr int kFarmProtocolVersion = 2;
 
 struct EpisodeRef {
   std::string episode_id;
@@ -35,6 +35,9 @@ struct WorkerStatus {
   std::vector<EpisodeRef> running;
   int unacked_results = 0;
   std::string version;
+  /// What else it can run beyond boards and clocks: "ros" where the ROS bridge and Debian's ROS
+  /// are installed (episodes of ROS methods need it).
+  std::vector<std::string> features;
 };
 
 /// The server leases one attempt of one episode to one worker.

@@ -27,6 +27,8 @@ void to_json(nlohmann::json& j, const JobProgress& p) {
        {"finished_ms", p.finished_ms}, {"now_ms", p.now_ms}, {"errors", p.errors},
        {"rate_per_s", p.rate_per_s()}, {"eta_s", p.eta_s()},
        {"labels", p.labels},   {"provenance", p.provenance}};
+  if (!p.pending_needs.empty()) j["pending_needs"] = p.pending_needs;
+  if (!p.waiting.empty()) j["waiting"] = p.waiting;
 }
 
 void from_json(const nlohmann::json& j, JobProgress& p) {
@@ -47,6 +49,8 @@ void from_json(const nlohmann::json& j, JobProgress& p) {
   p.errors = j.value("errors", std::vector<std::string>{});
   p.labels = j.value("labels", std::map<std::string, std::string>{});
   p.provenance = j.value("provenance", std::map<std::string, std::string>{});
+  p.pending_needs = j.value("pending_needs", std::map<std::string, int>{});
+  p.waiting = j.value("waiting", std::string());
 }
 
 }  // namespace enavi::api

@@ -45,6 +45,10 @@ struct JobProgress {
   std::vector<std::string> errors;  ///< recent reasons episodes failed ("EPISODE: reason")
   std::map<std::string, std::string> labels;      ///< the job spec's labels
   std::map<std::string, std::string> provenance;  ///< the server build and inputs at submission
+  /// Pending episodes by the worker feature they need ("ros": 4).
+  std::map<std::string, int> pending_needs;
+  /// Why pending episodes wait, when no connected worker can run them (empty otherwise).
+  std::string waiting;
 
   int finished() const { return done + failed + cancelled; }
   bool terminal() const { return state != "running"; }

@@ -10,6 +10,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "api/ros_stack.h"
 #include "navstack/methods/registry.h"
 #include "server/cli/cli_values.h"
 #include "server/cli/commands.h"
@@ -37,6 +38,7 @@ struct EvalFlags {
   std::string preset;  ///< "paper" or empty
   std::vector<std::string> overrides;  ///< --set items
   std::vector<std::string> labels;     ///< --label items
+  std::vector<std::string> ros_stacks; ///< --ros-stack files
 };
 
 // --preset paper: the paper's HIL matrix (5 boards x S1-S5 x E-Navi and the baseline, 3 seeds
@@ -91,6 +93,16 @@ void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
   server::EvalOptions& o = f.options;
   o.db = f.db;
   for (const auto& r : f.world_roots) o.job_spec.allowed_roots.emplace_back(r);
+  // ROS stacks named on the command line: their files are the user's to name, wherever they are.
+  if (!f.ros_stacks.empty() && o.job_spec.allowed_roots.empty()) o.job_spec.allowed_roots.push_back(std::filesystem::current_path());
+  for (const std::string& file : f.ros_stacks) {
+    const api::RosStack stack = api::LoadRosStack(file, navstack::MethodNames());
+    const std::filesystem::path path = std::filesystem::absolute(file);
+    o.ros_stacks[stack.name] = path.string();
+    o.job_spec.allowed_roots.push_back(path.parent_path());
+    if (std::find(o.methods.begin(), o.methods.end(), stack.name) == o.methods.end()) o.methods.push_back(stack.name);
+  }
+  if (!f.ros_stacks.empty() && sub.count("--clock") == 0) o.clock = "emulated";  // the only clock a ROS stack runs on
   o.job_spec.catalog = sim::FarmCatalog();
   o.job_spec.catalog.unchecked_prefixes = f.unchecked_override_prefixes;
   if (f.domain >= 0) o.domain = static_cast<std::uint32_t>(f.domain);
@@ -160,6 +172,10 @@ void RegisterEvalCommand(CLI::App& app) {
   std::string method_names;
   for (const std::string& m : navstack::MethodNames()) method_names += (method_names.empty() ? "" : ", ") + m;
   sub->add_option("--methods", o.methods, "methods (comma-separated): " + method_names)->delimiter(',')->capture_default_str();
+  sub->add_option("--ros-stack", f->ros_stacks,
+                  "a ROS 1 stack file (docs/ros.md): flies the user's stack as a method by its name, beside "
+                  "--methods, on the emulated clock (repeatable)")
+      ->check(CLI::ExistingFile);
   sub->add_option("--seeds", o.seeds, "seeds 1..N per cell")->capture_default_str();
   sub->add_option("--clock", o.clock, "clock:" + ClocksHelp())
       ->capture_default_str()

@@ -8,6 +8,7 @@
 #include "server/cli/commands.h"
 #include "server/cli/farm_flags.h"
 #include "server/cli/registry_help.h"
+#include "workers/sim/episode.h"
 #include "workers/sim/episode_config.h"
 #include "workers/worker/process.h"
 #include "workers/worker/worker.h"
@@ -57,6 +58,12 @@ void RunWorker(const WorkerFlags& f, const CLI::App& root) {
   const api::Catalog catalog = sim::FarmCatalog();
   o.boards = Served("--boards", "board", f.boards, catalog.boards);
   o.clocks = Served("--clocks", "clock", f.clocks, catalog.clocks);
+  // ROS methods wherever this host can fly them (the bridge built, ROS installed).
+  if (sim::RosLinkAvailable()) {
+    o.features.push_back("ros");
+  } else {
+    spdlog::info("not serving ROS methods: {}", sim::RosLinkUnavailableReason());
+  }
   o.calibration_id = f.calibration_id;
   if (!f.episode_cmd.empty()) o.episode_command = worker::SplitCommand(f.episode_cmd);
   o.limits.wall_timeout = std::chrono::seconds(static_cast<std::int64_t>(f.episode_timeout_s));

@@ -117,6 +117,10 @@ std::string EvalJobYaml(const EvalOptions& o) {
   if (o.clock == "emulated" || o.speed_probe != "check") y << "speed_probe: " << YamlQuoted(o.speed_probe) << "\n";
   if (!o.policy.empty()) y << "policy: " << YamlQuoted(o.policy) << "\n";
   if (!o.labels.empty()) y << "labels: " << YamlMap(o.labels) << "\n";
+  if (!o.ros_stacks.empty()) {
+    y << "ros_methods:\n";
+    for (const auto& [name, file] : o.ros_stacks) y << "  " << YamlQuoted(name) << ": " << YamlQuoted(file) << "\n";
+  }
   if (!o.overrides.empty()) y << "overrides: " << YamlMap(o.overrides) << "\n";
   if (!o.method_overrides.empty()) {
     y << "episode_overrides:\n";

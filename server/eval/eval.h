@@ -43,6 +43,8 @@ struct EvalOptions {
   /// `--set METHOD:NAME=VALUE`: a tunable of one method (an `episode_overrides` entry matching
   /// it), e.g. {"enavi": {"strategy.least_load": 1}} for an ablation beside the other methods.
   std::map<std::string, std::map<std::string, double>> method_overrides;
+  /// `--ros-stack FILE`: ROS methods by name, each a stack file (docs/ros.md); each is in `methods`.
+  std::map<std::string, std::string> ros_stacks;
   std::filesystem::path db;      ///< empty: a temporary database, removed afterwards
   int workers = 2;
   int slots = 1;                 ///< per worker

@@ -486,6 +486,7 @@ std::string ProgressLine(const api::JobProgress& p, bool bar) {
   } else {
     const double eta = p.eta_s();
     os << "  ETA " << (eta < 0 ? std::string("?") : Fixed(eta, 0) + "s");
+    if (!p.waiting.empty()) os << "  (waiting: " << p.waiting << ")";
   }
   return os.str();
 }

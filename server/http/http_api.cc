@@ -376,20 +376,23 @@ void HttpApi::Routes() {
     res.set_content(api::EncodeRolloutStream(store.collect().Rollouts(req.matches[1])), "application/octet-stream");
   });
 
-  s.Get("/api/jobs", [&store](const httplib::Request& req, httplib::Response& res) {
+  s.Get("/api/jobs", [this, &store](const httplib::Request& req, httplib::Response& res) {
     std::map<std::string, std::string> labels;
     for (const std::string& filter : QueryValues(req, "label")) {
       auto [k, v] = api::ParseLabelFilter(filter, "label");
       if (labels.count(k) && labels[k] != v) return Reply(res, 200, nlohmann::json::array());
       labels[k] = v;
     }
-    Reply(res, 200, store.jobs().ListJobs(NowMs(), labels));
+    std::vector<api::JobProgress> jobs = store.jobs().ListJobs(NowMs(), labels);
+    if (farm_) for (api::JobProgress& p : jobs) farm_->ExplainWaiting(&p);
+    Reply(res, 200, jobs);
   });
 
-  s.Get(R"(/api/jobs/([A-Za-z0-9_-]+))", [&store](const httplib::Request& req,
-                                                  httplib::Response& res) {
-    const auto p = store.jobs().Progress(req.matches[1], NowMs());
+  s.Get(R"(/api/jobs/([A-Za-z0-9_-]+))", [this, &store](const httplib::Request& req,
+                                                        httplib::Response& res) {
+    auto p = store.jobs().Progress(req.matches[1], NowMs());
     if (!p) return Error(res, 404, "no job '" + std::string(req.matches[1]) + "'");
+    if (farm_) farm_->ExplainWaiting(&*p);
     Reply(res, 200, *p);
   });
 

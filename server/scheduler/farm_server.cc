@@ -114,6 +114,23 @@ FarmServerStats FarmServer::stats() const {
   return stats_;
 }
 
+void FarmServer::ExplainWaiting(api::JobProgress* p) const {
+  if (p->terminal()) return;
+  std::lock_guard lock(mutex_);
+  for (const auto& [feature, count] : p->pending_needs) {
+    const bool served = std::any_of(workers_.begin(), workers_.end(), [&f = feature](const auto& w) {
+      const auto& features = w.second.status.features;
+      return w.second.alive && std::find(features.begin(), features.end(), f) != features.end();
+    });
+    if (served) continue;
+    p->waiting += (p->waiting.empty() ? "" : "; ") + std::to_string(count) + " episode(s) need a worker with " +
+                  feature + ", and no connected worker has it" +
+                  (feature == "ros" ? " (a worker offers ros where the ROS bridge was built and Debian's ROS is "
+                                      "installed: scripts/install-deps.sh)"
+                                    : "");
+  }
+}
+
 void FarmServer::Loop() {
   while (!stop_) {
     try {
@@ -353,7 +370,7 @@ void FarmServer::Assign(std::int64_t now_ms) {
         std::min(status.slots - (it == leased.end() ? 0 : it->second), status.free_slots);
     if (free <= 0) continue;
     const auto leases =
-        store_->leases().LeaseEpisodes(id, free, {status.boards, status.clocks}, deadline, now_ms);
+        store_->leases().LeaseEpisodes(id, free, {status.boards, status.clocks, status.features}, deadline, now_ms);
     for (const Lease& l : leases) {
       bus_->Publish(api::Assignment{id, l.episode_id, l.attempt, l.job_id, l.deadline_ms,
                                     options_.lease.count(), l.spec, CollectionHash(l.job_id)});

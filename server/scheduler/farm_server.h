@@ -84,6 +84,9 @@ class FarmServer {
 
   std::vector<WorkerView> Workers() const;
   FarmServerStats stats() const;
+  /// Sets `p.waiting` when some of its pending episodes need a feature (ROS) that no connected
+  /// worker offers: they wait for one, and the user should know why.
+  void ExplainWaiting(api::JobProgress* p) const;
   Store& store() { return *store_; }
 
  private:

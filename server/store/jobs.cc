@@ -48,13 +48,14 @@ std::string JobStore::CreateJob(const std::string& name, const std::string& spec
   for (const auto& [key, value] : meta.labels) label.Reset().Bind(1, job_id).Bind(2, key).Bind(3, value).Run();
   Statement& insert = db.Prepare(
       "INSERT INTO episodes (id, job_id, idx, spec_json, board, world, method, seed, clock, "
-      "state, updated_ms) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, 'pending', ?)");
+      "state, updated_ms, needs) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, 'pending', ?, ?)");
   for (std::size_t i = 0; i < episodes.size(); ++i) {
     const api::EpisodeSpec& e = episodes[i];
     insert.Reset()
         .Bind(1, EpisodeId(job_id, i)).Bind(2, job_id).Bind(3, static_cast<std::int64_t>(i))
         .Bind(4, nlohmann::json(e).dump()).Bind(5, e.board).Bind(6, e.world).Bind(7, e.method)
-        .Bind(8, static_cast<std::int64_t>(e.seed)).Bind(9, e.clock).Bind(10, now_ms).Run();
+        .Bind(8, static_cast<std::int64_t>(e.seed)).Bind(9, e.clock).Bind(10, now_ms)
+        .Bind(11, std::string(e.ros ? "ros" : "")).Run();
   }
   if (collect) {
     db.Prepare("INSERT INTO collect_jobs (job_id, policy_hash, sample) VALUES (?, ?, ?)")
@@ -104,6 +105,12 @@ api::JobProgress JobStore::ProgressLocked(const std::string& job_id, std::int64_
     if (state == "done") p.done = n;
     if (state == "failed") p.failed = n;
     if (state == "cancelled") p.cancelled = n;
+  }
+  if (p.pending > 0 && HasColumn(db, "episodes", "needs")) {
+    Statement& needs = db.Prepare(
+        "SELECT needs, COUNT(*) FROM episodes WHERE job_id = ? AND state = 'pending' AND needs != '' GROUP BY needs");
+    needs.Bind(1, job_id);
+    while (needs.Step()) p.pending_needs[needs.Text(0)] = static_cast<int>(needs.Int(1));
   }
   Statement& errors = db.Prepare(
       "SELECT id, last_error FROM episodes WHERE job_id = ? AND state = 'failed' "

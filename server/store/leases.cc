@@ -27,11 +27,15 @@ std::vector<Lease> LeaseStore::LeaseEpisodes(const std::string& worker_id, int c
   // Oldest job first, then episode order. Capability filters are applied here rather than in
   // SQL so the statement stays cacheable; scanning stops once `count` are found.
   Statement& pending = db.Prepare(
-      "SELECT e.id, e.job_id, e.attempts, e.spec_json, e.board, e.clock FROM episodes e "
+      "SELECT e.id, e.job_id, e.attempts, e.spec_json, e.board, e.clock, e.needs FROM episodes e "
       "JOIN jobs j ON j.id = e.job_id WHERE e.state = 'pending' AND j.state = 'running' "
       "ORDER BY j.created_ms, j.rowid, e.idx");
   while (static_cast<int>(leases.size()) < count && pending.Step()) {
     if (!Accepts(caps.boards, pending.Text(4)) || !Accepts(caps.clocks, pending.Text(5))) continue;
+    // A need is a feature the worker must list (an empty feature list is not "any" here).
+    if (const std::string needs = pending.Text(6);
+        !needs.empty() && std::find(caps.features.begin(), caps.features.end(), needs) == caps.features.end())
+      continue;
     Lease l;
     l.episode_id = pending.Text(0);
     l.job_id = pending.Text(1);

@@ -39,6 +39,7 @@ struct ReleasedLease {
 struct WorkerCapabilities {
   std::vector<std::string> boards;
   std::vector<std::string> clocks;
+  std::vector<std::string> features;  ///< an episode that needs one goes only to a worker listing it
 };
 
 class LeaseStore {

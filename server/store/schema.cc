@@ -128,6 +128,9 @@ void Migrate(Database& db) {
   if (!HasColumn(db, "jobs", "provenance_json")) {
     db.Exec("ALTER TABLE jobs ADD COLUMN provenance_json TEXT NOT NULL DEFAULT '{}'");
   }
+  // What a worker needs besides the board and clock to run an episode: "ros" for a ROS method
+  // (api::WorkerStatus::features); '' for the rest.
+  if (!HasColumn(db, "episodes", "needs")) db.Exec("ALTER TABLE episodes ADD COLUMN needs TEXT NOT NULL DEFAULT ''");
   // The flat metrics of each result, so aggregates read ~1 kB per row instead of the record
   // with its notes and events. Rows stored before the column existed are filled in here.
   if (!HasColumn(db, "results", "metrics_json")) {

@@ -597,6 +597,17 @@ sim::NavAccounting RosNavLink::Accounting() const {
 }
 
 void RegisterRosLink() {
+  // The bridge was built; the host must also have the ROS programs it starts.
+  for (const char* program : {"rosmaster", "roslaunch", "rosbag"}) {
+    bool found = false;
+    for (const char* dir : {"/usr/bin", "/usr/local/bin"}) found = found || access((std::string(dir) + "/" + program).c_str(), X_OK) == 0;
+    if (!found) {
+      sim::SetRosLinkUnavailable(std::string("this host has no ") + program +
+                                 " (Debian's python3-rosmaster, python3-roslaunch, python3-rosbag: "
+                                 "scripts/install-deps.sh)");
+      return;
+    }
+  }
   sim::SetRosLinkFactory([](const sim::RosLinkRequest& r) -> std::unique_ptr<sim::NavLink> {
     RosLinkOptions o;
     o.stack = *r.spec->ros;

@@ -141,9 +141,22 @@ std::unique_ptr<NavLink> MakeNavLink(const api::EpisodeSpec& spec, const Episode
 
 }  // namespace
 
-void SetRosLinkFactory(RosLinkFactory factory) { RosFactory() = std::move(factory); }
+std::string& RosUnavailable() {
+  static std::string reason = "this enavi was built without the ROS bridge (Debian's ROS packages: "
+                              "scripts/install-deps.sh, then rebuild)";
+  return reason;
+}
 
-bool RosLinkAvailable() { return static_cast<bool>(RosFactory()); }
+void SetRosLinkFactory(RosLinkFactory factory) {
+  RosFactory() = std::move(factory);
+  RosUnavailable().clear();
+}
+
+void SetRosLinkUnavailable(std::string reason) { RosUnavailable() = std::move(reason); }
+
+bool RosLinkAvailable() { return static_cast<bool>(RosFactory()) && RosUnavailable().empty(); }
+
+std::string RosLinkUnavailableReason() { return RosUnavailable(); }
 
 const std::vector<ClockInfo>& Clocks() {
   static const std::vector<ClockInfo> infos = [] {
@@ -194,9 +207,8 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   config.nav.planner.robot_radius = std::max(config.nav.planner.robot_radius, vehicle.collision_radius);
   std::unique_ptr<NavLink> nav;
   if (spec.ros) {
-    if (!RosFactory())
-      throw std::invalid_argument("method: '" + spec.method + "' is a ROS stack, and this enavi was built without "
-                                  "the ROS bridge (Debian's ROS packages: scripts/install-deps.sh, then rebuild)");
+    if (!RosLinkAvailable())
+      throw std::invalid_argument("method: '" + spec.method + "' is a ROS stack, and " + RosLinkUnavailableReason());
     RosLinkRequest request;
     request.spec = &spec;
     request.board = &board;

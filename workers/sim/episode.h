@@ -84,8 +84,13 @@ struct RosLinkRequest {
 /// library; the composition root registers it where it was built (RegisterRosLink).
 using RosLinkFactory = std::function<std::unique_ptr<NavLink>(const RosLinkRequest&)>;
 void SetRosLinkFactory(RosLinkFactory factory);
-/// Whether ROS methods can fly here: the bridge was built and registered.
+/// Why ROS methods cannot fly here (the bridge was registered, but ROS is not installed on this
+/// host): the error an episode of one gives.
+void SetRosLinkUnavailable(std::string reason);
+/// Whether ROS methods can fly here: the bridge was built and registered, and ROS is installed.
 bool RosLinkAvailable();
+/// Why not (empty when they can).
+std::string RosLinkUnavailableReason();
 
 /// A clock the navigation stack can run on (docs/design.md, "Time: two clocks").
 struct ClockInfo {

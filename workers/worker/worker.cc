@@ -188,6 +188,7 @@ void Worker::HandleAssignment(const api::Assignment& a) {
   if (static_cast<int>(running_.size() + waiting_.size()) >= options_.slots) return reject("no free slot");
   if (!Has(options_.boards, a.spec.board)) return reject("board " + a.spec.board + " not served");
   if (!Has(options_.clocks, a.spec.clock)) return reject("clock " + a.spec.clock + " not served");
+  if (a.spec.ros && !Has(options_.features, "ros")) return reject("ROS methods not served (no ROS on this worker)");
   if (!a.policy_hash.empty() && !fs::exists(PolicyPath(a.policy_hash))) {
     spdlog::info("{} attempt {} waits for policy {}", a.episode_id, a.attempt, a.policy_hash.substr(0, 12));
     waiting_.emplace(key, std::make_pair(a, Clock::now()));
@@ -419,6 +420,7 @@ void Worker::PublishStatus() {
   s.free_slots = s.draining ? 0 : options_.slots - static_cast<int>(running_.size() + waiting_.size());
   s.boards = options_.boards;
   s.clocks = options_.clocks;
+  s.features = options_.features;
   s.calibration_id = options_.calibration_id;
   s.seq = ++seq_;
   for (const auto& [key, slot] : running_) s.running.push_back({key.first, key.second});

@@ -26,6 +26,7 @@ struct WorkerOptions {
   int slots = 1;                        ///< episodes run at once
   std::vector<std::string> boards;      ///< boards served (required; registered names)
   std::vector<std::string> clocks;      ///< clocks served (required; registered names)
+  std::vector<std::string> features;    ///< what else it runs: "ros" (api::WorkerStatus::features)
   std::string calibration_id;
   /// Episode command without its --spec-file/--result-file arguments; empty: this executable's
   /// `fly` (`/proc/self/exe fly`).
