@@ -79,6 +79,12 @@ const std::vector<RosTopicRole>& RosTopicRoles() {
   return roles;
 }
 
+std::map<std::string, std::string> DefaultRosTopics() {
+  std::map<std::string, std::string> out;
+  for (const RosTopicRole& role : RosTopicRoles()) out[role.role] = role.default_name;
+  return out;
+}
+
 RosStack ParseRosStack(const YamlReader& r, const YAML::Node& node, const std::string& base_dir,
                        const std::string& name, const std::vector<std::string>& reserved) {
   const YamlReader::Map m(r, node, "",
@@ -126,7 +132,6 @@ RosStack ParseRosStack(const YamlReader& r, const YAML::Node& node, const std::s
       s.args[key] = r.Scalar(kv.second, "args." + key);
     }
   }
-  for (const RosTopicRole& role : RosTopicRoles()) s.topics[role.role] = role.default_name;
   if (m.Has("topics")) {
     const YAML::Node& topics = m.Get("topics");
     if (!topics.IsMap()) r.Fail(topics, "topics", "expected a map of role: topic name");

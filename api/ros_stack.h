@@ -47,6 +47,9 @@ struct RosTopicRole {
 /// names (every ROS node expects them there).
 const std::vector<RosTopicRole>& RosTopicRoles();
 
+/// Every role with its default topic name.
+std::map<std::string, std::string> DefaultRosTopics();
+
 /// Depth image encodings the bridge publishes (sensor_msgs/image_encodings).
 inline constexpr const char* kRosDepthEncodings[] = {"32FC1", "16UC1"};
 
@@ -58,7 +61,7 @@ struct RosStack {
   std::string workspace;           ///< canonical path of a setup.bash to source, or empty
   std::vector<std::string> package_path;  ///< canonical directories for ROS_PACKAGE_PATH
   std::map<std::string, std::string> args;    ///< launch arguments
-  std::map<std::string, std::string> topics;  ///< every role of RosTopicRoles(), defaults filled in
+  std::map<std::string, std::string> topics = DefaultRosTopics();  ///< every role of RosTopicRoles()
   std::string depth_encoding = "32FC1";
   double odometry_hz = 100;
   std::string odometry_twist = "body";  ///< the frame of Odometry.twist: body (base_link) or world

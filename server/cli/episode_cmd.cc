@@ -23,6 +23,8 @@ void RegisterEpisodeCommand(CLI::App& app) {
     sim::EpisodeOptions options;
     options.emulation.calibration_file = args->calibration;
     options.emulation.probe_host_speed = board::ProbeHostSpeed;  // the spec's speed_probe says what for
+    // A worker's emulated episodes take turns for the host's CPUs (its other slots, other workers).
+    options.emulation.admission_wait_s = 600;
     sim::RunEpisodeChild(args->files, options);
   });
 }

@@ -17,6 +17,7 @@
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <httplib.h>
 #include <nlohmann/json.hpp>
 
 #include "tests/integration/loop_test_util.h"
@@ -278,6 +279,50 @@ TEST_F(RosBridgeTest, ALaunchFileFromAPackageGetsTheEpisodesArgsAndABagIsRecorde
   EXPECT_NEAR(frames, 30.0 * flight, 0.1 * 30.0 * flight) << info.out;
   EXPECT_NE(info.out.find("quadrotor_msgs/PositionCommand"), std::string::npos) << info.out;
   ExpectNothingLeft(r);
+}
+
+// Issue 42's farm case: a job of 2 boards x 2 scenarios x (a ROS method, enavi) on `enavi eval`
+// with 2 workers; compare and the dashboard's API name the ROS method as the tables do.
+TEST_F(RosBridgeTest, AJobOfARosMethodAndEnaviRunsOnEvalWithTwoWorkers) {
+  const std::string stack = TestStack("position", "command_timeout_s: 5\n");
+  const fs::path db = dir_.path() / "eval.db";
+  const CliRun eval = Enavi(dir_, "eval --ros-stack " + stack + " --methods enavi --boards tx2,pi4b --scenarios empty,s1 "
+                                  "--workers 2 --speed-probe off --name rosjob --db " + db.string());
+  ASSERT_EQ(eval.code, 0) << eval.out << eval.err;
+  EXPECT_NE(eval.out.find("teststack"), std::string::npos) << "the table names the ROS method:\n" << eval.out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(eval.err, m, std::regex("\\(job (j[0-9a-f]+)"))) << eval.err;
+  const std::string job = m[1];
+  const std::string ref = db.string() + ":" + job;
+  const CliRun compare = Enavi(dir_, "compare " + ref + " " + ref + " --format json");
+  ASSERT_EQ(compare.code, 0) << compare.err;
+  EXPECT_NE(compare.out.find("\"teststack\""), std::string::npos) << compare.out.substr(0, 2000);
+
+  // The dashboard (read-only) serves the job with the method by its name.
+  const fs::path ready = dir_.path() / "ready";
+  const pid_t dash = fork();
+  ASSERT_GE(dash, 0);
+  if (dash == 0) {
+    const std::string enavi = std::string(ENAVI_BINARY_DIR) + "/bin/enavi";
+    execl(enavi.c_str(), enavi.c_str(), "dashboard", "--db", db.c_str(), "--http", "127.0.0.1:0", "--ready-file",
+          ready.c_str(), nullptr);
+    _exit(127);
+  }
+  std::string url;
+  for (int i = 0; i < 200 && url.empty(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    url = ReadFile(ready);
+  }
+  url.erase(url.find_last_not_of(" \n") + 1);
+  ASSERT_FALSE(url.empty()) << "the dashboard never became ready";
+  httplib::Client client(url);
+  const auto summary = client.Get("/api/jobs/" + job + "/summary");
+  kill(dash, SIGTERM);
+  waitpid(dash, nullptr, 0);
+  ASSERT_TRUE(summary) << "no reply from " << url;
+  EXPECT_EQ(summary->status, 200);
+  EXPECT_NE(summary->body.find("\"teststack\""), std::string::npos) << summary->body.substr(0, 2000);
+  ExpectNothingLeft(nlohmann::json::object({{"notes", nlohmann::json::object()}}));
 }
 
 // Part 3 of the issue: the stack's group has the board's capacity and no thread more than one

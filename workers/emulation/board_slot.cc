@@ -1,11 +1,14 @@
 #include "workers/emulation/board_slot.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+#include <thread>
 
 #include "api/fixed.h"
 #include "workers/board/host_calibration.h"
+#include "workers/emulation/termination_signals.h"
 
 namespace enavi::emulation {
 
@@ -74,35 +77,60 @@ BoardSlot::BoardSlot(const board::BoardProfile& board, double dilation, const Em
     for (const auto& r : open.reaped) list += (list.empty() ? "" : ", ") + r;
     notes_["emulation.reaped"] = list;
   }
+  // Admission: other emulated episodes on this host hold CPUs. Auto dilation takes the smallest
+  // k at which the board fits what is free, as long as a thread's quota stays above what the
+  // kernel enforces; otherwise (and when admission is refused) the episode waits for them, up to
+  // admission_wait_s.
   const BoardCpu cpu{board.cores, speed_};
-  const double host_cpus = manager_->HostCpus();
-  const double reserved = manager_->ReservedCpus();
-  const double free_cpus = host_cpus - cg.host_reserve_cpus - reserved;
-  dilation_ = dilation;
-  if (dilation_ <= 0) {
-    if (free_cpus < 0.05) {
-      throw std::invalid_argument("--clock emulated: admission refused: no host CPU free (host " +
-                                  Fixed(host_cpus, 0) + " CPUs, " + Fixed(reserved, 3) +
-                                  " held by running emulations, " + Fixed(cg.host_reserve_cpus, 2) +
-                                  " kept for the simulator)");
+  const auto started = std::chrono::steady_clock::now();
+  const auto give_up = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                     std::chrono::duration<double>(emulation.admission_wait_s));
+  const double max_auto_dilation = speed_ * static_cast<double>(emulation.cfs_period_us) / kMinQuotaUs;
+  for (;;) {
+    const double host_cpus = manager_->HostCpus();
+    const double reserved = manager_->ReservedCpus();
+    const double free_cpus = host_cpus - cg.host_reserve_cpus - reserved;
+    std::string refusal;
+    dilation_ = dilation;
+    if (dilation_ <= 0) {
+      dilation_ = free_cpus >= 0.05 ? MinimumDilation(cpu, free_cpus) : 0.0;
+      if (dilation_ <= 0 || dilation_ > max_auto_dilation) {
+        refusal = "admission refused: " + Fixed(std::max(0.0, free_cpus), 2) + " host CPUs free (host " +
+                  Fixed(host_cpus, 0) + " CPUs, " + Fixed(reserved, 3) + " held by running emulations, " +
+                  Fixed(cg.host_reserve_cpus, 2) + " kept for the simulator): the board would need a dilation above " +
+                  Fixed(max_auto_dilation, 2) + ", where a thread's quota falls below the kernel's 1 ms";
+      } else {
+        notes_["emulation.dilation"] = Fixed(dilation_, 2) + " (auto: smallest multiple of 0.25 at which " +
+                                       std::to_string(board.cores) + " x " + Fixed(speed_, 3) + " = " +
+                                       Fixed(board.cores * speed_, 3) + " host CPUs fit the " + Fixed(free_cpus, 2) +
+                                       " free)";
+      }
+    } else {
+      notes_["emulation.dilation"] = Fixed(dilation_, 2) + " (requested)";
     }
-    dilation_ = MinimumDilation(cpu, free_cpus);
-    notes_["emulation.dilation"] = Fixed(dilation_, 2) + " (auto: smallest multiple of 0.25 at which " +
-                                   std::to_string(board.cores) + " x " + Fixed(speed_, 3) + " = " +
-                                   Fixed(board.cores * speed_, 3) + " host CPUs fit the " + Fixed(free_cpus, 2) +
-                                   " free)";
-  } else {
-    notes_["emulation.dilation"] = Fixed(dilation_, 2) + " (requested)";
+    if (refusal.empty()) {
+      QuotaOptions qo;
+      qo.dilation = dilation_;
+      qo.period_us = emulation.cfs_period_us;
+      quota_ = ComputeBoardQuota(cpu, qo);
+      EpisodeLimits limits;
+      limits.cpus = emulation.cpus;
+      auto created = manager_->CreateEpisode(quota_, limits);
+      if (created.ok()) {
+        group_ = std::move(created.group);
+        break;
+      }
+      refusal = created.refusal;
+    }
+    if (std::chrono::steady_clock::now() >= give_up || PendingTerminationSignal() != 0)
+      throw std::invalid_argument("--clock emulated: " + refusal +
+                                  (emulation.admission_wait_s > 0
+                                       ? " (waited " + Fixed(emulation.admission_wait_s, 0) + " s)"
+                                       : ""));
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
   }
-  QuotaOptions qo;
-  qo.dilation = dilation_;
-  qo.period_us = emulation.cfs_period_us;
-  quota_ = ComputeBoardQuota(cpu, qo);
-  EpisodeLimits limits;
-  limits.cpus = emulation.cpus;
-  auto created = manager_->CreateEpisode(quota_, limits);
-  if (!created.ok()) throw std::invalid_argument("--clock emulated: " + created.refusal);
-  group_ = std::move(created.group);
+  if (const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(); waited > 1)
+    notes_["emulation.admission"] = "waited " + Fixed(waited, 1) + " s for host CPUs held by other emulated episodes";
   notes_["emulation.cgroup"] =
       std::string(manager_->layout().version == CgroupVersion::kV2 ? "v2 " : "v1 ") + group_->name() +
       ": board quota " + std::to_string(quota_.board_quota_us) + " us / " + std::to_string(quota_.period_us) +

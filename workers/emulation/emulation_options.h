@@ -36,6 +36,10 @@ struct EmulationOptions {
   /// Run the simulator's paced threads SCHED_FIFO (priority 1) during the episode, so other
   /// load on the host cannot make it miss its schedule (falls back to SCHED_OTHER if refused).
   bool simulator_fifo = true;
+  /// How long an episode waits for host CPUs that other emulated episodes hold before admission
+  /// is refused, wall seconds (0: refused at once). A farm worker's episodes wait (several
+  /// emulated episodes on one host take turns); `enavi fly` does not.
+  double admission_wait_s = 0;
   /// Episode cpuset ("0-1"); empty: all of the worker's CPUs. A cpuset narrower than the root
   /// domain makes the kernel refuse SCHED_DEADLINE (EPERM): the fallback path.
   std::string cpus;

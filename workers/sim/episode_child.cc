@@ -25,6 +25,8 @@ void CheckSpecFields(const nlohmann::json& j, const std::string& file) {
   every.recenter = true;
   every.model_path = {"d"};
   every.speed_probe = "use";
+  every.ros = api::RosStack{};
+  every.rosbag_dir = "d";
   const nlohmann::json known = every;
   for (const auto& item : j.items()) {
     if (known.contains(item.key())) continue;

@@ -126,6 +126,38 @@ TEST_F(FarmServerTest, AssignsPendingEpisodesUpToTheWorkersSlots) {
   EXPECT_EQ(w.assignments[0].job_id, job);
 }
 
+// An episode of a ROS method goes only to a worker that offers ros (docs/ros.md); until one
+// connects the job says why its episodes wait.
+TEST_F(FarmServerTest, ARosMethodsEpisodeWaitsForAWorkerWithRos) {
+  StartServer();
+  std::vector<api::EpisodeSpec> episodes(2);
+  episodes[0].method = "enavi";
+  episodes[1].method = "ego";
+  episodes[1].clock = "emulated";
+  episodes[1].ros = api::RosStack{};
+  episodes[1].ros->name = "ego";
+  episodes[1].ros->run = {"true"};
+  const std::string job = server_->Submit("test", "yaml", episodes);
+  FakeWorker plain(options_.bus, "plain", 2);
+  ASSERT_TRUE(Drive(plain, [&] { return plain.assignments.size() >= 1; }));
+  Drive(plain, [] { return false; }, 500ms);
+  ASSERT_EQ(plain.assignments.size(), 1u) << "the ROS episode must not go to a worker without ros";
+  EXPECT_EQ(plain.assignments[0].spec.method, "enavi");
+  api::JobProgress p = *store_->jobs().Progress(job, NowMs());
+  EXPECT_EQ(p.pending_needs, (std::map<std::string, int>{{"ros", 1}}));
+  server_->ExplainWaiting(&p);
+  EXPECT_EQ(p.waiting.rfind("1 episode(s) need a worker with ros, and no connected worker has it", 0), 0u) << p.waiting;
+
+  FakeWorker ros(options_.bus, "ros", 1);
+  ros.status.features = {"ros"};
+  ASSERT_TRUE(Drive(ros, [&] { return !ros.assignments.empty(); }));
+  EXPECT_EQ(ros.assignments[0].spec.method, "ego");
+  ASSERT_TRUE(ros.assignments[0].spec.ros.has_value()) << "the stack travels with the episode";
+  p = *store_->jobs().Progress(job, NowMs());
+  server_->ExplainWaiting(&p);
+  EXPECT_EQ(p.waiting, "");
+}
+
 TEST_F(FarmServerTest, ResultIsStoredBeforeItIsAcknowledgedAndDuplicatesAreAckedToo) {
   StartServer();
   FakeWorker w(options_.bus, "w1", 1);
