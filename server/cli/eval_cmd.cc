@@ -177,6 +177,8 @@ void RegisterEvalCommand(CLI::App& app) {
                   "--methods, on the emulated clock (repeatable)")
       ->check(CLI::ExistingFile);
   sub->add_option("--seeds", o.seeds, "seeds 1..N per cell")->capture_default_str();
+  sub->add_option("--timeout", o.timeout_s, "each episode's limit in sim seconds (0: from the start-goal distance)")
+      ->check(CLI::Range(0.0, api::kMaxTimeoutS));
   sub->add_option("--clock", o.clock, "clock:" + ClocksHelp())
       ->capture_default_str()
       ->check(CLI::IsMember(sim::FarmCatalog().clocks));

@@ -116,6 +116,7 @@ std::string EvalJobYaml(const EvalOptions& o) {
   // Also when asked for on the virtual clock, so that the job's check refuses it by name.
   if (o.clock == "emulated" || o.speed_probe != "check") y << "speed_probe: " << YamlQuoted(o.speed_probe) << "\n";
   if (!o.policy.empty()) y << "policy: " << YamlQuoted(o.policy) << "\n";
+  if (o.timeout_s > 0) y << "timeout_s: " << o.timeout_s << "\n";
   if (!o.labels.empty()) y << "labels: " << YamlMap(o.labels) << "\n";
   if (!o.ros_stacks.empty()) {
     y << "ros_methods:\n";

@@ -30,6 +30,7 @@ struct EvalOptions {
   std::vector<std::string> scenarios = {"s1"};
   std::vector<std::string> methods = {"baseline", "enavi"};
   int seeds = 1;
+  double timeout_s = 0;  ///< each episode's sim-time limit (the job's timeout_s); 0: from the distance
   std::string clock = "virtual";
   std::string cost = "model";
   /// Emulated clock: wall seconds per sim second, or "auto" (the smallest at which each board fits

@@ -287,7 +287,7 @@ TEST_F(RosBridgeTest, AJobOfARosMethodAndEnaviRunsOnEvalWithTwoWorkers) {
   const std::string stack = TestStack("position", "command_timeout_s: 5\n");
   const fs::path db = dir_.path() / "eval.db";
   const CliRun eval = Enavi(dir_, "eval --ros-stack " + stack + " --methods enavi --boards tx2,pi4b --scenarios empty,s1 "
-                                  "--workers 2 --speed-probe off --name rosjob --db " + db.string());
+                                  "--workers 2 --timeout 4 --speed-probe off --name rosjob --db " + db.string());
   ASSERT_EQ(eval.code, 0) << eval.out << eval.err;
   EXPECT_NE(eval.out.find("teststack"), std::string::npos) << "the table names the ROS method:\n" << eval.out;
   std::smatch m;
