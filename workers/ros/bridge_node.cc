@@ -198,6 +198,7 @@ BridgeNode::BridgeNode(const api::RosStack& stack, const std::string& master_uri
   ::ros::param::set("/enavi/bounds_min", vec(geometry.bounds.min()));
   ::ros::param::set("/enavi/bounds_max", vec(geometry.bounds.max()));
   ::ros::param::set("/enavi/board", geometry.board);
+  ::ros::param::set("/enavi/board_cores", geometry.cores);
 
   // CameraInfo: ROS puts pixel centres at integer coordinates, our intrinsics at +0.5
   // (CameraIntrinsics::PixelRay), so the principal point moves by half a pixel.

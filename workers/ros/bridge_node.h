@@ -32,6 +32,7 @@ struct EpisodeGeometry {
   navstack::CameraIntrinsics camera;
   Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();  ///< the camera's optical frame in the body
   std::string board;
+  int cores = 1;  ///< the board's cores: what nproc says on it (a process here sees the host's)
 };
 
 /// What arrived on the command topic since the last look.

@@ -116,6 +116,7 @@ std::map<std::string, std::string> EpisodeLaunchArgs(const EpisodeGeometry& g) {
     a["enavi_map_size_" + ax] = Number(i < 2 ? 2.0 * reach : g.bounds.max()[i]);
   }
   a["enavi_start_yaw"] = Number(g.start_yaw);
+  a["enavi_cores"] = std::to_string(g.cores);
   a["enavi_width"] = std::to_string(g.camera.width);
   a["enavi_height"] = std::to_string(g.camera.height);
   a["enavi_fx"] = Number(g.camera.fx);

@@ -44,7 +44,8 @@ std::set<std::string> DeclaredLaunchArgs(const std::string& launch_xml);
 
 /// What the episode offers every launch file (passed only where it declares them): start, goal
 /// and start yaw; the world's bounds; map_size for planners whose map is centred on the origin
-/// (Ego-Planner's grid_map: 2 x the largest |bound| per axis); the depth camera's intrinsics.
+/// (Ego-Planner's grid_map: 2 x the largest |bound| per axis); the depth camera's intrinsics; the
+/// board's cores (a process on the host sees the host's).
 std::map<std::string, std::string> EpisodeLaunchArgs(const EpisodeGeometry& g);
 
 /// The stack's command: roslaunch --screen FILE name:=value... (the stack's args, then the

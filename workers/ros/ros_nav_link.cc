@@ -620,6 +620,7 @@ void RegisterRosLink() {
     o.geometry.camera = r.camera;
     o.geometry.X_BC = r.X_BC;
     o.geometry.board = r.board->id;
+    o.geometry.cores = r.board->cores;
     o.initial = r.initial;
     o.output_dir = r.options->ros_output_dir;
     o.bag_file = r.bag_file;
