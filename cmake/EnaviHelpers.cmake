@@ -19,6 +19,9 @@ function(enavi_add_test name)
   if(NOT ARG_LABELS)
     set(ARG_LABELS unit)
   endif()
+  if(name IN_LIST ENAVI_ASAN_CI_TESTS)
+    list(APPEND ARG_LABELS asan_ci)
+  endif()
   # tests_<label> builds every test binary of a label (scripts/build.sh --sanitize: only those).
   foreach(label ${ARG_LABELS})
     if(NOT TARGET tests_${label})
@@ -26,7 +29,11 @@ function(enavi_add_test name)
     endif()
     add_dependencies(tests_${label} ${name})
   endforeach()
-  set(props LABELS "${ARG_LABELS}")
+  # gtest_discover_tests writes its properties out flat, so a second label would read as a
+  # property name: the tests get the first here and all of them from a file CTest includes after
+  # the discovered list (<name>_TESTS).
+  list(GET ARG_LABELS 0 first_label)
+  set(props LABELS ${first_label})
   if(ENAVI_SANITIZE)
     # The sanitizer environment comes in through `env` on the test's command line: handed to
     # gtest_discover_tests as PROPERTIES ENVIRONMENT, a list keeps only its first variable (CMake
@@ -43,4 +50,10 @@ function(enavi_add_test name)
     list(APPEND props COST ${ARG_COST})
   endif()
   gtest_discover_tests(${name} PROPERTIES ${props} DISCOVERY_TIMEOUT 60)
+  list(LENGTH ARG_LABELS label_count)
+  if(label_count GREATER 1)
+    set(relabel "${CMAKE_CURRENT_BINARY_DIR}/${name}_labels.cmake")
+    file(WRITE "${relabel}" "if(DEFINED ${name}_TESTS)\n  set_tests_properties(\${${name}_TESTS} PROPERTIES LABELS \"${ARG_LABELS}\")\nendif()\n")
+    set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${relabel}")
+  endif()
 endfunction()
