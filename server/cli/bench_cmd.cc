@@ -81,9 +81,6 @@ void RunThrottle(const ThrottleArgs& args) {
     speed_source = "no valid host calibration (" + check.message + "): this host taken as the reference core";
   }
   const double speed = profile.is_host ? 1.0 : profile.per_core_speed / host_speed;
-  if (speed > 1.0 + board::kFasterBoardTolerance)
-    throw std::invalid_argument("bench throttle: board '" + args.board + "' has cores faster than this host's (" +
-                                std::to_string(speed) + " x); a throttle can only slow down");
   bench::ThrottleBenchOptions options;
   options.dilation = args.dilation;
   options.period_us = args.period_us;

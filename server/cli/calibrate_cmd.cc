@@ -67,7 +67,6 @@ nlohmann::json BoardTableJson(const board::HostCalibration& cal) {
     rows.push_back({{"board", e.board},
                     {"cores", e.cores},
                     {"speed_vs_host", e.speed_vs_host},
-                    {"emulable", e.emulable},
                     {"quota_cpus_k1", e.quota_cpus_k1},
                     {"min_dilation", e.min_dilation},
                     {"wcet_s", wcet},
@@ -86,7 +85,7 @@ void PrintBoardTable(const board::HostCalibration& cal) {
   for (const std::string& id : board::KnownBoards()) {
     const emulation::BoardEmulation e = emulation::DescribeBoardEmulation(board::LoadBoard(id), cal, EmulationCpusFree());
     std::printf("  %-6s %5d %8.3f %10.2f %6s                     ", e.board.c_str(), e.cores, e.speed_vs_host,
-                e.quota_cpus_k1, e.emulable ? std::to_string(e.min_dilation).substr(0, 4).c_str() : "n/a");
+                e.quota_cpus_k1, std::to_string(e.min_dilation).substr(0, 4).c_str());
     for (const char* t : tasks) {
       const auto it = e.wcet_s.find(t);
       if (it == e.wcet_s.end()) {
@@ -97,11 +96,8 @@ void PrintBoardTable(const board::HostCalibration& cal) {
         std::printf(" %13s", cell);
       }
     }
-    if (!e.emulable) {
-      std::printf("  (cores faster than the host's: virtual clock only)");
-    } else if (e.speed_vs_host > 1.0) {
-      std::printf("  (%.0f %% faster than the host: emulated at host speed)", 100 * (e.speed_vs_host - 1));
-    }
+    if (e.speed_vs_host > 1.0)
+      std::printf("  (%.0f %% faster than the host: dilation >= %.3f)", 100 * (e.speed_vs_host - 1), e.speed_vs_host);
     std::printf("\n");
   }
 }

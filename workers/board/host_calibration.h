@@ -79,12 +79,6 @@ CalibrationCheck CheckHostCalibration(const std::string& path, const std::string
 /// The same for this machine and the embedded reference costs.
 CalibrationCheck CheckHostCalibration(const std::string& path);
 
-/// A board whose cores are at most this much faster than the host's (relative) is emulated at
-/// full host speed: the host's relative speed is measured to a few per cent only (a busy
-/// machine, turbo), and refusing x86 at 1.02 x would be noise, not physics. Beyond it the board
-/// cannot be emulated by throttling.
-inline constexpr double kFasterBoardTolerance = 0.05;
-
 /// Per-core speed of `board` relative to a host whose core is `host_speed` x the reference core:
 /// 1 for the host itself, else board.per_core_speed / host_speed.
 double SpeedVsHost(const BoardProfile& board, double host_speed);

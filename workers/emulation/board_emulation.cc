@@ -12,11 +12,8 @@ BoardEmulation DescribeBoardEmulation(const board::BoardProfile& board, const bo
   e.board = board.id;
   e.cores = board.cores;
   e.speed_vs_host = board::SpeedVsHost(board, host.relative_speed);
-  e.emulable = e.speed_vs_host <= 1.0 + board::kFasterBoardTolerance;
   e.quota_cpus_k1 = board.cores * e.speed_vs_host;
-  e.min_dilation = e.emulable && host_cpus_free > 0
-                       ? MinimumDilation({board.cores, std::min(1.0, e.speed_vs_host)}, host_cpus_free)
-                       : 0.0;
+  e.min_dilation = host_cpus_free > 0 ? MinimumDilation({board.cores, e.speed_vs_host}, host_cpus_free) : 0.0;
   // A job that took x host seconds takes x / speed on the board.
   for (const auto& [task, t] : host.tasks)
     if (t.jobs > 0) {

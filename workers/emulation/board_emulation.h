@@ -1,7 +1,7 @@
 #pragma once
 // How a board is emulated on this host (the `enavi calibrate` table): its speed against this
-// host's cores from the host calibration, whether throttling can emulate it, the host CPUs its
-// quota takes and the smallest dilation that fits.
+// host's cores from the host calibration, the host CPUs its quota takes and the smallest
+// dilation that fits (a board faster than the host needs a dilation of at least its speed).
 
 #include <map>
 #include <string>
@@ -15,9 +15,8 @@ struct BoardEmulation {
   std::string board;
   int cores = 1;
   double speed_vs_host = 1.0;  ///< board per-core speed / host per-core speed
-  bool emulable = true;        ///< false if the board's cores are faster than the host's (beyond the tolerance)
   double quota_cpus_k1 = 0;    ///< cores x speed: host CPUs the board takes at dilation 1
-  double min_dilation = 1.0;   ///< smallest k that fits `host_cpus_free`
+  double min_dilation = 1.0;   ///< smallest k that fits `host_cpus_free` (and >= speed_vs_host)
   /// Board WCET per task (max job time of the calibration flights on this board), seconds.
   std::map<std::string, double> wcet_s;
   /// The same for the 99th percentile (the max is often one map rebuild).

@@ -21,13 +21,17 @@ BoardQuota ComputeBoardQuota(const BoardCpu& board, const QuotaOptions& options)
   if (board.cores < 1) {
     throw std::invalid_argument("board quota: cores must be >= 1, got " + std::to_string(board.cores));
   }
-  if (!(board.core_speed > 0.0 && board.core_speed <= 1.0)) {
+  if (!(board.core_speed > 0.0) || !std::isfinite(board.core_speed)) {
     throw std::invalid_argument("board quota: core_speed (board per-core speed / host per-core "
-                                "speed) must be in (0, 1], got " + Num(board.core_speed) +
-                                "; a board faster than the host cannot be emulated by throttling");
+                                "speed) must be > 0, got " + Num(board.core_speed));
   }
   if (!(options.dilation >= 1.0) || !std::isfinite(options.dilation)) {
     throw std::invalid_argument("board quota: dilation must be >= 1, got " + Num(options.dilation));
+  }
+  if (options.dilation < board.core_speed) {
+    throw std::invalid_argument("board quota: dilation must be >= the board's core speed " +
+                                Num(board.core_speed) + " x a host core's (a thread gets speed / "
+                                "dilation of a host core, at most one), got " + Num(options.dilation));
   }
   if (options.period_us < 1000 || options.period_us > 1'000'000) {
     throw std::invalid_argument("board quota: period_us must be in [1000, 1000000], got " +
@@ -57,7 +61,7 @@ double MinimumDilation(const BoardCpu& board, double host_cpus_free) {
     throw std::invalid_argument("MinimumDilation: host_cpus_free must be > 0, got " +
                                 Num(host_cpus_free));
   }
-  const double need = board.cores * board.core_speed / host_cpus_free;
+  const double need = std::max(board.cores * board.core_speed / host_cpus_free, board.core_speed);
   return std::max(1.0, std::ceil(need * 4.0 - 1e-9) / 4.0);
 }
 

@@ -17,7 +17,10 @@ namespace enavi::emulation {
 /// The CPU of a board as the emulation needs it.
 struct BoardCpu {
   int cores = 1;            ///< board cores, >= 1
-  double core_speed = 1.0;  ///< board per-core speed / host per-core speed, in (0, 1]
+  /// Board per-core speed / host per-core speed, > 0. A board core faster than the host's
+  /// (> 1) is emulated by dilating time: one thread gets speed / dilation of a host core, so
+  /// the dilation must be at least the speed.
+  double core_speed = 1.0;
 };
 
 struct QuotaOptions {
@@ -48,13 +51,13 @@ struct BoardQuota {
 inline constexpr std::int64_t kMinQuotaUs = 1000;
 
 /// Quotas for `board` under `options`. Throws std::invalid_argument (message names the field,
-/// the value and the allowed range) for cores < 1, speed outside (0, 1], dilation < 1, a
-/// period outside [1000, 1000000] us, or a per-thread quota below kMinQuotaUs.
+/// the value and the allowed range) for cores < 1, a speed that is not > 0, dilation < 1 or
+/// below the speed, a period outside [1000, 1000000] us, or a per-thread quota below kMinQuotaUs.
 BoardQuota ComputeBoardQuota(const BoardCpu& board, const QuotaOptions& options);
 
 /// Smallest dilation k >= 1 at which the whole board fits in `host_cpus_free` host CPUs
-/// (cores x speed / k <= host_cpus_free), rounded up to a multiple of 0.25 so it reads well in
-/// a job spec. Throws std::invalid_argument for a non-positive host_cpus_free.
+/// (cores x speed / k <= host_cpus_free) and one board core in one host core (k >= speed),
+/// rounded up to a multiple of 0.25 so it reads well in a job spec. Throws std::invalid_argument for a non-positive host_cpus_free.
 double MinimumDilation(const BoardCpu& board, double host_cpus_free);
 
 /// Expected slowdown (emulated wall time / unthrottled wall time of one thread alone on a host

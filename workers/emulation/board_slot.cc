@@ -48,20 +48,19 @@ BoardSlot::BoardSlot(const board::BoardProfile& board, double dilation, const Em
   if (!check.ok()) throw std::invalid_argument("--clock emulated needs a valid host calibration: " + check.message);
   const board::HostCalibration& cal = *check.calibration;
   const double host_speed = HostSpeedNow(cal, emulation);
-  const double raw_speed = board::SpeedVsHost(board, host_speed);
-  if (raw_speed > 1.0 + board::kFasterBoardTolerance) {
-    throw std::invalid_argument("--clock emulated: board '" + board.id + "' has cores " + Fixed(raw_speed, 3) +
-                                " x as fast as this host's (board " + Fixed(board.per_core_speed, 3) + ", host " +
-                                Fixed(host_speed, 3) +
-                                " x the reference core); a CPU throttle can only slow down, use the virtual clock");
-  }
-  speed_ = std::min(1.0, raw_speed);
+  speed_ = board::SpeedVsHost(board, host_speed);
   notes_["emulation.speed"] = Fixed(speed_, 4) + " of a host core per board core (board " +
                               Fixed(board.per_core_speed, 3) + " / host " + Fixed(host_speed, 3) +
                               " x the reference core; calibration " + path + ", " + cal.date + ")" +
-                              (raw_speed > 1.0 ? "; the board is " + Fixed(100 * (raw_speed - 1), 1) +
-                                                     " % faster than the host: emulated at full host speed"
-                                               : "");
+                              (speed_ > 1.0 ? "; the board's cores are " + Fixed(100 * (speed_ - 1), 1) +
+                                                  " % faster than the host's: time is dilated at least as much"
+                                            : "");
+  if (dilation > 0 && dilation < speed_) {
+    throw std::invalid_argument("--clock emulated: board '" + board.id + "' has cores " + Fixed(speed_, 3) +
+                                " x as fast as this host's, so the dilation must be at least " + Fixed(speed_, 3) +
+                                " (a thread gets speed / dilation of a host core, at most one); got " +
+                                Fixed(dilation, 2));
+  }
 
   // 2. cgroups: detect, reap stale groups, admit.
   CgroupOptions cg;
@@ -103,7 +102,7 @@ BoardSlot::BoardSlot(const board::BoardProfile& board, double dilation, const Em
         notes_["emulation.dilation"] = Fixed(dilation_, 2) + " (auto: smallest multiple of 0.25 at which " +
                                        std::to_string(board.cores) + " x " + Fixed(speed_, 3) + " = " +
                                        Fixed(board.cores * speed_, 3) + " host CPUs fit the " + Fixed(free_cpus, 2) +
-                                       " free)";
+                                       " free" + (speed_ > 1.0 ? " and is at least the speed" : "") + ")";
       }
     } else {
       notes_["emulation.dilation"] = Fixed(dilation_, 2) + " (requested)";

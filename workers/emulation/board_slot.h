@@ -24,14 +24,14 @@ class BoardSlot {
   /// picks the dilation (`dilation` <= 0: the smallest multiple of 0.25 at which the board fits
   /// the host's free CPUs) and creates the episode's groups. Throws std::invalid_argument when
   /// this host cannot emulate the board: no valid host calibration, no writable cgroup
-  /// hierarchy, admission refused, a board faster than the host.
+  /// hierarchy, admission refused, a requested dilation below the board's speed against the host.
   BoardSlot(const board::BoardProfile& board, double dilation, const EmulationOptions& emulation);
   /// Removes the episode's groups (killing what is left inside) and the `enavi` parent if unused.
   ~BoardSlot();
   BoardSlot(const BoardSlot&) = delete;
   BoardSlot& operator=(const BoardSlot&) = delete;
 
-  /// Board core speed / host core speed, in (0, 1].
+  /// Board core speed / host core speed, > 0 (above 1 the dilation is at least as large).
   double speed() const { return speed_; }
   /// Wall seconds per sim second.
   double dilation() const { return dilation_; }

@@ -59,7 +59,8 @@ TEST(BoardQuotaTest, OutOfRangeInputsNameTheFieldAndRange) {
     return std::string("no exception");
   };
   EXPECT_NE(message([&] { ComputeBoardQuota({0, 0.5}, o); }).find("cores"), std::string::npos);
-  EXPECT_NE(message([&] { ComputeBoardQuota({2, 1.5}, o); }).find("(0, 1]"), std::string::npos);
+  EXPECT_NE(message([&] { ComputeBoardQuota({2, 1.5}, o); }).find("dilation must be >= the board's core speed 1.5"),
+            std::string::npos);
   EXPECT_NE(message([&] { ComputeBoardQuota({2, 0.0}, o); }).find("core_speed"), std::string::npos);
   o.dilation = 0.5;
   EXPECT_NE(message([&] { ComputeBoardQuota({2, 0.5}, o); }).find("dilation"), std::string::npos);
@@ -96,6 +97,17 @@ TEST(BoardQuotaTest, MinimumDilationFitsTheBoardIntoFreeHostCpus) {
   EXPECT_DOUBLE_EQ(MinimumDilation({6, 0.6}, 1.75), 2.25) << "3.6 / 1.75 = 2.06 -> 2.25";
   EXPECT_DOUBLE_EQ(MinimumDilation({4, 0.5}, 1.0), 2.0);
   EXPECT_THROW(MinimumDilation({4, 0.5}, 0.0), std::invalid_argument);
+}
+
+TEST(BoardQuotaTest, ABoardFasterThanTheHostIsEmulatedByDilatingTimeAtLeastByItsSpeed) {
+  EXPECT_DOUBLE_EQ(MinimumDilation({1, 1.07}, 1.75), 1.25) << "one core fits, but a thread needs k >= 1.07";
+  QuotaOptions o;
+  o.dilation = 1.25;
+  const BoardQuota q = ComputeBoardQuota({4, 1.07}, o);
+  EXPECT_NEAR(q.CoreCpus(), 1.07 / 1.25, 1e-4) << "a board core is 0.856 of a host core in dilated time";
+  EXPECT_NEAR(ExpectedSlowdown(q, 1, 4.0), 1.25 / 1.07, 1e-3) << "one thread: k / speed, as for slower boards";
+  o.dilation = 1.0;
+  EXPECT_THROW(ComputeBoardQuota({4, 1.07}, o), std::invalid_argument) << "one host core cannot run 1.07 of itself";
 }
 
 }  // namespace
