@@ -51,6 +51,9 @@ void CheckOptions(const QuadrotorOptions& o) {
               "), got " + std::to_string(v.collision_radius));
   Require(std::isfinite(o.contact_tolerance) && o.contact_tolerance >= 0.0, "contact_tolerance",
           "must be finite and >= 0");
+  Require(o.body_drag_cda.allFinite() && (o.body_drag_cda.array() >= 0.0).all(), "body_drag_cda",
+          "must be finite and >= 0");
+  Require(positive(o.air_density), "air_density", "must be finite and > 0");
 }
 
 // Bullet's cylinder margin rounds the rim; the outer extents stay as given.
@@ -80,6 +83,7 @@ struct QuadrotorSim::Impl {
   std::int64_t steps = 0;
   std::array<double, 4> omega{};
   navstack::RotorCommand command;
+  Eigen::Vector3d air_W = Eigen::Vector3d::Zero();
   // Acceleration over the last step (W). Bullet's velocities are those of the middle of the
   // last step, half a step behind time().
   Eigen::Vector3d a_W = Eigen::Vector3d::Zero();
@@ -119,8 +123,9 @@ struct QuadrotorSim::Impl {
       tau_B += rotor_positions_B[i].cross(f_B);
       tau_B.z() += -navstack::VehicleParams::kSpin[i] * p.moment_coeff * thrust;
     }
-    const Eigen::Vector3d v_B = R.transpose() * v_W();
-    F_B -= p.linear_drag.cwiseProduct(v_B);
+    const Eigen::Vector3d v_rel_B = R.transpose() * (v_W() - air_W);
+    F_B -= p.linear_drag.cwiseProduct(v_rel_B);
+    F_B -= 0.5 * options.air_density * v_rel_B.norm() * options.body_drag_cda.cwiseProduct(v_rel_B);
     *F_W = R * F_B;
     *tau_W = R * tau_B;
   }
@@ -250,6 +255,11 @@ void QuadrotorSim::SetCommand(const navstack::RotorCommand& command) {
     }
   }
   impl_->command = command;
+}
+
+void QuadrotorSim::SetAirVelocity(const Eigen::Vector3d& air_W) {
+  if (!air_W.allFinite()) throw std::invalid_argument("air velocity must be finite");
+  impl_->air_W = air_W;
 }
 
 void QuadrotorSim::Step() {

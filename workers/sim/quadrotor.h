@@ -26,7 +26,17 @@ struct QuadrotorOptions {
   double collision_half_height = 0.06;
   /// A contact point with signed separation below this (m) is a collision.
   double contact_tolerance = 1e-3;
+  /// Body (parasitic) drag 0.5 rho Cd A |v_rel| v_rel, per body axis, as Cd * A in m^2; zero
+  /// (off) unless set. kX500BodyDragCdA is what the episode uses when it flies in wind.
+  Eigen::Vector3d body_drag_cda = Eigen::Vector3d::Zero();
+  double air_density = 1.225;  ///< kg/m^3, ISA sea level
 };
+
+/// Cd * A of an X500-class airframe, body axes (m^2). ESTIMATES, not measurements: the X500's
+/// centre plates, battery and arms seen from the side are about 0.03 m^2 and from above about
+/// 0.05 m^2 (500 mm wheelbase, 0.14 m centre plates); Cd about 1.0 sideways (bluff body) and 1.2
+/// from above (flat plate, Hoerner, "Fluid-Dynamic Drag", 1965, ch. 3).
+inline const Eigen::Vector3d kX500BodyDragCdA{0.03, 0.03, 0.06};
 
 /// First touch of the vehicle with the world. Flight ends there; the episode runner stops.
 struct ContactEvent {
@@ -46,7 +56,11 @@ double HoverRotorSpeed(const navstack::VehicleParams& vehicle);
 /// Per Step(): each rotor's speed follows its command through a first-order lag (time constant
 /// up/down) and is clamped to [0, omega_max]; rotor i pushes thrust_coeff * omega_i^2 along
 /// body +z at its position and twists the body by -kSpin[i] * moment_coeff * thrust_i about
-/// body z; linear drag -linear_drag (body axes) * v_B; gravity 9.81 m/s^2. Bullet integrates
+/// body z; rotor drag -linear_drag (body axes) * v_rel_B, the linear rotor-drag model of
+/// Faessler, Franchi and Scaramuzza, "Differential flatness of quadrotor dynamics subject to
+/// rotor drag", RA-L 2018 (F = -R D R^T v, D diagonal, with VehicleParams' coefficients); body
+/// drag -0.5 rho CdA |v_rel| v_rel_B; v_rel is the velocity relative to the air (SetAirVelocity,
+/// still air by default); gravity 9.81 m/s^2. Bullet integrates
 /// one step of exactly dt (no substeps, no interpolation). Bullet's integrator is symplectic
 /// Euler; the body's velocities are read as mid-step values (leapfrog), so positions are
 /// second-order accurate: a free fall matches z0 - g t^2 / 2 up to float rounding.
@@ -68,6 +82,10 @@ class QuadrotorSim {
   /// Commanded rotor speeds (rad/s), held until the next call; clamped to [0, omega_max].
   /// @throws std::invalid_argument if a command is not finite.
   void SetCommand(const navstack::RotorCommand& command);
+  /// Velocity of the air at the vehicle (world frame, m/s), held until the next call: the drag
+  /// acts against the velocity relative to it.
+  /// @throws std::invalid_argument if not finite.
+  void SetAirVelocity(const Eigen::Vector3d& air_W);
   /// Advances the simulation by exactly dt.
   void Step();
 

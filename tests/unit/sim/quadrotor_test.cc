@@ -106,6 +106,26 @@ TEST(QuadrotorSimTest, HoverCommandAtStartHoldsStill) {
   EXPECT_LT(s.v_WB.norm(), 1e-3);
 }
 
+TEST(QuadrotorSimTest, WindPushesThroughRotorAndBodyDragAgainstTheRelativeAirspeed) {
+  // Level at hover in a 5 m/s wind along +x: the only horizontal force at first is the drag
+  // k_x * 5 + 0.5 rho CdA_x 5^2 downwind.
+  QuadrotorOptions options;
+  options.body_drag_cda = kX500BodyDragCdA;
+  QuadrotorSim sim(EmptyWorld(), options, {0, 0, 2}, 0.0);
+  sim.SetAirVelocity({5.0, 0.0, 0.0});
+  for (int i = 0; i < 10; ++i) sim.Step();
+  const VehicleParams& v = options.vehicle;
+  const double expected =
+      (v.linear_drag.x() * 5.0 + 0.5 * options.air_density * kX500BodyDragCdA.x() * 25.0) / v.mass;
+  EXPECT_NEAR(sim.State().a_WB.x(), expected, 0.01 * expected);
+  EXPECT_NEAR(sim.State().a_WB.y(), 0.0, 1e-9);
+  // Moving with the air: no drag at all.
+  QuadrotorSim still(EmptyWorld(), options, {0, 0, 2}, 0.0);
+  for (int i = 0; i < 10; ++i) still.Step();
+  EXPECT_EQ(still.State().a_WB.x(), 0.0);
+  EXPECT_THROW(sim.SetAirVelocity({std::nan(""), 0.0, 0.0}), std::invalid_argument);
+}
+
 TEST(QuadrotorSimTest, MotorFollowsFirstOrderLag) {
   QuadrotorOptions options;
   QuadrotorSim sim(EmptyWorld(), options, {0, 0, 50}, 0.0);
