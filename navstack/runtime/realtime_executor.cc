@@ -63,21 +63,28 @@ void JobLock::unlock() {
 // ---------------------------------------------------------------------------------------------
 // RealtimeExecutor
 
-RealtimeExecutor::RealtimeExecutor(RealtimeExecutorOptions options) : options_(std::move(options)) {
+RealtimeExecutor::RealtimeExecutor(RealtimeExecutorOptions options)
+    : options_(std::move(options)), clock_(options_.clock) {
   if (options_.threads < 1)
     throw std::invalid_argument("RealtimeExecutor: threads must be >= 1, got " + std::to_string(options_.threads));
-  if (!(options_.dilation > 0) || !std::isfinite(options_.dilation))
-    throw std::invalid_argument("RealtimeExecutor: dilation must be > 0, got " + std::to_string(options_.dilation));
   if (!(options_.host_to_board > 0) || !std::isfinite(options_.host_to_board))
     throw std::invalid_argument("RealtimeExecutor: host_to_board must be > 0, got " +
                                 std::to_string(options_.host_to_board));
+  if (!clock_) {
+    clock_ = std::make_shared<DilatedSteadyClock>(1.0);
+    default_clock_ = true;
+  }
+  clock_->Listen(mutex_, release_cv_);
 }
 
-RealtimeExecutor::~RealtimeExecutor() { Stop(); }
+RealtimeExecutor::~RealtimeExecutor() {
+  Stop();
+  clock_->Unlisten(release_cv_);
+}
 
 double RealtimeExecutor::NowLocked() const {
   if (!started_) return 0.0;
-  return std::max(0.0, Seconds(Clock::now() - epoch_) / options_.dilation);
+  return std::max(0.0, clock_->Now());
 }
 
 double RealtimeExecutor::now() const {
@@ -155,13 +162,8 @@ int RealtimeExecutor::PickLocked() const {
 }
 
 void RealtimeExecutor::AdvanceTo(double t) {
-  Clock::time_point until;
-  {
-    std::lock_guard l(mutex_);
-    if (!started_) return;
-    until = epoch_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(t * options_.dilation));
-  }
-  std::this_thread::sleep_until(until);
+  std::unique_lock l(mutex_);
+  while (started_ && !stopping_ && NowLocked() < t) clock_->WaitUntil(release_cv_, l, t);
 }
 
 const TaskStats& RealtimeExecutor::stats(TaskId task) const {
@@ -230,11 +232,11 @@ void RealtimeExecutor::Launch() {
   });
 }
 
-void RealtimeExecutor::Start(Clock::time_point epoch) {
+void RealtimeExecutor::Start() {
   Launch();
   std::lock_guard l(mutex_);
   if (started_ || stopping_) return;
-  epoch_ = epoch;
+  if (default_clock_) static_cast<DilatedSteadyClock&>(*clock_).SetEpoch(Clock::now());
   started_ = true;
   release_cv_.notify_all();
   work_cv_.notify_all();
@@ -296,12 +298,7 @@ void RealtimeExecutor::ReleaseLoop() {
       if (s.rate_hz > 0) earliest = std::min(earliest, s.next_release);
     }
     if (released) work_cv_.notify_all();
-    if (std::isinf(earliest)) {
-      release_cv_.wait(l);
-    } else {
-      release_cv_.wait_until(l, epoch_ + std::chrono::duration_cast<Clock::duration>(
-                                             std::chrono::duration<double>(earliest * options_.dilation)));
-    }
+    clock_->WaitUntil(release_cv_, l, earliest - kEps);  // due as above: within kEps
   }
 }
 
@@ -331,16 +328,18 @@ void RealtimeExecutor::WorkerLoop(int worker) {
     JobFn fn = s.fn;
     l.unlock();
 
-    double cpu = 0.0, wall = 0.0;
+    double cpu = 0.0, wall = 0.0, elapsed = 0.0;
     bool ok = true;
     JobOutput out;
     try {
       std::shared_lock job(job_lock_);
       const auto wall0 = Clock::now();
       const double cpu0 = ThreadCpuSeconds();
+      const double sim0 = clock_->Now();
       out = fn();
       cpu += ThreadCpuSeconds() - cpu0;
       wall += Seconds(Clock::now() - wall0);
+      elapsed += clock_->Now() - sim0;
     } catch (const std::exception& e) {
       Fail(std::string(TaskName(static_cast<TaskId>(task))) + " job: " + e.what());
       ok = false;
@@ -353,7 +352,7 @@ void RealtimeExecutor::WorkerLoop(int worker) {
       ++f.stats.completed;
       f.last_finish = NowLocked();
       if (f.last_finish > job.deadline + kEps) ++f.stats.late;
-      const double cost = cpu * options_.host_to_board;
+      const double cost = options_.timing == JobTiming::kThreadCpu ? cpu * options_.host_to_board : elapsed;
       f.stats.busy_s += cost;
       f.stats.cost_sum_s += cost;
       f.stats.cost_max_s = std::max(f.stats.cost_max_s, cost);
@@ -374,9 +373,11 @@ void RealtimeExecutor::WorkerLoop(int worker) {
       try {
         const auto wall0 = Clock::now();
         const double cpu0 = ThreadCpuSeconds();
+        const double sim0 = clock_->Now();
         out.commit();
         cpu += ThreadCpuSeconds() - cpu0;
         wall += Seconds(Clock::now() - wall0);
+        elapsed += clock_->Now() - sim0;
       } catch (const std::exception& e) {
         Fail(std::string(TaskName(static_cast<TaskId>(task))) + " commit: " + e.what());
       }

@@ -1,18 +1,21 @@
 #pragma once
 // The emulated clock's TaskExecutor (docs/design.md, "Time: two clocks"): the navigation stack's jobs run in
-// real time on `threads` worker threads. Periodic and sporadic releases follow sim time, which
-// is wall time / dilation since Start(); ready jobs are dispatched without preemption, earliest
-// deadline first (global EDF over the workers) or first released first served (a ROS node's
-// spinner). A job's code runs under the shared side of a JobLock, its commit (and everything
+// real time on `threads` worker threads. Periodic and sporadic releases follow sim time, read
+// from a TimeSource (time_source.h): wall time / dilation in the emulated clock's navstack
+// process, ROS time in our ROS node (ros/node/); ready jobs are dispatched without preemption,
+// earliest deadline first (global EDF over the workers) or first released first served (a ROS
+// node's spinner). A job's code runs under the shared side of a JobLock, its commit (and everything
 // else that writes the stack's state: frames, odometry) under the exclusive side, so a stack
 // that is not thread-safe (NavStack) runs unchanged: jobs only read shared state, each writes
 // only its own task's fields, and commits serialise.
 //
-// What a job costs is measured, not modelled: its thread CPU time (CLOCK_THREAD_CPUTIME_ID,
-// code + commit) times `host_to_board` (1 / the board's per-core speed relative to the host)
-// is its board time. How fast a worker runs is not this class's business: the owner makes each
-// worker thread one board core (a SCHED_DEADLINE speed server or a per-thread cgroup quota) in
-// `on_worker_start`.
+// What a job costs is measured, not modelled (JobTiming): where the board's speed is known (the
+// emulated clock's navstack process), its thread CPU time (CLOCK_THREAD_CPUTIME_ID, code +
+// commit) times `host_to_board` (1 / the board's per-core speed relative to the host); where it
+// is not (a ROS node, which sees only ROS time, as on a real board), the sim time its code and
+// commit took. How fast a worker runs is not this class's business: the owner makes each worker
+// thread one board core (a SCHED_DEADLINE speed server or a per-thread cgroup quota) in
+// `on_worker_start`, or the board's cgroups do (the ROS bridge).
 
 #include <sys/types.h>
 
@@ -21,6 +24,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -28,6 +32,7 @@
 #include <vector>
 
 #include "navstack/runtime/executor.h"
+#include "navstack/runtime/time_source.h"
 #include "navstack/runtime/virtual_executor.h"
 
 namespace enavi::navstack {
@@ -52,15 +57,23 @@ class JobLock {
   bool writer_ = false;
 };
 
+/// How a job's board time is measured.
+enum class JobTiming {
+  kThreadCpu,  ///< its thread CPU time x host_to_board (the board's speed is known)
+  kElapsed,    ///< the sim time its code and commit took on the TimeSource (a node's own clock)
+};
+
 struct RealtimeExecutorOptions {
   /// Worker threads (= board cores the jobs may use), >= 1.
   int threads = 1;
   /// kGlobalEdf: earliest absolute deadline first; kFifoNonPreemptive: earliest release first.
   /// Both without preemption: a started job keeps its worker until it finishes.
   SchedulingPolicy policy = SchedulingPolicy::kGlobalEdf;
-  /// Wall seconds per sim second (k >= 1 slows the emulated world down, k < 1 is allowed).
-  double dilation = 1.0;
-  /// Board seconds per host CPU second of a job: 1 / (board per-core speed / host speed).
+  /// Sim time (shared: its owner sets it: the epoch of a DilatedSteadyClock, the steps of a
+  /// SteppedClock). Null: a DilatedSteadyClock of dilation 1 whose epoch is Start()'s instant.
+  std::shared_ptr<TimeSource> clock;
+  JobTiming timing = JobTiming::kThreadCpu;
+  /// kThreadCpu: board seconds per host CPU second of a job: 1 / (board per-core speed / host speed).
   double host_to_board = 1.0;
   /// Runs first on each worker thread (e.g. enter a SCHED_DEADLINE speed server).
   std::function<void(int worker)> on_worker_start;
@@ -80,7 +93,7 @@ struct JobLockStats {
 
 class RealtimeExecutor final : public TaskExecutor {
  public:
-  /// Throws std::invalid_argument for threads < 1 or a non-positive dilation / host_to_board.
+  /// Throws std::invalid_argument for threads < 1 or a non-positive host_to_board.
   explicit RealtimeExecutor(RealtimeExecutorOptions options);
   ~RealtimeExecutor() override;  ///< Stop()s and joins
   RealtimeExecutor(const RealtimeExecutor&) = delete;
@@ -90,9 +103,9 @@ class RealtimeExecutor final : public TaskExecutor {
   void SetRate(TaskId task, double hz) override;
   double rate(TaskId task) const override;
   void Trigger(TaskId task, double relative_deadline) override;
-  /// The clock runs by itself: blocks until now() >= t (returns at once before Start()).
+  /// The clock runs by itself: blocks until now() >= t (returns at once before Start() or after Stop()).
   void AdvanceTo(double t) override;
-  /// Sim time: 0 before Start(), then (wall - epoch) / dilation, never negative.
+  /// Sim time: 0 before Start(), then the clock's, never negative.
   double now() const override;
   int cores() const override { return options_.threads; }
   /// A copy of the task's counters taken now, owned by the calling thread: valid until that
@@ -104,9 +117,9 @@ class RealtimeExecutor final : public TaskExecutor {
   /// Creates the workers (each runs on_worker_start first) and the release thread; returns once
   /// every worker has run its start hook. No job starts before Start().
   void Launch();
-  /// Sim time 0 is `epoch` (may lie a little in the future); releases and dispatch begin.
-  /// Launch()es first if needed.
-  void Start(std::chrono::steady_clock::time_point epoch);
+  /// Releases and dispatch begin, at the clock's time now (a DilatedSteadyClock's epoch must be
+  /// set; the default clock's is set to this instant). Launch()es first if needed.
+  void Start();
   /// Stops releasing, lets running jobs finish (their commits are applied), joins all threads.
   /// Idempotent.
   void Stop();
@@ -162,7 +175,8 @@ class RealtimeExecutor final : public TaskExecutor {
   std::condition_variable work_cv_;     // workers: a job became ready, or stop
   std::condition_variable release_cv_;  // release thread: rates changed, started, or stop
   std::array<Slot, kTaskCount> slots_;
-  std::chrono::steady_clock::time_point epoch_;
+  std::shared_ptr<TimeSource> clock_;
+  bool default_clock_ = false;
   bool launched_ = false, started_ = false, stopping_ = false;
   std::vector<std::thread> threads_;
   std::vector<pid_t> worker_tids_;

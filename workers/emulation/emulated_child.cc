@@ -150,7 +150,8 @@ int RunNavstackChild(const ChildArgs& a) {
   navstack::RealtimeExecutorOptions eo;
   eo.threads = a.threads;
   eo.policy = a.policy;
-  eo.dilation = a.dilation;
+  const auto clock = std::make_shared<navstack::DilatedSteadyClock>(a.dilation);
+  eo.clock = clock;
   eo.host_to_board = 1.0 / a.speed;
   eo.on_worker_start = [&](int w) {
     const std::string name = "nav-worker-" + std::to_string(w);
@@ -196,7 +197,8 @@ int RunNavstackChild(const ChildArgs& a) {
     if (shared->stop.load() || channel.Peer() == emulation::PeerState::kDead) return 0;
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
-  exec.Start(Clock::time_point(std::chrono::nanoseconds(epoch_ns)));
+  clock->SetEpoch(Clock::time_point(std::chrono::nanoseconds(epoch_ns)));
+  exec.Start();
   shared->child_state.store(kRunning, std::memory_order_release);
 
   auto stats = std::make_unique<StatsWire>();

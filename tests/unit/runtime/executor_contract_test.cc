@@ -1,6 +1,6 @@
 // The rules every TaskExecutor keeps (navstack/runtime/executor.h, docs/design.md "Time: two
 // clocks"), one typed suite for both clocks: VirtualExecutor (sim-time schedule, cost model) and
-// RealtimeExecutor (worker threads, wall time). Each executor gets a harness with a "holding"
+// RealtimeExecutor (worker threads) on wall time and on ROS time (a clock stepped from outside). Each executor gets a harness with a "holding"
 // job: on the virtual clock it costs 100 ms of board time, on the real-time one it blocks on a
 // gate the test opens. Orders are made by releases while the hold keeps the only core busy, so
 // nothing here asserts on durations.
@@ -126,12 +126,16 @@ class RealtimeHarness {
       return JobOutput{};
     });
   }
-  void Start() { ex_.Start(std::chrono::steady_clock::now()); }
+  void Start() {
+    clock_->SetEpoch(std::chrono::steady_clock::now());
+    ex_.Start();
+  }
   /// Sim time 0 lies `late` seconds in the past: the release thread's first wake-up finds that
   /// span's instants all due, as after a stall on a loaded host.
   void StartLate(double late) {
-    ex_.Start(std::chrono::steady_clock::now() -
-              std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(late)));
+    clock_->SetEpoch(std::chrono::steady_clock::now() -
+                     std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(late)));
+    ex_.Start();
   }
   bool WaitHolding(int n) { return RunUntil([&] { return holding_.load() >= n; }); }
   void Tick() { std::this_thread::sleep_for(2ms); }
@@ -144,12 +148,76 @@ class RealtimeHarness {
   void Stop() { ex_.Stop(); }
 
  private:
-  static RealtimeExecutorOptions Options(int cores, SchedulingPolicy policy) {
+  RealtimeExecutorOptions Options(int cores, SchedulingPolicy policy) {
     RealtimeExecutorOptions o;
     o.threads = cores;
     o.policy = policy;
+    o.clock = clock_;
     return o;
   }
+  std::shared_ptr<DilatedSteadyClock> clock_ = std::make_shared<DilatedSteadyClock>(1.0);
+  RealtimeExecutor ex_;
+  Gate gate_;
+  std::atomic<int> holding_{0};
+};
+
+// The real-time executor on ROS time (our ROS node): a SteppedClock the harness moves by 1 ms
+// steps, as /clock does, while it waits for what it waits for.
+class SteppedHarness {
+ public:
+  SteppedHarness(int cores, SchedulingPolicy policy) : ex_(Options(cores, policy)) {}
+  ~SteppedHarness() {
+    gate_.Open();
+    ex_.Stop();
+  }
+  TaskExecutor& ex() { return ex_; }
+  void RegisterHolding(TaskId task, StartLog* log) {
+    auto first = std::make_shared<std::atomic<bool>>(true);
+    ex_.Register(task, [this, task, log, first] {
+      if (log) log->Add(task);
+      if (first->exchange(false)) {
+        ++holding_;
+        gate_.Wait();
+      }
+      return JobOutput{};
+    });
+  }
+  void RegisterShort(TaskId task, StartLog* log) {
+    ex_.Register(task, [task, log] {
+      log->Add(task);
+      return JobOutput{};
+    });
+  }
+  void Start() { ex_.Start(); }
+  /// The clock stands at `late` when releases begin.
+  void StartLate(double late) {
+    clock_->Set(late);
+    ex_.Start();
+  }
+  bool WaitHolding(int n) { return RunUntil([&] { return holding_.load() >= n; }); }
+  void Tick() { Step(); }
+  void ReleaseHolds() { gate_.Open(); }
+  void PassSimTime(double t) { RunUntil([&] { return ex_.now() > t; }); }
+  template <typename F>
+  bool RunUntil(F done) {
+    for (int i = 0; i < 10'000 && !done(); ++i) Step();
+    return done();
+  }
+  void Stop() { ex_.Stop(); }
+
+ private:
+  RealtimeExecutorOptions Options(int cores, SchedulingPolicy policy) {
+    RealtimeExecutorOptions o;
+    o.threads = cores;
+    o.policy = policy;
+    o.clock = clock_;
+    return o;
+  }
+  void Step() {
+    clock_->Set(clock_->Now() + 0.001);
+    std::this_thread::sleep_for(1ms);
+  }
+  std::shared_ptr<SteppedClock> clock_ = std::make_shared<SteppedClock>();
   RealtimeExecutor ex_;
   Gate gate_;
   std::atomic<int> holding_{0};
@@ -158,12 +226,12 @@ class RealtimeHarness {
 template <typename H>
 class ExecutorContractTest : public ::testing::Test {};
 
-using Harnesses = ::testing::Types<VirtualHarness, RealtimeHarness>;
+using Harnesses = ::testing::Types<VirtualHarness, RealtimeHarness, SteppedHarness>;
 class HarnessNames {
  public:
   template <typename T>
   static std::string GetName(int) {
-    return std::is_same_v<T, VirtualHarness> ? "Virtual" : "Realtime";
+    return std::is_same_v<T, VirtualHarness> ? "Virtual" : std::is_same_v<T, RealtimeHarness> ? "Realtime" : "Stepped";
   }
 };
 TYPED_TEST_SUITE(ExecutorContractTest, Harnesses, HarnessNames);

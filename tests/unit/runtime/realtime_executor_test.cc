@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -53,7 +54,7 @@ TEST(RealtimeExecutorTest, CommitsRunUnderTheExclusiveLockWhileNoJobRuns) {
   });
   ex.SetRate(TaskId::kPerception, 300.0);
   ex.SetRate(TaskId::kCollision, 300.0);
-  ex.Start(std::chrono::steady_clock::now());
+  ex.Start();
   ASSERT_TRUE(Eventually([&] { return commits.load() >= 30; }));
   ex.Stop();
   EXPECT_EQ(overlaps.load(), 0) << "a commit ran while job code was inside the shared section";
@@ -71,7 +72,7 @@ TEST(RealtimeExecutorTest, WriterWaitsForARunningJob) {
     gate.Wait();
     return JobOutput{};
   });
-  ex.Start(std::chrono::steady_clock::now());
+  ex.Start();
   ex.Trigger(TaskId::kPlanning, 1.0);
   ASSERT_TRUE(Eventually([&] { return running.load(); }));
   EXPECT_FALSE(ex.job_lock().try_lock()) << "frames and odometry must not be written under a running job";
@@ -91,7 +92,7 @@ TEST(RealtimeExecutorTest, BoardTimeIsThreadCpuTimesHostToBoard) {
     }
     return JobOutput{};
   });
-  ex.Start(std::chrono::steady_clock::now());
+  ex.Start();
   for (int i = 0; i < 3; ++i) {
     ex.Trigger(TaskId::kPerception, 1.0);
     ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPerception).completed == i + 1; }));
@@ -106,14 +107,72 @@ TEST(RealtimeExecutorTest, BoardTimeIsThreadCpuTimesHostToBoard) {
 
 TEST(RealtimeExecutorTest, SimTimeIsWallTimeOverDilationAndStartsAtTheEpoch) {
   RealtimeExecutorOptions o;
-  o.dilation = 4.0;
+  const auto clock = std::make_shared<DilatedSteadyClock>(4.0);
+  o.clock = clock;
   RealtimeExecutor ex(o);
+  clock->SetEpoch(std::chrono::steady_clock::now() - std::chrono::seconds(8));
   EXPECT_EQ(ex.now(), 0.0) << "before Start()";
-  const auto epoch = std::chrono::steady_clock::now() - std::chrono::seconds(8);
-  ex.Start(epoch);
+  ex.Start();
   const double t = ex.now();
   EXPECT_GE(t, 2.0) << "8 wall seconds at k = 4 are at least 2 sim seconds";
   EXPECT_LT(t, 3.0);
+}
+
+// ROS time (our ROS node): the clock moves only when /clock steps it, and a job's board time is
+// the sim time its code took (JobTiming::kElapsed), as a node on a real board measures it.
+TEST(RealtimeExecutorTest, OnASteppedClockReleasesWaitForItsStepsAndJobsCostTheirElapsedSimTime) {
+  RealtimeExecutorOptions o;
+  const auto clock = std::make_shared<SteppedClock>();
+  o.clock = clock;
+  o.timing = JobTiming::kElapsed;
+  o.host_to_board = 1000.0;  // ignored with kElapsed
+  RealtimeExecutor ex(o);
+  Gate gate;
+  std::atomic<int> started{0};
+  ex.Register(TaskId::kPerception, [&] {
+    if (++started == 1) gate.Wait();
+    return JobOutput{};
+  });
+  clock->Set(1.0);
+  EXPECT_EQ(ex.now(), 0.0) << "before Start()";
+  ex.Start();
+  EXPECT_DOUBLE_EQ(ex.now(), 1.0);
+  ex.SetRate(TaskId::kPerception, 10.0);  // releases at 1.0, 1.1, ...
+  ASSERT_TRUE(Eventually([&] { return started.load() == 1; }));
+  clock->Set(1.25);  // the job holds its worker for 0.25 s of sim time; 1.1 and 1.2 find it active
+  ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPerception).skipped == 2; }));
+  gate.Open();
+  ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPerception).completed == 1; }));
+  std::this_thread::sleep_for(30ms);  // wall time passes, sim time does not: nothing is released
+  EXPECT_EQ(ex.stats(TaskId::kPerception).released, 3);
+  clock->Set(1.3);
+  ASSERT_TRUE(Eventually([&] { return ex.stats(TaskId::kPerception).completed == 2; }));
+  ex.Stop();
+  const TaskStats s = ex.stats(TaskId::kPerception);
+  EXPECT_EQ(s.released, 4);
+  EXPECT_DOUBLE_EQ(s.cost_max_s, 0.25) << "the first job ran from 1.0 to 1.25 of ROS time";
+  EXPECT_LT(s.busy_s - s.cost_max_s, 1e-12) << "the second ran within one step";
+  EXPECT_EQ(s.late, 1) << "its deadline was 1.1";
+}
+
+TEST(RealtimeExecutorTest, AdvanceToBlocksUntilTheSteppedClockGetsThere) {
+  RealtimeExecutorOptions o;
+  const auto clock = std::make_shared<SteppedClock>();
+  o.clock = clock;
+  RealtimeExecutor ex(o);
+  ex.Start();
+  std::atomic<bool> returned{false};
+  std::thread waiter([&] {
+    ex.AdvanceTo(0.5);
+    returned = true;
+  });
+  clock->Set(0.2);
+  std::this_thread::sleep_for(20ms);
+  EXPECT_FALSE(returned.load()) << "0.2 < 0.5";
+  clock->Set(0.5);
+  EXPECT_TRUE(Eventually([&] { return returned.load(); }));
+  waiter.join();
+  ex.Stop();
 }
 
 TEST(RealtimeExecutorTest, AThrowingJobStopsDispatchAndIsReported) {
@@ -125,7 +184,7 @@ TEST(RealtimeExecutorTest, AThrowingJobStopsDispatchAndIsReported) {
     ++other_runs;
     return JobOutput{};
   });
-  ex.Start(std::chrono::steady_clock::now());
+  ex.Start();
   ex.Trigger(TaskId::kPlanning, 1.0);
   ASSERT_TRUE(Eventually([&] { return !ex.error().empty(); }));
   EXPECT_NE(ex.error().find("planner exploded"), std::string::npos) << ex.error();
@@ -147,7 +206,7 @@ TEST(RealtimeExecutorTest, StopAppliesTheCommitOfTheRunningJob) {
     out.commit = [&] { committed = true; };
     return out;
   });
-  ex.Start(std::chrono::steady_clock::now());
+  ex.Start();
   ex.Trigger(TaskId::kPlanning, 1.0);
   ASSERT_TRUE(Eventually([&] { return running.load(); }));
   std::thread opener([&] {
@@ -164,9 +223,6 @@ TEST(RealtimeExecutorTest, RejectsBadOptions) {
   o.threads = 0;
   EXPECT_THROW(RealtimeExecutor{o}, std::invalid_argument);
   o.threads = 1;
-  o.dilation = 0;
-  EXPECT_THROW(RealtimeExecutor{o}, std::invalid_argument);
-  o.dilation = 1;
   o.host_to_board = -1;
   EXPECT_THROW(RealtimeExecutor{o}, std::invalid_argument);
 }
