@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "api/fixed.h"
+#include "navstack/methods/reference_tracker.h"
 #include "navstack/runtime/realtime_executor.h"
 #include "navstack/runtime/sched_deadline.h"
 #include "workers/emulation/shm_channel.h"
@@ -34,10 +35,6 @@ using api::Fixed;
 
 void NameThread(const char* name) { pthread_setname_np(pthread_self(), name); }
 
-bool SameSample(const navstack::TrajectorySample& a, const navstack::TrajectorySample& b) {
-  return a.p == b.p && a.v == b.v && a.a == b.a && a.j == b.j && a.yaw == b.yaw && a.yaw_rate == b.yaw_rate;
-}
-
 // Publishes the stack's outputs. Every call happens under the exclusive JobLock (after a commit
 // or after the IPC thread fed a frame), so NavStack is read consistently and there is one
 // writer at a time.
@@ -47,32 +44,21 @@ class OutputPublisher {
 
   void Publish(navstack::Navigator& nav, double now) {
     ReferenceWire& w = *wire_;
-    const std::shared_ptr<const navstack::Trajectory> traj = nav.trajectory();
-    // A method hands a new plan's predecessor over as `previous` unless it was holding (NavStack
-    // follows it until the new plan's start; Ego-Planner's plans start when they land).
-    if (traj != last_traj_) {
-      previous_ = following_ ? last_traj_ : nullptr;
-      last_traj_ = traj;
-      if (traj) {
-        ToWire(*traj, &w.current);
+    const navstack::PublishedReference& ref = tracker_.reference();
+    if (tracker_.Update(nav, now)) {
+      if (ref.current) {
+        ToWire(*ref.current, &w.current);
       } else {
         w.current.count = 0;
       }
-      if (previous_) {
-        ToWire(*previous_, &w.previous);
+      if (ref.previous) {
+        ToWire(*ref.previous, &w.previous);
       } else {
         w.previous.count = 0;
       }
     }
-    // Holding (emergency stop, fail-safe) shows as a reference that is not the trajectory's.
-    following_ = false;
-    if (traj) {
-      const double t1 = std::max(now, traj->start_time());
-      const double t2 = traj->end_time() + 1.0;
-      following_ = SameSample(nav.Reference(t1), traj->Sample(t1)) && SameSample(nav.Reference(t2), traj->Sample(t2));
-    }
-    w.mode = following_ ? ReferenceWire::kTrajectory : ReferenceWire::kHold;
-    w.hold = ToWire(nav.Reference(now));
+    w.mode = ref.following ? ReferenceWire::kTrajectory : ReferenceWire::kHold;
+    w.hold = ToWire(ref.hold);
     const navstack::TaskRates& r = nav.rates();
     w.f_per = r.f_per;
     w.f_plan = r.f_plan;
@@ -99,8 +85,7 @@ class OutputPublisher {
  private:
   LinkShared* shared_;
   std::unique_ptr<ReferenceWire> wire_;
-  std::shared_ptr<const navstack::Trajectory> last_traj_, previous_;
-  bool following_ = false;
+  navstack::ReferenceTracker tracker_;
 };
 
 std::string DescribeSched(const std::vector<navstack::DeadlineResult>& results, bool requested,

@@ -76,27 +76,23 @@ bool SameTrajectory(const std::shared_ptr<const navstack::Trajectory>& have, con
 
 void ReferenceMirror::Update(const ReferenceWire& w) {
   has_message_ = true;
-  hold_mode_ = w.mode == ReferenceWire::kHold;
-  hold_ = FromWire(w.hold);
+  ref_.following = w.mode != ReferenceWire::kHold;
+  ref_.hold = FromWire(w.hold);
   // The usual change is a new plan whose predecessor becomes `previous`: reuse what we built.
   std::shared_ptr<const navstack::Trajectory> current =
-      SameTrajectory(current_, w.current) ? current_ : FromWire(w.current, options_);
+      SameTrajectory(ref_.current, w.current) ? ref_.current : FromWire(w.current, options_);
   std::shared_ptr<const navstack::Trajectory> previous;
-  if (SameTrajectory(current_, w.previous)) {
-    previous = current_;
-  } else if (SameTrajectory(previous_, w.previous)) {
-    previous = previous_;
+  if (SameTrajectory(ref_.current, w.previous)) {
+    previous = ref_.current;
+  } else if (SameTrajectory(ref_.previous, w.previous)) {
+    previous = ref_.previous;
   } else {
     previous = FromWire(w.previous, options_);
   }
-  current_ = std::move(current);
-  previous_ = std::move(previous);
+  ref_.current = std::move(current);
+  ref_.previous = std::move(previous);
 }
 
-navstack::TrajectorySample ReferenceMirror::Reference(double t) const {
-  if (hold_mode_ || !current_) return hold_;
-  if (t < current_->start_time() && previous_) return previous_->Sample(t);
-  return current_->Sample(t);
-}
+navstack::TrajectorySample ReferenceMirror::Reference(double t) const { return ref_.Sample(t); }
 
 }  // namespace enavi::emulation

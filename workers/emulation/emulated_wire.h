@@ -14,6 +14,7 @@
 #include <memory>
 
 #include "navstack/common/state.h"
+#include "navstack/methods/reference_tracker.h"
 #include "navstack/planning/planner_options.h"
 #include "navstack/planning/trajectory.h"
 #include "navstack/runtime/executor.h"
@@ -61,7 +62,7 @@ struct ReferenceWire {
   std::int64_t publications = 0;
 };
 
-/// The simulator's copy of the stack's reference: NavStack::Reference(t) evaluated on the
+/// The simulator's copy of the stack's reference (navstack/methods/reference_tracker.h) on the
 /// rebuilt trajectories.
 class ReferenceMirror {
  public:
@@ -74,9 +75,7 @@ class ReferenceMirror {
  private:
   navstack::PlannerOptions options_;
   bool has_message_ = false;
-  bool hold_mode_ = true;
-  navstack::TrajectorySample hold_;
-  std::shared_ptr<const navstack::Trajectory> current_, previous_;
+  navstack::PublishedReference ref_;
 };
 
 /// Per-task accounting and a few counters of the navstack process.
