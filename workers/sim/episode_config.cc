@@ -7,23 +7,16 @@
 #include <memory>
 #include <stdexcept>
 
-#include <nlohmann/json.hpp>
-
 #include "navstack/methods/registry.h"
 #include "navstack/planning/planner_options.h"
+#include "navstack/rl/shipped_policy.h"
 #include "workers/board/board_profile.h"
 #include "workers/sim/episode.h"
 #include "worlds/generators.h"
-#include "navstack/rl/policy_io.h"
 
 namespace enavi::sim {
 
-// Generated from navstack/rl/policies/*.json by cmake/EmbedFiles.cmake.
-const std::map<std::string, std::string>& EmbeddedPolicies();
-
 namespace {
-
-constexpr const char* kDefaultPolicyName = "enavi_default.json";
 
 struct Setter {
   Tunable tunable;
@@ -115,21 +108,6 @@ api::Catalog FarmCatalog() {
   return catalog;
 }
 
-std::shared_ptr<const navstack::rl::PolicyFile> LoadPolicy(const std::string& path) {
-  if (!path.empty()) return std::make_shared<const navstack::rl::PolicyFile>(navstack::rl::LoadFrequencyPolicy(path));
-  static const std::shared_ptr<const navstack::rl::PolicyFile> shipped = [] {
-    const auto& files = EmbeddedPolicies();
-    const auto it = files.find(kDefaultPolicyName);
-    if (it == files.end()) return std::shared_ptr<const navstack::rl::PolicyFile>();
-    return std::make_shared<const navstack::rl::PolicyFile>(
-        navstack::rl::PolicyFromJson(nlohmann::json::parse(it->second), std::string("shipped ") + kDefaultPolicyName));
-  }();
-  if (!shipped)
-    throw std::invalid_argument(std::string("policy: this build ships no trained E-Navi policy (") + kDefaultPolicyName +
-                                "); train one with `enavi train` and pass it with --policy FILE");
-  return shipped;
-}
-
 EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
   EpisodeConfig config;
   if (spec.ros) {
@@ -152,7 +130,7 @@ EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
   const navstack::MethodInfo& method = *config.method;
   navstack::MethodSetup setup;
   setup.seed = spec.seed;
-  if (method.uses_policy) setup.policy = LoadPolicy(spec.policy);
+  if (method.uses_policy) setup.policy = navstack::rl::LoadPolicyOrShipped(spec.policy);
   navstack::ConfigureMethod(method, setup, &config.nav);
   config.scheduler = {method.scheduler.policy, method.scheduler.threads};
   for (const auto& [name, value] : spec.overrides) {

@@ -39,10 +39,6 @@ std::vector<Tunable> TunablesFor(const navstack::MethodInfo& method);
 /// navstack's methods with their tunables, the board profiles, the scenario generators, the clocks.
 api::Catalog FarmCatalog();
 
-/// The E-Navi frequency-adapter policy at `path`, or the shipped default when empty. Throws
-/// std::invalid_argument naming the file and field for a missing or corrupt file.
-std::shared_ptr<const navstack::rl::PolicyFile> LoadPolicy(const std::string& path);
-
 /// Builds the configuration for `spec.method` (the registry's) and applies `spec.overrides`.
 /// Throws std::invalid_argument naming an unknown method or override, or an out-of-range value
 /// with its range.

@@ -3,13 +3,11 @@
 #include <cstring>
 
 #include "api/provenance.h"
+#include "navstack/rl/shipped_policy.h"
 #include "navstack/runtime/cost_model.h"
 #include "workers/sim/embree_scene.h"
 
 namespace enavi::sim {
-
-// Generated from navstack/rl/policies/*.json by cmake/EmbedFiles.cmake.
-const std::map<std::string, std::string>& EmbeddedPolicies();
 
 std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spec,
                                                      const board::BoardProfile& board,
@@ -22,10 +20,10 @@ std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spe
   note("git_commit") = api::BuildCommit();
   if (uses_policy) {
     if (spec.policy.empty()) {
-      const auto& files = EmbeddedPolicies();
-      const auto it = files.find("enavi_default.json");
+      const auto& files = navstack::rl::ShippedPolicyFiles();
+      const auto it = files.find(navstack::rl::kShippedPolicyName);
       if (it != files.end()) note("policy_sha256") = api::Sha256Hex(it->second);
-      note("policy") = "shipped enavi_default.json";
+      note("policy") = std::string("shipped ") + navstack::rl::kShippedPolicyName;
     } else {
       note("policy_sha256") = api::Sha256File(spec.policy);
       note("policy") = spec.policy;
