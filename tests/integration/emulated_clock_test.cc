@@ -22,6 +22,7 @@
 #include <thread>
 #include <vector>
 
+#include "tests/integration/suite_calibration.h"
 #include "workers/board/board_profile.h"
 #include "workers/board/calibration_flights.h"
 #include "workers/board/host_calibration.h"
@@ -33,6 +34,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
+using integration::SuiteCalibration;
 
 std::vector<std::string> EnaviCgroups() {
   std::vector<std::string> found;
@@ -394,35 +396,15 @@ std::vector<std::string> OwnEpisodeCgroups() {
   return own;
 }
 
-// The clocks are compared with this host's own calibration: the stored one (`enavi calibrate`)
-// when it is valid here, else one the suite makes (a fresh machine, as in CI) with the same flight
-// plan at kCalibrationSeconds a flight, into a file it owns and removes.
-constexpr double kCalibrationSeconds = 5.0;
-
+// The clocks are compared with this host's own calibration (suite_calibration.h).
 class ClockAgreementTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     if (geteuid() != 0 || emulation::DetectCgroups().version == emulation::CgroupVersion::kNone) return;
-    const board::CalibrationCheck stored = board::CheckHostCalibration(board::CalibrationPath());
-    if (stored.ok()) {
-      calibration_file_ = stored.path;
-      return;
-    }
-    std::printf("no valid stored calibration (%s): calibrating this host, %.0f s flights\n", stored.message.c_str(),
-                kCalibrationSeconds);
-    board::CalibrationOptions options;
-    options.episode_seconds = kCalibrationSeconds;
-    const board::CalibrationRun run = board::RunCalibration(options);
-    own_dir_ = fs::temp_directory_path() / ("enavi-clock-agreement-" + std::to_string(getpid()));
-    fs::create_directories(own_dir_);
-    calibration_file_ = (own_dir_ / "calibration.json").string();
-    board::SaveHostCalibration(run.host, calibration_file_);
-    std::printf("host speed %.3f x the reference core (%d jobs, R^2 %.3f)\n", run.relative_speed, run.fit.samples,
-                run.fit.r2);
+    calibration_ = SuiteCalibration::Make("clock-agreement");
+    calibration_file_ = calibration_.path;
   }
-  static void TearDownTestSuite() {
-    if (!own_dir_.empty()) fs::remove_all(own_dir_);
-  }
+  static void TearDownTestSuite() { calibration_.Remove(); }
 
   void SetUp() override {
     if (geteuid() != 0) GTEST_SKIP() << "the emulated clock needs root (cgroups, SCHED_DEADLINE)";
@@ -438,8 +420,8 @@ class ClockAgreementTest : public ::testing::Test {
   }
 
   EpisodeOptions options_;
+  static inline SuiteCalibration calibration_;
   static inline std::string calibration_file_;
-  static inline fs::path own_dir_;
 };
 
 TEST_F(ClockAgreementTest, FixedOnS1FliesTheSameOnBothClocks) {

@@ -21,8 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/integration/loop_test_util.h"
-#include "workers/board/calibration_flights.h"
-#include "workers/board/host_calibration.h"
+#include "tests/integration/suite_calibration.h"
 #include "workers/emulation/cgroup_layout.h"
 
 namespace enavi::integration {
@@ -100,23 +99,10 @@ class RosBridgeTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     if (geteuid() != 0 || emulation::DetectCgroups().version == emulation::CgroupVersion::kNone) return;
-    const board::CalibrationCheck stored = board::CheckHostCalibration(board::CalibrationPath());
-    if (stored.ok()) {
-      calibration_ = stored.path;
-      return;
-    }
-    std::printf("no valid stored calibration (%s): calibrating this host, 5 s flights\n", stored.message.c_str());
-    board::CalibrationOptions options;
-    options.episode_seconds = 5.0;
-    const board::CalibrationRun run = board::RunCalibration(options);
-    own_ = fs::temp_directory_path() / ("enavi-ros-bridge-test-" + std::to_string(getpid()));
-    fs::create_directories(own_);
-    calibration_ = (own_ / "calibration.json").string();
-    board::SaveHostCalibration(run.host, calibration_);
+    suite_calibration_ = SuiteCalibration::Make("ros-bridge-test");
+    calibration_ = suite_calibration_.path;
   }
-  static void TearDownTestSuite() {
-    if (!own_.empty()) fs::remove_all(own_);
-  }
+  static void TearDownTestSuite() { suite_calibration_.Remove(); }
   void SetUp() override {
     if (geteuid() != 0) GTEST_SKIP() << "the bridge runs stacks on the emulated clock, which needs root (cgroups)";
     const emulation::CgroupLayout layout = emulation::DetectCgroups();
@@ -145,8 +131,8 @@ class RosBridgeTest : public ::testing::Test {
 
   TempDir dir_;
   int stacks_ = 0;
+  static inline SuiteCalibration suite_calibration_;
   static inline std::string calibration_;
-  static inline fs::path own_;
 };
 
 TEST_F(RosBridgeTest, EachCommandTypeFliesTheTestStackToTheGoal) {
