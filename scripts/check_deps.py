@@ -6,11 +6,12 @@
            closure (a target includes only its own headers and those of targets it links), and
            no target outside bench/ links one of bench/;
   depfiles: the compiler's dependency output (*.o.d under the build tree) of every navstack,
-           workers and server object, which also sees headers reached through other headers (a
+           workers, server and ros object, which also sees headers reached through other headers (a
            unity build's object counts for the sources it includes).
 
 bench/ is the top of the tree: its programs may use any layer, server/ included, and no layer
-includes or links bench/ code.
+includes or links bench/ code. ros/ (our navigation methods as a ROS node, built with ROS only)
+sits beside workers/: it may use api/ and navstack/, never workers/, server/ or bench/.
 
 Exits 1 listing each violation as FILE:LINE: rule, 2 on bad arguments, 0 when the tree is clean.
 """
@@ -20,7 +21,7 @@ import os
 import re
 import sys
 
-LAYERS = ("api", "worlds", "navstack", "workers", "server")
+LAYERS = ("api", "worlds", "navstack", "workers", "server", "ros")
 
 # Third-party headers a layer must never see, by the include path's first component (sources)
 # or by a directory in the resolved path (depfiles).
@@ -46,6 +47,8 @@ FORBIDDEN = {
     "workers": [(re.compile(r"^(server|bench)/"), "workers includes server/ or bench/")],
     # bench/ sits above server/: its programs measure server code too (ingest, the dashboard).
     "server": [(re.compile(r"^bench/"), "server includes bench/")],
+    # Our ROS node runs a method as a user's stack would: on navstack and api, nothing of the farm's.
+    "ros": [(re.compile(r"^(workers|server|bench)/"), "ros includes workers/, server/ or bench/")],
 }
 
 # The generated file a CMake unity build compiles in place of a target's sources.
@@ -215,7 +218,7 @@ def check_depfile(path, source_root, build_root):
                     if p.endswith((".cc", ".cpp")))
         rel_source = next((r for r in included if layer_of(r)), rel_source)
     layer = layer_of(rel_source)
-    if layer not in ("navstack", "workers", "server"):
+    if layer not in ("navstack", "workers", "server", "ros"):
         return []
     problems = []
     for p in resolved[1:]:
@@ -231,6 +234,8 @@ def check_depfile(path, source_root, build_root):
                 problems.append(f"{rel_source}: navstack depends on {rel}")
             elif layer == "workers" and dep_layer == "server":
                 problems.append(f"{rel_source}: workers depends on {rel}")
+            elif layer == "ros" and dep_layer in ("workers", "server"):
+                problems.append(f"{rel_source}: ros depends on {rel}")
             elif layer == "navstack" and rel == "api/dds.h":
                 problems.append(f"{rel_source}: navstack depends on the Cyclone DDS wrapper {rel}")
         elif layer == "navstack":

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """scripts/check_deps.py fails on a planted upward include in a navstack probe (and on a server
-probe that includes bench/, the top layer) and passes on a clean one, through both of its
+probe that includes bench/, the top layer, and on a ros probe that includes workers/ or server/)
+and passes on a clean one, through both of its
 routes: the source scan and the compiler's dependency output (the probe is run through the
 compiler with -M, as the build does with -MD), the latter also with the probe compiled through a
 generated file that includes it, as in a unity build.
@@ -14,7 +15,7 @@ import subprocess
 import sys
 import tempfile
 
-LAYERS = ("api", "worlds", "navstack", "workers", "server", "bench")  # the folders a probe tree links in
+LAYERS = ("api", "worlds", "navstack", "workers", "server", "bench", "ros")  # the folders a probe tree links in
 
 
 def make_tree(root, repo, probe_text, probe_layer):
@@ -91,6 +92,10 @@ def main():
         # bench/ is the top layer: the CLI's bench cores live in server/bench, not bench/.
         ("server", '#include "bench/farm/farm_processes.h"\n', 1, "bench/farm/farm_processes.h"),
         ("server", '#include "server/bench/raycast_bench.h"\n#include "workers/sim/episode.h"\n', 0, "clean"),
+        # Our ROS node (ros/) uses navstack and api only: not the farm's workers or server.
+        ("ros", '#include "workers/sim/episode.h"\n', 1, "workers/sim/episode.h"),
+        ("ros", '#include "server/cli/commands.h"\n', 1, "server/cli/commands.h"),
+        ("ros", '#include "navstack/runtime/time_source.h"\n#include "api/ros_stack.h"\n', 0, "clean"),
     ]
     failures = []
     routes = (("sources", False), ("depfiles", False), ("unity", True))
