@@ -1,14 +1,13 @@
 #include "workers/sim/episode_config.h"
 
 #include <algorithm>
-#include <cmath>
 #include <functional>
-#include <map>
-#include <memory>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
+#include "navstack/methods/method_config.h"
 #include "navstack/methods/registry.h"
-#include "navstack/planning/planner_options.h"
 #include "navstack/rl/shipped_policy.h"
 #include "workers/board/board_profile.h"
 #include "workers/sim/episode.h"
@@ -23,65 +22,26 @@ struct Setter {
   std::function<void(EpisodeConfig&, double)> set;
 };
 
-const std::vector<Setter>& Setters() {
+// The simulator's own tunables (the depth stream it renders); the stack's are navstack's
+// (navstack/methods/method_config.h).
+const std::vector<Setter>& CameraSetters() {
   static const std::vector<Setter> setters = {
-      {{"planner.v_max", 0.2, 10.0, 2.0, false, "maximum speed, m/s"},
-       [](EpisodeConfig& c, double v) { c.nav.planner.v_max = v; }},
-      {{"planner.a_max", 0.5, 20.0, 3.0, false, "maximum acceleration, m/s^2"},
-       [](EpisodeConfig& c, double v) { c.nav.planner.a_max = v; }},
-      {{"planner.yaw_rate_max", 0.1, 100.0, navstack::PlannerOptions{}.yaw_rate_max, false, "heading rate limit, rad/s"},
-       [](EpisodeConfig& c, double v) { c.nav.planner.yaw_rate_max = v; }},
-      {{"planner.yaw_accel_max", 0.1, 1000.0, navstack::PlannerOptions{}.yaw_accel_max, false,
-        "heading acceleration limit, rad/s^2 (1000: about none, as in Ego-Planner's traj_server)"},
-       [](EpisodeConfig& c, double v) { c.nav.planner.yaw_accel_max = v; }},
-      {{"planner.robot_radius", 0.1, 2.0, 0.3, false, "obstacle inflation radius, m"},
-       [](EpisodeConfig& c, double v) { c.nav.planner.robot_radius = v; }},
-      {{"planner.optimizer", 0, 1, 0, true, "0: ESDF optimiser (fixed, enavi), 1: Ego-Planner's rebound (baseline); default: the method's"},
-       [](EpisodeConfig& c, double v) {
-         c.nav.planner.optimizer = v > 0 ? navstack::PlannerOptimizer::kRebound : navstack::PlannerOptimizer::kEsdf;
-       }},
-      {{"perception.stride", 1, 64, 2, true, "depth pixel stride for mapping"},
-       [](EpisodeConfig& c, double v) { c.nav.perception.stride = static_cast<int>(v); }},
-      {{"perception.max_range", 1.0, 10.0, 5.0, false, "mapping range, m"},
-       [](EpisodeConfig& c, double v) { c.nav.perception.max_range = v; }},
       {{"camera.decimation", 1, 8, 2, true, "depth stream: the 640x480 sensor decimated n x n (2: 320x240); perception.stride counts its pixels"},
        [](EpisodeConfig& c, double v) {
          c.nav.camera = navstack::CameraIntrinsics::Default().Decimated(static_cast<int>(v));
        }},
       {{"camera.noise_k", 0.0, 0.05, 0.0, false, "depth noise sigma = k d^2, 1/m"},
        [](EpisodeConfig& c, double v) { c.noise.k = v; }},
-      {{"sched.threads", 0, 64, 0, true, "threads the jobs run on (0: the method's default; capped at the board's cores)"},
-       [](EpisodeConfig& c, double v) {
-         if (v > 0) c.scheduler.threads = static_cast<int>(v);
-       }},
-      {{"sched.global_edf", 0, 1, 0, true, "1: preemptive global EDF, 0: FIFO without preemption"},
-       [](EpisodeConfig& c, double v) {
-         c.scheduler.policy = v > 0 ? navstack::SchedulingPolicy::kGlobalEdf
-                                    : navstack::SchedulingPolicy::kFifoNonPreemptive;
-       }},
   };
   return setters;
-}
-
-std::string Known(const navstack::MethodInfo& method) {
-  std::string known;
-  for (const Tunable& t : TunablesFor(method)) known += (known.empty() ? "" : ", ") + t.name;
-  return known;
-}
-
-void CheckRange(const Tunable& t, double value) {
-  if (!std::isfinite(value) || value < t.min || value > t.max || (t.integer && value != std::floor(value)))
-    throw std::invalid_argument("overrides." + t.name + ": " + std::to_string(value) + " is outside [" +
-                                std::to_string(t.min) + ", " + std::to_string(t.max) + "]" +
-                                (t.integer ? " or not an integer" : ""));
 }
 
 }  // namespace
 
 const std::vector<Tunable>& CommonTunables() {
   static const std::vector<Tunable> list = [] {
-    std::vector<Tunable> out;
-    for (const auto& s : Setters()) out.push_back(s.tunable);
+    std::vector<Tunable> out = navstack::StackTunables();
+    for (const auto& s : CameraSetters()) out.push_back(s.tunable);
     return out;
   }();
   return list;
@@ -131,24 +91,27 @@ EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
   navstack::MethodSetup setup;
   setup.seed = spec.seed;
   if (method.uses_policy) setup.policy = navstack::rl::LoadPolicyOrShipped(spec.policy);
-  navstack::ConfigureMethod(method, setup, &config.nav);
-  config.scheduler = {method.scheduler.policy, method.scheduler.threads};
+  navstack::MethodConfig stack = navstack::ConfigureMethodDefaults(method, setup);
+  // The camera's overrides set what the stack's leave alone (nav.camera, noise): applied last.
+  std::vector<std::pair<const Setter*, double>> camera;
   for (const auto& [name, value] : spec.overrides) {
-    const auto common = std::find_if(Setters().begin(), Setters().end(),
-                                     [&name = name](const Setter& s) { return s.tunable.name == name; });
-    if (common != Setters().end()) {
-      CheckRange(common->tunable, value);
-      common->set(config, value);
-      continue;
+    const auto it = std::find_if(CameraSetters().begin(), CameraSetters().end(),
+                                 [&name = name](const Setter& s) { return s.tunable.name == name; });
+    try {
+      if (it != CameraSetters().end()) {
+        navstack::CheckTunableRange(it->tunable, value);
+        camera.emplace_back(&*it, value);
+      } else if (!navstack::ApplyOverride(name, value, &stack)) {
+        throw std::invalid_argument(name + ": unknown parameter for method " + method.name +
+                                    " (known: " + navstack::TunableNames(TunablesFor(method)) + ")");
+      }
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("overrides.") + e.what());
     }
-    const auto own = std::find_if(method.tunables.begin(), method.tunables.end(),
-                                  [&name = name](const Tunable& t) { return t.name == name; });
-    if (own == method.tunables.end())
-      throw std::invalid_argument("overrides." + name + ": unknown parameter for method " + method.name +
-                                  " (known: " + Known(method) + ")");
-    CheckRange(*own, value);
-    config.nav.params[name] = value;
   }
+  config.nav = std::move(stack.nav);
+  config.scheduler = stack.scheduler;
+  for (const auto& [setter, value] : camera) setter->set(config, value);
   return config;
 }
 

@@ -13,13 +13,9 @@
 
 namespace enavi::sim {
 
-/// How the stack's jobs are scheduled on the board.
-struct SchedulerConfig {
-  navstack::SchedulingPolicy policy = navstack::SchedulingPolicy::kGlobalEdf;
-  /// Threads the jobs may use: 0 = all board cores (E-Navi's global EDF); the baseline's ROS
-  /// node runs its callbacks on one spinner thread.
-  int threads = 0;
-};
+/// How the stack's jobs are scheduled on the board: threads 0 = all board cores (E-Navi's global
+/// EDF); the baseline's ROS node runs its callbacks on one spinner thread.
+using SchedulerConfig = navstack::MethodScheduler;
 
 struct EpisodeConfig {
   const navstack::MethodInfo* method = nullptr;  ///< from the registry
@@ -30,7 +26,8 @@ struct EpisodeConfig {
 
 /// One overridable parameter: its name in job specs, allowed range, and what it sets.
 using Tunable = navstack::MethodTunable;
-/// The tunables every method accepts (planner, perception, camera, scheduler).
+/// The tunables every method accepts: the stack's (navstack::StackTunables: planner, perception,
+/// scheduler), then the simulator's camera.*.
 const std::vector<Tunable>& CommonTunables();
 /// Every tunable a spec for `method` may override: the common ones, then the method's own.
 std::vector<Tunable> TunablesFor(const navstack::MethodInfo& method);

@@ -2,12 +2,15 @@
 // generators; clocks: sim::Clocks(); methods: navstack's), and job validation and the episode
 // runner read the same lists: every registered name is accepted, every other name is refused
 // with the registered ones in the message.
+#include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "api/job_spec.h"
+#include "navstack/methods/method_config.h"
 #include "workers/sim/episode.h"
 #include "workers/sim/episode_config.h"
 
@@ -54,6 +57,48 @@ TEST(FarmCatalogTest, TheHeadingLimitsAreTunablesThatReachThePlanner) {
     EXPECT_EQ(c.nav.planner.yaw_rate_max, 3.14) << method;
     EXPECT_EQ(c.nav.planner.yaw_accel_max, 1000.0) << method;
   }
+}
+
+// The stack's tunables are navstack's (navstack/methods/method_config.h), the camera's the
+// simulator's; a spec's overrides reach both, and a bad one is refused naming it under overrides.
+TEST(FarmCatalogTest, OverridesReachTheStackAndTheCameraAndABadOneIsRefusedNamingIt) {
+  std::vector<std::string> names;
+  for (const Tunable& t : CommonTunables()) names.push_back(t.name);
+  const std::vector<std::string> stack_and_camera = [] {
+    std::vector<std::string> out;
+    for (const navstack::MethodTunable& t : navstack::StackTunables()) out.push_back(t.name);
+    out.push_back("camera.decimation");
+    out.push_back("camera.noise_k");
+    return out;
+  }();
+  EXPECT_EQ(names, stack_and_camera);
+
+  api::EpisodeSpec spec;
+  spec.method = "fixed";
+  spec.overrides = {{"camera.decimation", 4}, {"camera.noise_k", 0.01}, {"planner.v_max", 1.5}, {"sched.threads", 2},
+                    {"rates.f_per", 20}};
+  const EpisodeConfig c = MakeEpisodeConfig(spec);
+  EXPECT_EQ(c.nav.camera.width, 160);
+  EXPECT_EQ(c.noise.k, 0.01);
+  EXPECT_EQ(c.nav.planner.v_max, 1.5);
+  EXPECT_EQ(c.scheduler.threads, 2);
+  EXPECT_EQ(c.nav.params.at("rates.f_per"), 20.0);
+
+  auto refusal = [&spec](const std::map<std::string, double>& overrides) {
+    spec.overrides = overrides;
+    try {
+      MakeEpisodeConfig(spec);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal({{"camera.noise_k", 0.1}}), "overrides.camera.noise_k: 0.1 is outside [0, 0.05]");
+  EXPECT_EQ(refusal({{"planner.v_max", 20}}), "overrides.planner.v_max: 20 is outside [0.2, 10]");
+  const std::string unknown = refusal({{"ego.fsm_hz", 10}});
+  EXPECT_EQ(unknown.rfind("overrides.ego.fsm_hz: unknown parameter for method fixed (known: planner.v_max", 0), 0u)
+      << unknown;
+  EXPECT_NE(unknown.find("camera.noise_k"), std::string::npos) << unknown;
 }
 
 TEST(FarmCatalogTest, UnknownNamesAreRefusedWithTheRegisteredOnes) {
