@@ -1,10 +1,9 @@
-// E-Navi Farm dashboard: one page, hash routes, reads the same JSON API as any script.
-// Everything a user or a job spec named (job names, labels, reasons) is put into the page as
-// text nodes, never as HTML, so a hostile name shows as the characters it is.
+// E-Navi Farm dashboard: one page, hash routes, reads the same JSON API as any script; the
+// charts are plots.js's (Chart.js). Everything a user or a job spec named (job names, labels,
+// reasons, methods) is put into the page as text nodes, never as HTML, so a hostile name shows as
+// the characters it is.
 'use strict';
 
-const SVG_NS = 'http://www.w3.org/2000/svg';
-const COLORS = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b', '#e377c2', '#17becf'];
 let info = {metric_rules: {}};
 let timer = null;
 
@@ -24,19 +23,7 @@ function el(tag, attrs, ...children) {
   return node;
 }
 
-function svg(tag, attrs, text) {
-  const node = document.createElementNS(SVG_NS, tag);
-  for (const [k, v] of Object.entries(attrs || {})) node.setAttribute(k, v);
-  if (text !== undefined) node.textContent = String(text);
-  return node;
-}
-
-function fmt(v, digits) {
-  if (v === null || v === undefined || Number.isNaN(v)) return '–';
-  if (typeof v !== 'number') return String(v);
-  const d = digits === undefined ? (Math.abs(v) >= 100 ? 1 : Math.abs(v) >= 1 ? 2 : 3) : digits;
-  return v.toFixed(d);
-}
+const fmt = Plots.fmt;
 
 function duration(s) {
   if (s === undefined || s < 0) return '?';
@@ -58,9 +45,19 @@ async function api(path) {
   return body;
 }
 
+// Replaces box's content, its charts with it: the old ones are destroyed, the new ones drawn.
+function fill(box, ...nodes) {
+  for (const c of box.querySelectorAll('canvas.chart')) {
+    const chart = Chart.getChart(c);
+    if (chart) chart.destroy();
+  }
+  box.replaceChildren(...nodes);
+  Plots.mount(box);
+}
+
 function show(...nodes) {
-  const main = document.getElementById('main');
-  main.replaceChildren(...nodes);
+  Plots.destroyAll();
+  fill(document.getElementById('main'), ...nodes);
 }
 
 function showError(e) {
@@ -84,126 +81,6 @@ function selectOf(name, options, selected) {
 function table(headers, rows) {
   return el('table', {}, el('thead', {}, el('tr', {}, headers.map(h => el('th', {}, h)))),
             el('tbody', {}, rows));
-}
-
-// ---------------------------------------------------------------- charts (SVG)
-
-function niceTicks(lo, hi, count) {
-  if (!(hi > lo)) { hi = lo + 1; }
-  const step0 = (hi - lo) / count;
-  const mag = Math.pow(10, Math.floor(Math.log10(step0)));
-  const step = [1, 2, 5, 10].map(m => m * mag).find(s => s >= step0);
-  const ticks = [];
-  for (let t = Math.ceil(lo / step) * step; t <= hi + 1e-9 * step; t += step) ticks.push(t);
-  return ticks;
-}
-
-function frame(title, width, height, xr, yr, ylabel) {
-  const m = {l: 52, r: 12, t: 22, b: 28};
-  const root = svg('svg', {class: 'chart', width, height, viewBox: `0 0 ${width} ${height}`});
-  root.appendChild(svg('text', {x: m.l, y: 14, 'font-weight': 'bold'}, ylabel ? `${title} (${ylabel})` : title));
-  const sx = x => m.l + (x - xr[0]) / (xr[1] - xr[0] || 1) * (width - m.l - m.r);
-  const sy = y => height - m.b - (y - yr[0]) / (yr[1] - yr[0] || 1) * (height - m.t - m.b);
-  for (const t of niceTicks(yr[0], yr[1], 4)) {
-    root.appendChild(svg('line', {x1: m.l, x2: width - m.r, y1: sy(t), y2: sy(t), stroke: '#eee'}));
-    root.appendChild(svg('text', {x: m.l - 4, y: sy(t) + 4, 'text-anchor': 'end'}, fmt(t)));
-  }
-  root.appendChild(svg('line', {x1: m.l, x2: m.l, y1: m.t, y2: height - m.b, stroke: '#999'}));
-  root.appendChild(svg('line', {x1: m.l, x2: width - m.r, y1: height - m.b, y2: height - m.b, stroke: '#999'}));
-  return {root, sx, sy, m, width, height};
-}
-
-function range(values, pad) {
-  let lo = Infinity, hi = -Infinity;
-  for (const v of values) { if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); } }
-  if (!Number.isFinite(lo)) return [0, 1];
-  if (hi === lo) { hi += Math.abs(hi) * 0.1 || 1; lo -= Math.abs(lo) * 0.1 || 0; }
-  const p = (hi - lo) * (pad || 0.05);
-  return [lo - p, hi + p];
-}
-
-// Time series: lines (optionally steps), event markers on the time axis.
-function lineChart({title, series, events, width = 560, height = 180, ylabel, xlabel = 't (s)', xIntegers = false}) {
-  const xs = series.flatMap(s => s.x);
-  const ys = series.flatMap(s => s.err ? s.y.flatMap((y, k) => [y - (s.err[k] || 0), y + (s.err[k] || 0)]) : s.y);
-  const f = frame(title, width, height, range(xs, 0), range(ys), ylabel);
-  for (const t of niceTicks(range(xs, 0)[0], range(xs, 0)[1], 6)) {
-    if (xIntegers && Math.abs(t - Math.round(t)) > 1e-9) continue;
-    f.root.appendChild(svg('text', {x: f.sx(t), y: height - 10, 'text-anchor': 'middle'}, xIntegers ? String(Math.round(t)) : fmt(t)));
-  }
-  f.root.appendChild(svg('text', {x: width - f.m.r, y: height - 2, 'text-anchor': 'end', fill: '#777'}, xlabel));
-  for (const e of events || []) {
-    const line = svg('line', {class: 'mark event ' + e.kind, x1: f.sx(e.t), x2: f.sx(e.t), y1: f.m.t,
-                              y2: height - f.m.b, stroke: e.kind.includes('collision') ? '#d62728' : '#bbb',
-                              'stroke-dasharray': '2,2'});
-    line.appendChild(svg('title', {}, `${fmt(e.t)} s ${e.kind} ${e.detail || ''}`));
-    f.root.appendChild(line);
-  }
-  series.forEach((s, i) => {
-    let d = '';
-    for (let k = 0; k < s.x.length; k++) {
-      const x = f.sx(s.x[k]), y = f.sy(s.y[k]);
-      if (k === 0) d += `M${x},${y}`;
-      else d += s.step ? `H${x}V${y}` : `L${x},${y}`;
-    }
-    const color = s.color || COLORS[i % COLORS.length];
-    f.root.appendChild(svg('path', {class: 'mark', d, fill: 'none', stroke: color, 'stroke-width': 1.5}));
-    // Error bars (s.err: half-widths, null where unknown).
-    (s.err || []).forEach((e, k) => {
-      if (e === null || e === undefined) return;
-      const x = f.sx(s.x[k]);
-      f.root.appendChild(svg('path', {class: 'mark ci', stroke: color, 'stroke-width': 1,
-                                      d: `M${x - 4},${f.sy(s.y[k] + e)}H${x + 4}M${x},${f.sy(s.y[k] + e)}` +
-                                         `V${f.sy(s.y[k] - e)}M${x - 4},${f.sy(s.y[k] - e)}H${x + 4}`}));
-    });
-    f.root.appendChild(svg('text', {x: f.m.l + 8 + 90 * i, y: f.m.t + 10, fill: color}, s.name));
-  });
-  return f.root;
-}
-
-// Spread over seeds: per group (board x scenario) and method, min-max whisker, mean +- std box,
-// mean dot.
-function spreadChart({title, groups, methods, width = 560, height = 200, ylabel}) {
-  const values = groups.flatMap(g => methods.flatMap(m => g.stats[m] ? [g.stats[m].min, g.stats[m].max,
-                                                        g.stats[m].mean - g.stats[m].std, g.stats[m].mean + g.stats[m].std] : []));
-  const f = frame(title, width, height, [0, groups.length], range(values), ylabel);
-  const slot = (width - f.m.l - f.m.r) / Math.max(groups.length, 1);
-  groups.forEach((g, gi) => {
-    f.root.appendChild(svg('text', {x: f.sx(gi + 0.5), y: height - 10, 'text-anchor': 'middle'}, g.label));
-    methods.forEach((m, mi) => {
-      const st = g.stats[m];
-      if (!st) return;
-      const x = f.sx(gi) + slot * (mi + 1) / (methods.length + 1);
-      const color = COLORS[mi % COLORS.length];
-      f.root.appendChild(svg('line', {class: 'mark', x1: x, x2: x, y1: f.sy(st.min), y2: f.sy(st.max), stroke: color}));
-      const top = f.sy(st.mean + st.std), bottom = f.sy(st.mean - st.std);
-      f.root.appendChild(svg('rect', {class: 'mark', x: x - 5, width: 10, y: top, height: Math.max(1, bottom - top),
-                                      fill: color, 'fill-opacity': 0.3, stroke: color}));
-      const dot = svg('circle', {class: 'mark', cx: x, cy: f.sy(st.mean), r: 3, fill: color});
-      dot.appendChild(svg('title', {}, `${m} ${g.label}: mean ${fmt(st.mean)}, std ${fmt(st.std)}, ` +
-                                       `min ${fmt(st.min)}, max ${fmt(st.max)}, n ${st.n}`));
-      f.root.appendChild(dot);
-    });
-  });
-  methods.forEach((m, mi) => f.root.appendChild(
-      svg('text', {x: f.m.l + 8 + 90 * mi, y: f.m.t + 10, fill: COLORS[mi % COLORS.length]}, m)));
-  return f.root;
-}
-
-// Two flights from above, on the same axes.
-function pathsChart({title, paths, width = 420, height = 420}) {
-  const xs = paths.flatMap(p => p.x), ys = paths.flatMap(p => p.y);
-  let xr = range(xs), yr = range(ys);
-  const span = Math.max(xr[1] - xr[0], yr[1] - yr[0]);  // equal scale on both axes
-  xr = [(xr[0] + xr[1] - span) / 2, (xr[0] + xr[1] + span) / 2];
-  yr = [(yr[0] + yr[1] - span) / 2, (yr[0] + yr[1] + span) / 2];
-  const f = frame(title, width, height, xr, yr);
-  paths.forEach((p, i) => {
-    const d = p.x.map((x, k) => (k ? 'L' : 'M') + f.sx(x) + ',' + f.sy(p.y[k])).join('');
-    f.root.appendChild(svg('path', {class: 'mark', d, fill: 'none', stroke: p.color || COLORS[i], 'stroke-width': 2}));
-    f.root.appendChild(svg('text', {x: f.m.l + 8 + 160 * i, y: f.m.t + 10, fill: p.color || COLORS[i]}, p.name));
-  });
-  return f.root;
 }
 
 // ---------------------------------------------------------------- pages
@@ -288,16 +165,15 @@ async function jobPage(id) {
         const st = statOf(c, m);
         return el('td', {class: 'num'}, st ? fmt(st.mean) + (st.n > 1 ? ' ± ' + fmt(st.std) : '') : '–');
       })));
-  // Charts: per board x scenario, each method's spread over seeds.
-  const groupsKey = [...new Set(cells.map(c => c.board + ' ' + c.scenario))];
+  // Charts: per board x scenario, each method's spread over seeds (methods: whatever the job flew).
+  const groups = [...new Set(cells.map(c => c.board + ' ' + c.scenario))];
   const methods = [...new Set(cells.map(c => c.method))];
-  const charts = ruled.map(m => spreadChart({
+  const cellOf = new Map(cells.map(c => [`${c.board} ${c.scenario}\n${c.method}`, c]));
+  const charts = ruled.map(m => Plots.spread({
     title: m + (rules[m] && rules[m].success_only ? ' (successful flights)' : '') +
            (rules[m] ? ` — ${rules[m].direction} is better` : ''),
-    methods,
-    groups: groupsKey.map(g => ({label: g, stats: Object.fromEntries(cells.filter(c => c.board + ' ' + c.scenario === g)
-                                                                       .filter(c => statOf(c, m))
-                                                                       .map(c => [c.method, statOf(c, m)]))}))
+    groups, methods,
+    stats: (g, method) => { const c = cellOf.get(`${g}\n${method}`); return c ? statOf(c, m) || null : null; },
   }));
   const frows = failures.failures.map(f => el('tr', {},
       el('td', {}, f.state === 'failed' ? f.episode_id : link('#/episode/' + f.episode_id, f.episode_id)),
@@ -306,35 +182,73 @@ async function jobPage(id) {
   const other = rest.map(m => el('tr', {}, el('td', {}, m),
       cells.map(c => el('td', {class: 'num'}, c.metrics[m] ? fmt(c.metrics[m].mean) : '–'))));
   const results = el('div', {id: 'results'});
+  const overlayPick = pickTwo();
   show(el('h1', {}, 'Job ', el('span', {class: 'job-name'}, job.name), ' ', el('span', {class: 'muted'}, job.id)),
        el('p', {}, labelsOf(job.labels), ' ', job.state, ' ', progressBar(job), ` ${job.done}/${job.total} done`,
           job.failed ? `, ${job.failed} failed` : '', job.state === 'running' ? `, ETA ${duration(job.eta_s)}` : ''),
        el('p', {class: 'muted'}, provenanceText(job.provenance || {})),
        el('h2', {}, 'Summary'), table(header, rows),
-       el('h2', {}, 'Spread over seeds'), el('div', {class: 'charts'}, charts),
+       el('h2', {}, 'Spread over seeds'),
+       el('p', {class: 'muted'}, 'per board x scenario and method: whisker min–max, box mean ± std, dot the mean; ' +
+                                 'hover a group for its numbers, click a legend entry to hide a method'),
+       el('div', {class: 'charts'}, charts),
        el('h2', {}, 'Failures and unsuccessful flights'),
        frows.length ? table(['episode', 'board', 'scenario', 'method', 'seed', 'state', 'reason'], frows)
                     : el('p', {class: 'muted'}, 'none'),
-       el('h2', {}, 'Episodes'), results,
+       el('h2', {}, 'Episodes'), overlayPick.note, results,
        el('h2', {}, 'Other metrics (mean)'),
        table(['metric'].concat(cells.map(c => `${c.board} ${c.scenario} ${c.method}`)), other));
-  await resultsPager(id, results, 0);
+  await resultsPager(id, results, 0, overlayPick);
   if (job.state === 'running') timer = setTimeout(route, 3000);
 }
 
-async function resultsPager(id, box, offset) {
+// Two flights ticked in the episode list (on any of its pages, or the same flight's other
+// method) open on one set of charts: the overlay page.
+function pickTwo() {
+  const chosen = [];
+  const note = el('p', {id: 'overlay-pick', class: 'muted'});
+  const update = () => {
+    if (chosen.length < 2) {
+      note.replaceChildren(`tick two episodes to overlay their flights (${chosen.length} ticked)`);
+    } else {
+      note.replaceChildren(link(`#/overlay?a=${encodeURIComponent(chosen[0])}&b=${encodeURIComponent(chosen[1])}`,
+                                `overlay ${chosen[0]} and ${chosen[1]}`));
+    }
+  };
+  const box = id => {
+    const input = el('input', {type: 'checkbox', class: 'pick', 'data-episode': id, title: 'overlay this flight'});
+    input.checked = chosen.includes(id);
+    input.onchange = () => {
+      const at = chosen.indexOf(id);
+      if (at >= 0) chosen.splice(at, 1);
+      if (input.checked) chosen.push(id);
+      // A third tick replaces the oldest.
+      while (chosen.length > 2) {
+        const dropped = chosen.shift();
+        document.querySelectorAll(`input.pick[data-episode="${dropped}"]`).forEach(n => { n.checked = false; });
+      }
+      update();
+    };
+    return input;
+  };
+  update();
+  return {note, box};
+}
+
+async function resultsPager(id, box, offset, pick) {
   const limit = 50;
   const page = await api(`/api/jobs/${id}/results?offset=${offset}&limit=${limit}`);
   const rows = page.results.map(r => el('tr', {},
+      el('td', {}, pick.box(r.episode_id)),
       el('td', {}, link('#/episode/' + r.episode_id, r.episode_id)), el('td', {}, r.board), el('td', {}, r.scenario),
       el('td', {}, r.method), el('td', {class: 'num'}, r.seed), el('td', {}, r.end_reason),
       el('td', {class: 'num'}, fmt(r.flight_time_s)), el('td', {class: 'num'}, fmt(r.nav_cpu_util_pct)),
       el('td', {}, r.worker_host || r.worker)));
   const pager = el('div', {class: 'pager'},
-      el('button', {onclick: () => resultsPager(id, box, Math.max(0, offset - limit))}, 'previous'),
-      el('button', {onclick: () => { if (offset + limit < page.total) resultsPager(id, box, offset + limit); }}, 'next'),
+      el('button', {onclick: () => resultsPager(id, box, Math.max(0, offset - limit), pick)}, 'previous'),
+      el('button', {onclick: () => { if (offset + limit < page.total) resultsPager(id, box, offset + limit, pick); }}, 'next'),
       `${page.total ? offset + 1 : 0}–${Math.min(offset + limit, page.total)} of ${page.total}`);
-  box.replaceChildren(pager, table(['episode', 'board', 'scenario', 'method', 'seed', 'end', 'flight time s',
+  box.replaceChildren(pager, table(['overlay', 'episode', 'board', 'scenario', 'method', 'seed', 'end', 'flight time s',
                                     'nav CPU %', 'host'], rows));
 }
 
@@ -342,8 +256,43 @@ function speedOf(series) {
   return series.velocity.map(v => Math.hypot(v[0], v[1], v[2]));
 }
 
+// A flight's time series as the episode and overlay pages chart them: a chart per panel, a line
+// per column (the overlay: a chart per column, a line per flight).
+const PANELS = [
+  {title: 'speed', unit: 'm/s', columns: [{name: '|v|', of: speedOf}]},
+  {title: 'navigation CPU', unit: '% of a core', columns: [{name: 'nav', of: s => s.utilisation}]},
+  {title: 'eci', columns: [{name: 'eci', of: s => s.eci}]},
+  {title: 'task frequencies', unit: 'Hz', columns: [{name: 'f_per', of: s => s.f_per, step: true},
+                                                    {name: 'f_col', of: s => s.f_col, step: true},
+                                                    {name: 'f_dif', of: s => s.f_dif, step: true}]},
+  {title: 'map resolution', unit: 'm', columns: [{name: 'res', of: s => s.res, step: true}]},
+];
+
+const ZOOM_HINT = 'drag across a chart to zoom in time (the flight\'s other charts follow), double-click to zoom out; ' +
+                  'hover for the values';
+
+// The job an episode belongs to: episode ids are JOB-INDEX.
+function jobOfEpisode(id) { return id.replace(/-[0-9]+$/, ''); }
+
+// Another flight to overlay on this one: the same board and world in this job, the same seed
+// first (the other methods' flight: baseline vs E-Navi), or any episode id typed (another job's:
+// before vs after a commit).
+function overlayChooser(id, r, episodes) {
+  const others = episodes.filter(e => e.id !== id && e.state === 'done' && e.board === r.spec.board && e.world === r.spec.world)
+                         .sort((p, q) => (p.seed !== r.spec.seed) - (q.seed !== r.spec.seed) || p.seed - q.seed ||
+                                         String(p.method).localeCompare(q.method));
+  const pick = selectOf('b', others.map(e => [e.id, `${e.method} seed ${e.seed} (${e.id})`]), others.length ? others[0].id : '');
+  const typed = el('input', {type: 'text', name: 'other', placeholder: 'or any episode id'});
+  return el('form', {id: 'overlay-with', class: 'inline', onsubmit: ev => {
+    ev.preventDefault();
+    const b = typed.value.trim() || pick.value;
+    if (b) location.hash = `#/overlay?a=${encodeURIComponent(id)}&b=${encodeURIComponent(b)}`;
+  }}, 'overlay with', others.length ? pick : '', typed, el('button', {type: 'submit'}, 'overlay'));
+}
+
 async function episodePage(id) {
-  const r = await api('/api/episodes/' + id + '/result');
+  const [r, episodes] = await Promise.all([api('/api/episodes/' + id + '/result'),
+                                           api(`/api/jobs/${jobOfEpisode(id)}/episodes`).catch(() => [])]);
   const s = r.series;
   const events = r.events || [];
   const img = el('img', {class: 'topdown', alt: 'bird\'s-eye view', src: `/api/episodes/${id}/topdown.png`});
@@ -354,50 +303,153 @@ async function episodePage(id) {
                  ['path m', fmt(r.path_length_m)], ['nav CPU %', fmt(r.nav_cpu_util_pct)],
                  ['velocity std m/s', fmt(r.velocity_std_mps)], ['deadline misses', r.deadline_misses]];
   const notes = Object.entries(r.notes || {}).filter(([k]) => k.startsWith('provenance.'));
-  const charts = [
-    lineChart({title: 'speed', ylabel: 'm/s', series: [{name: '|v|', x: s.t, y: speedOf(s)}], events}),
-    lineChart({title: 'navigation CPU', ylabel: '% of a core', series: [{name: 'nav', x: s.t, y: s.utilisation}], events}),
-    lineChart({title: 'eci', series: [{name: 'eci', x: s.t, y: s.eci}], events}),
-    lineChart({title: 'task frequencies', ylabel: 'Hz', events, series: [
-      {name: 'f_per', x: s.t, y: s.f_per, step: true}, {name: 'f_col', x: s.t, y: s.f_col, step: true},
-      {name: 'f_dif', x: s.t, y: s.f_dif, step: true}]}),
-    lineChart({title: 'map resolution', ylabel: 'm', series: [{name: 'res', x: s.t, y: s.res, step: true}], events}),
-  ];
+  const charts = PANELS.map(p => Plots.timeSeries({
+    title: p.title, unit: p.unit, events, group: 'episode',
+    series: p.columns.map(c => ({name: c.name, x: s.t, y: c.of(s), step: c.step}))}));
   const evRows = events.slice(0, 300).map(e => el('tr', {}, el('td', {class: 'num'}, fmt(e.t)), el('td', {}, e.kind),
                                                   el('td', {}, e.detail)));
   show(el('h1', {}, 'Episode ', id),
        table(facts.map(f => f[0]), [el('tr', {}, facts.map(f => el('td', {}, f[1])))]),
        notes.length ? table(['provenance', 'value'], notes.map(([k, v]) => el('tr', {}, el('td', {}, k.slice(11)), el('td', {}, v))))
                     : el('p', {class: 'muted'}, 'no provenance notes in this result'),
+       overlayChooser(id, r, episodes),
        el('h2', {}, 'Bird\'s-eye view (path coloured by eci)'), imgBox,
-       el('h2', {}, 'Over time (dashed lines: events)'), el('div', {class: 'charts'}, charts),
+       el('h2', {}, 'Over time (dashed lines: events)'), el('p', {class: 'muted'}, ZOOM_HINT),
+       el('div', {class: 'charts'}, charts),
        el('h2', {}, 'Events'), table(['t s', 'kind', 'detail'], evRows));
 }
 
-const VERDICT_RANK = {regression: 4, improvement: 3, change: 2, insignificant: 1, too_few_pairs: 1, same: 0};
+// What tells two flights apart in a legend: what differs between them of job, method, board,
+// world and seed.
+function flightNames(ids, results) {
+  const fields = [['job', (r, id) => jobOfEpisode(id)], ['method', r => r.spec.method], ['board', r => r.spec.board],
+                  ['world', r => r.spec.world], ['seed', r => 'seed ' + r.spec.seed]];
+  const differ = fields.filter(([, f]) => f(results[0], ids[0]) !== f(results[1], ids[1]));
+  const used = differ.length ? differ : fields.slice(1);
+  return results.map((r, i) => ['A', 'B'][i] + ': ' + used.map(([, f]) => f(r, ids[i])).join(' '));
+}
+
+function pathOf(r) {
+  return {x: r.series.position.map(q => q[0]), y: r.series.position.map(q => q[1]), t: r.series.t};
+}
+
+// The second flight of an overlay is dashed: where the two are the same, both stay visible.
+const FLIGHT_DASH = [[], [6, 3]];
+
+// Two flights on one set of charts: paths from above and every time series, A and B.
+function overlayCharts(ids, results, group) {
+  const names = flightNames(ids, results);
+  const charts = [Plots.paths({title: 'paths from above',
+                               paths: results.map((r, i) => ({name: names[i], dash: FLIGHT_DASH[i], ...pathOf(r)}))})];
+  for (const p of PANELS) {
+    for (const c of p.columns) {
+      charts.push(Plots.timeSeries({
+        title: p.columns.length > 1 ? `${p.title}: ${c.name}` : p.title, unit: p.unit, group,
+        series: results.map((r, i) => ({name: names[i], x: r.series.t, y: c.of(r.series), step: c.step, dash: FLIGHT_DASH[i]}))}));
+    }
+  }
+  return charts;
+}
+
+async function overlayPage() {
+  const params = hashParams();
+  const ids = [params.get('a') || '', params.get('b') || ''];
+  const inputs = ids.map((v, i) => el('input', {type: 'text', name: ['a', 'b'][i], value: v, placeholder: 'episode id'}));
+  const form = el('form', {class: 'inline', onsubmit: ev => {
+    ev.preventDefault();
+    location.hash = `#/overlay?a=${encodeURIComponent(inputs[0].value.trim())}&b=${encodeURIComponent(inputs[1].value.trim())}`;
+  }}, 'A', inputs[0], 'B', inputs[1], el('button', {type: 'submit'}, 'overlay'));
+  if (!ids[0] || !ids[1]) {
+    show(el('h1', {}, 'Overlay'), form,
+         el('p', {class: 'muted'}, 'two flights on one set of charts: tick two episodes on a job page, use "overlay with" on ' +
+                                   'an episode page, or a pair of a compare cell'));
+    return;
+  }
+  const results = await Promise.all(ids.map(id => api('/api/episodes/' + encodeURIComponent(id) + '/result')));
+  const names = flightNames(ids, results);
+  const rows = results.map((r, i) => el('tr', {},
+      el('td', {}, names[i]), el('td', {}, link('#/episode/' + ids[i], ids[i])),
+      el('td', {}, link('#/job/' + jobOfEpisode(ids[i]), jobOfEpisode(ids[i]))),
+      el('td', {}, r.spec.board), el('td', {}, r.scenario), el('td', {}, r.spec.method), el('td', {class: 'num'}, r.spec.seed),
+      el('td', {}, r.end_reason), el('td', {class: 'num'}, fmt(r.flight_time_s)), el('td', {class: 'num'}, fmt(r.path_length_m)),
+      el('td', {class: 'num'}, fmt(r.nav_cpu_util_pct))));
+  show(el('h1', {}, 'Overlay'), form,
+       table(['flight', 'episode', 'job', 'board', 'scenario', 'method', 'seed', 'end', 'flight time s', 'path m', 'nav CPU %'], rows),
+       el('p', {class: 'muted'}, ZOOM_HINT + '; drag a box on the paths to zoom there'),
+       el('div', {class: 'charts'}, overlayCharts(ids, results, 'overlay')));
+}
+
+// A cell's colour: its worst metric. `undecided`: worse beyond the threshold in a cell of one
+// seed pair, paired mode (the metric's verdict is too_few_pairs): neither a regression nor fine.
+const VERDICT_RANK = {regression: 5, undecided: 4, improvement: 3, change: 2, insignificant: 1, too_few_pairs: 1, same: 0};
 const COMPARE_MODES = [['auto', 'auto mode'], ['exact', 'exact mode'], ['paired', 'paired mode (95 % CI)']];
+const REPORT_VERDICTS = {regression: 'REGRESSION', cannot_judge: 'CANNOT JUDGE', no_regression: 'no regression',
+                         no_change: 'no change'};
+
+function compareHash(base, cand, mode) {
+  return `#/compare?base=${encodeURIComponent(base)}&candidate=${encodeURIComponent(cand)}&mode=${mode}`;
+}
 
 // What the verdicts of this mode can and cannot tell. Flights fork on sub-micrometre differences,
 // so on the virtual clock a changed build changes many flights that are no better or worse: an
-// exact difference over a few seeds can be a draw, which only the paired test weighs.
+// exact difference over a few seeds can be a draw, which only the paired test weighs; with one
+// seed pair in a cell there is no interval at all.
 function modeNote(report, base, cand) {
   const pairs = report.cells.map(c => c.pairs);
   const seeds = pairs.length ? (Math.min(...pairs) === Math.max(...pairs) ? `${pairs[0]}`
                                                                           : `${Math.min(...pairs)}-${Math.max(...pairs)}`) : '0';
-  const paired = `#/compare?base=${encodeURIComponent(base)}&candidate=${encodeURIComponent(cand)}&mode=paired`;
   if (report.mode === 'exact') {
     if (report.changed_metrics === 0) return el('p', {id: 'mode-note', class: 'muted'}, 'exact mode: the same results to the last digit');
+    const regs = report.regressions, without = report.regressions_without_interval || 0, withInterval = regs - without;
+    const counts = [];
+    if (withInterval > 0) {
+      counts.push(`${report.regressions_within_draw} of the ${withInterval} regressions with a paired 95 % interval have ` +
+                  'one that includes 0');
+    }
+    if (without > 0) {
+      counts.push(`${without} of the ${regs} are in cells of one seed pair: no interval, so whether the seeds' draw alone ` +
+                  'gives them cannot be told');
+    }
     return el('p', {id: 'mode-note', class: 'note'},
               `exact mode: every difference is real, but flights fork on tiny differences, so with ${seeds} seeds a ` +
-              'cell can change by the draw of its routes alone' +
-              (report.regressions ? ` (${report.regressions_within_draw} of the ${report.regressions} regressions have a ` +
-                                    'paired 95 % interval that includes 0). ' : '. '),
-              el('a', {href: paired}, 'judge the same jobs in paired mode'),
+              'cell can change by the draw of its routes alone' + (counts.length ? ` (${counts.join('; ')}). ` : '. '),
+              el('a', {href: compareHash(base, cand, 'paired')}, 'judge the same jobs in paired mode'),
               ': a change is called only when its 95 % confidence interval over the seeds excludes zero.');
   }
   return el('p', {id: 'mode-note', class: 'muted'},
             `paired mode: ${seeds} seed pairs per cell; a change is called only when the 95 % confidence interval ` +
             'of its mean difference excludes zero (fewer than 2 pairs: too few to judge)');
+}
+
+// Paired mode with one seed pair in a cell cannot call a change beyond its threshold either way.
+function cannotJudgeNote(report, base, cand) {
+  if (report.verdict !== 'cannot_judge') return '';
+  return el('p', {id: 'cannot-judge', class: 'note cannot-judge'},
+            `CANNOT JUDGE: ${report.undecided} metric(s) in ${report.undecided_cells} cell(s) got worse beyond their ` +
+            'threshold, but paired mode needs 2 or more seed pairs per cell for a 95 % interval and these cells have 1: ' +
+            'fly 2 or more seeds', report.exact_applies ? [', or ', el('a', {href: compareHash(base, cand, 'exact')},
+                                                                        'compare the same jobs in exact mode')] : '', '.');
+}
+
+// How the two jobs differ (spec settings per cell, labels, server build): what a change of the
+// metrics below may come from, so it comes first.
+function specChanges(report) {
+  const changes = report.spec_changes || [];
+  const rows = changes.map(ch => el('tr', {'data-name': ch.name, 'data-kind': ch.kind},
+      el('td', {}, ch.name), el('td', {}, ch.kind),
+      el('td', {class: 'num'}, ch.kind === 'spec' ? `${ch.cells} of ${report.spec_cells}` : 'whole job'),
+      el('td', {}, ch.base_values.join(', ')), el('td', {}, ch.candidate_values.join(', '))));
+  let body;
+  if (rows.length) {
+    body = table(['setting', 'kind', 'cells', 'base', 'candidate'], rows);
+  } else if (report.specs_compared && report.jobs_compared) {
+    body = el('p', {class: 'muted'}, 'the two jobs\' specs, labels and server builds are the same');
+  } else {
+    body = el('p', {class: 'note'}, 'not known for ' + [report.specs_compared ? '' : 'the episodes\' specs',
+                                                      report.jobs_compared ? '' : 'the jobs\' labels and builds']
+                                                         .filter(Boolean).join(' and ') + ': whether they differ cannot be told');
+  }
+  return el('div', {id: 'spec-changes'}, el('h2', {}, 'How the jobs differ'), body);
 }
 
 async function comparePage() {
@@ -434,7 +486,12 @@ async function comparePage() {
       const cells = report.cells.filter(c => c.board === b && c.scenario === sc);
       if (!cells.length) return el('td', {class: 'muted'}, '–');
       let worst = 'same';
-      for (const c of cells) for (const m of c.metrics) if (VERDICT_RANK[m.verdict] > VERDICT_RANK[worst]) worst = m.verdict;
+      for (const c of cells) {
+        for (const m of c.metrics) {
+          const v = m.undecided ? 'undecided' : m.verdict;
+          if (VERDICT_RANK[v] > VERDICT_RANK[worst]) worst = v;
+        }
+      }
       const summary = cells.map(c => `${c.method}: ${c.regressions} worse, ${c.improvements} better`);
       const td = el('td', {class: 'cell ' + worst, 'data-board': b, 'data-scenario': sc, 'data-verdict': worst},
                     el('b', {}, worst), summary.map(t => el('div', {}, t)));
@@ -452,8 +509,12 @@ async function comparePage() {
   const unpaired = report.unpaired.map(u => el('tr', {}, el('td', {}, u.side), el('td', {}, u.board),
       el('td', {}, u.scenario), el('td', {}, u.method), el('td', {class: 'num'}, u.seed)));
   show(el('h1', {}, 'Compare'), form,
-       el('p', {class: 'verdict'}, `${report.mode} mode: ${report.regressions} regressions, ${report.improvements} improvements, ` +
-          `${report.changed_metrics} changed metrics` + (report.no_change ? ' — no change' : '')),
+       specChanges(report),
+       el('h2', {}, 'Metrics'),
+       el('p', {class: 'verdict verdict-' + report.verdict, 'data-verdict': report.verdict},
+          el('b', {}, REPORT_VERDICTS[report.verdict] || report.verdict), ` — ${report.mode} mode: ${report.regressions} regressions, ` +
+          `${report.improvements} improvements, ${report.changed_metrics} changed metrics`),
+       cannotJudgeNote(report, base, cand),
        modeNote(report, base, cand),
        provenance.length ? el('div', {id: 'provenance'}, el('h2', {}, 'Provenance that differs'),
                               table(['note', 'cells', 'base', 'candidate', 'meaning'], provenance)) : '',
@@ -467,31 +528,38 @@ async function cellDetail(cells, box) {
   const blocks = [];
   let pair = null;
   for (const c of cells) {
-    const rows = c.metrics.filter(m => m.verdict !== 'same').map(m => el('tr', {class: m.verdict},
-        el('td', {}, m.name), el('td', {}, m.verdict + (m.within_draw ? ' (within the draw)' : '')),
+    const rows = c.metrics.filter(m => m.verdict !== 'same').map(m => el('tr', {class: m.undecided ? 'undecided' : m.verdict},
+        el('td', {}, m.name),
+        el('td', {}, m.verdict + (m.within_draw ? ' (within the draw)' : '') + (m.undecided ? ' (worse: cannot judge)' : '')),
         el('td', {class: 'num'}, fmt(m.base_mean)),
         el('td', {class: 'num'}, fmt(m.candidate_mean)), el('td', {class: 'num'}, fmt(m.delta)),
-        el('td', {class: 'num'}, `[${fmt(m.ci_low)}, ${fmt(m.ci_high)}]`), el('td', {class: 'num'}, fmt(m.threshold)),
-        el('td', {class: 'num'}, m.pairs)));
+        el('td', {class: 'num'}, m.has_interval === false ? 'no interval' : `[${fmt(m.ci_low)}, ${fmt(m.ci_high)}]`),
+        el('td', {class: 'num'}, fmt(m.threshold)), el('td', {class: 'num'}, m.pairs)));
+    // Every seed pair opens as an overlay of its two flights.
+    const pairLinks = c.seeds.map((seed, i) => link(
+        `#/overlay?a=${encodeURIComponent(c.base_episodes[i])}&b=${encodeURIComponent(c.candidate_episodes[i])}`, `seed ${seed}`));
     blocks.push(el('h2', {}, `${c.board} ${c.scenario} ${c.method}`),
                 rows.length ? table(['metric', 'verdict', 'base', 'candidate', 'delta', '95% CI', 'threshold', 'pairs'], rows)
-                            : el('p', {class: 'muted'}, 'no change'));
+                            : el('p', {class: 'muted'}, 'no change'),
+                el('p', {class: 'pairs'}, 'overlay both flights of ', pairLinks.flatMap((l, i) => (i ? [', ', l] : [l]))));
     if (!pair) {
       const changed = c.changed_episodes[0];
       pair = changed ? [changed.base_episode, changed.candidate_episode, changed.seed, c]
                      : [c.base_episodes[0], c.candidate_episodes[0], c.seeds[0], c];
     }
   }
-  box.replaceChildren(...blocks, el('p', {}, 'loading flights…'));
+  fill(box, ...blocks, el('p', {}, 'loading flights…'));
   const [a, b] = await Promise.all([api(`/api/episodes/${pair[0]}/result`), api(`/api/episodes/${pair[1]}/result`)]);
-  const p = r => ({x: r.series.position.map(q => q[0]), y: r.series.position.map(q => q[1])});
-  box.replaceChildren(...blocks,
-      el('h2', {}, `Both flights: ${pair[3].board} ${pair[3].scenario} ${pair[3].method} seed ${pair[2]}`),
+  const names = ['base ' + pair[0], 'candidate ' + pair[1]];
+  fill(box, ...blocks,
+      el('h2', {}, `Both flights: ${pair[3].board} ${pair[3].scenario} ${pair[3].method} seed ${pair[2]} `,
+         link(`#/overlay?a=${encodeURIComponent(pair[0])}&b=${encodeURIComponent(pair[1])}`, '(every chart)')),
       el('div', {class: 'charts'},
-         pathsChart({title: 'paths from above (x, y m)', paths: [{name: 'base ' + pair[0], ...p(a)},
-                                                               {name: 'candidate ' + pair[1], ...p(b)}]}),
-         lineChart({title: 'speed', ylabel: 'm/s', series: [{name: 'base', x: a.series.t, y: speedOf(a.series)},
-                                                            {name: 'candidate', x: b.series.t, y: speedOf(b.series)}]})));
+         Plots.paths({title: 'paths from above', paths: [{name: names[0], ...pathOf(a)},
+                                                         {name: names[1], dash: FLIGHT_DASH[1], ...pathOf(b)}]}),
+         Plots.timeSeries({title: 'speed', unit: 'm/s', series: [
+           {name: names[0], x: a.series.t, y: speedOf(a.series)},
+           {name: names[1], x: b.series.t, y: speedOf(b.series), dash: FLIGHT_DASH[1]}]})));
 }
 
 async function trendPage() {
@@ -519,10 +587,9 @@ async function trendPage() {
   const points = trend.points.filter(p => p.method === method);
   const jobIds = [...new Set(points.map(p => p.job_id))];
   const boards = [...new Set(points.map(p => p.board))];
-  const series = boards.map(b => {
-    const pts = points.filter(p => p.board === b);
-    return {name: b, x: pts.map(p => jobIds.indexOf(p.job_id) + 1), y: pts.map(p => p.mean), err: pts.map(p => p.ci95)};
-  });
+  const labels = jobIds.map((id, i) => `#${i + 1} ${points.find(p => p.job_id === id).name} (${id})`);
+  const chartPoints = points.map(p => ({series: p.board, x: jobIds.indexOf(p.job_id) + 1, mean: p.mean, ci95: p.ci95,
+                                        text: `(n ${p.n})`}));
   const cellText = q => q ? fmt(q.mean) + (q.ci95 === null ? '' : ` ± ${fmt(q.ci95)}`) : '–';
   const rows = jobIds.map((id, i) => {
     const pts = points.filter(p => p.job_id === id);
@@ -532,13 +599,13 @@ async function trendPage() {
               boards.map(b => el('td', {class: 'num'}, cellText(pts.find(p => p.board === b)))));
   });
   show(el('h1', {}, 'Trend'), form,
-       points.length ? lineChart({title: `${metric} per board, ${method}, jobs with ${label}`, series, xlabel: 'job #',
-                                  xIntegers: true, width: 760, height: 260})
+       points.length ? Plots.jobSeries({title: `${metric} per board, ${method}, jobs with ${label}`, seriesNames: boards,
+                                        labels, points: chartPoints})
                      : el('p', {class: 'muted'}, 'no results with this label and metric'),
        points.length ? el('p', {id: 'trend-note', class: 'muted'},
                           'bars: 95 % interval of each mean over the seeds\' draw (the spread over seeds within each ' +
                           'scenario, pooled); a step smaller than the bars can be the draw: judge two jobs with compare ' +
-                          'in paired mode') : '',
+                          'in paired mode; drag across the chart to zoom to a range of jobs, double-click to zoom out') : '',
        table(['#', 'job', 'name', 'created (UTC)'].concat(boards), rows));
 }
 
@@ -554,6 +621,7 @@ async function route() {
   try {
     if (parts[0] === 'job' && parts[1]) await jobPage(parts[1]);
     else if (parts[0] === 'episode' && parts[1]) await episodePage(parts[1]);
+    else if (parts[0] === 'overlay') await overlayPage();
     else if (parts[0] === 'compare') await comparePage();
     else if (parts[0] === 'trend') await trendPage();
     else await jobsPage();

@@ -1,5 +1,5 @@
 // The dashboard's routes: its aggregates (docs/dashboard.md: summaries, failures, the bird's-eye
-// view, compare, trend, info) and its embedded page, script and style sheet.
+// view, compare, trend, info) and its embedded page, scripts (Chart.js among them) and style sheet.
 #include <string>
 
 // Before httplib.h: it pulls in <resolv.h>, whose `_res` macro breaks Eigen's parameter names.
@@ -90,7 +90,7 @@ void HttpApi::DashboardRoutes() {
                      {"git_commit", api::BuildCommit()}, {"metric_rules", rules}});
   });
 
-  // The pages: one HTML shell, the script and the style sheet, all embedded in the binary.
+  // The pages: one HTML shell, the scripts and the style sheet, all embedded in the binary.
   auto asset = [](const std::string& name, const char* type) {
     return [name, type](const httplib::Request&, httplib::Response& res) {
       const auto& files = DashboardAssets();
@@ -105,6 +105,8 @@ void HttpApi::DashboardRoutes() {
     };
   };
   server_->Get("/", asset("index.html", "text/html; charset=utf-8"));
+  server_->Get("/static/chart.min.js", asset("chart.min.js", "text/javascript; charset=utf-8"));
+  server_->Get("/static/plots.js", asset("plots.js", "text/javascript; charset=utf-8"));
   server_->Get("/static/app.js", asset("app.js", "text/javascript; charset=utf-8"));
   server_->Get("/static/style.css", asset("style.css", "text/css; charset=utf-8"));
 }

@@ -4,7 +4,10 @@
 //                             flights there, the planted regression, and another cost model
 //                             digest in their provenance
 //   hostile    suite=hostile  a job named <img src=x onerror=alert(1)>
-// Prints {"base", "candidate", "hostile"} job ids as JSON.
+//   oneseed-1  suite=oneseed  tx2 x s1 x baseline, one seed
+//   oneseed-2  suite=oneseed  the same with planner.v_max 1.5: slower, but one seed pair cannot
+//                             tell it apart from the draw (paired mode: cannot judge)
+// Prints {"base", "candidate", "hostile", "oneseed_base", "oneseed_candidate"} job ids as JSON.
 #include <iostream>
 
 #include <nlohmann/json.hpp>
@@ -50,6 +53,19 @@ int main(int argc, char** argv) {
       store, "name: \"<img src=x onerror=alert(1)>\"\nlabels: {suite: hostile}\n"
              "boards: [x86]\nscenarios: [s2]\nmethods: [baseline]\nseeds: 1\n",
       t0 + 2 * 86400000);
-  std::cout << nlohmann::json{{"base", base}, {"candidate", candidate}, {"hostile", hostile}}.dump() << "\n";
+  constexpr const char* kOneSeed = "boards: [tx2]\nscenarios: [s1]\nmethods: [baseline]\nseeds: 1\n";
+  const std::string oneseed_base = enavi::testing::SeedJob(
+      store, std::string("name: oneseed-1\nlabels: {suite: oneseed}\n") + kOneSeed, t0 + 3 * 86400000);
+  const std::string oneseed_candidate = enavi::testing::SeedJob(
+      store, std::string("name: oneseed-2\nlabels: {suite: oneseed}\n") + kOneSeed +
+                 "overrides: {planner.v_max: 1.5}\n",
+      t0 + 4 * 86400000);
+  std::cout << nlohmann::json{{"base", base},
+                              {"candidate", candidate},
+                              {"hostile", hostile},
+                              {"oneseed_base", oneseed_base},
+                              {"oneseed_candidate", oneseed_candidate}}
+                   .dump()
+            << "\n";
   return 0;
 }
