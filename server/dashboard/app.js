@@ -526,7 +526,6 @@ async function comparePage() {
 
 async function cellDetail(cells, box) {
   const blocks = [];
-  let pair = null;
   for (const c of cells) {
     const rows = c.metrics.filter(m => m.verdict !== 'same').map(m => el('tr', {class: m.undecided ? 'undecided' : m.verdict},
         el('td', {}, m.name),
@@ -542,12 +541,12 @@ async function cellDetail(cells, box) {
                 rows.length ? table(['metric', 'verdict', 'base', 'candidate', 'delta', '95% CI', 'threshold', 'pairs'], rows)
                             : el('p', {class: 'muted'}, 'no change'),
                 el('p', {class: 'pairs'}, 'overlay both flights of ', pairLinks.flatMap((l, i) => (i ? [', ', l] : [l]))));
-    if (!pair) {
-      const changed = c.changed_episodes[0];
-      pair = changed ? [changed.base_episode, changed.candidate_episode, changed.seed, c]
-                     : [c.base_episodes[0], c.candidate_episodes[0], c.seeds[0], c];
-    }
   }
+  // The flights shown: a changed pair of the method that regressed most (else of the first).
+  const worst = cells.reduce((w, c) => (c.regressions > w.regressions ? c : w), cells[0]);
+  const changed = worst.changed_episodes[0];
+  const pair = changed ? [changed.base_episode, changed.candidate_episode, changed.seed, worst]
+                       : [worst.base_episodes[0], worst.candidate_episodes[0], worst.seeds[0], worst];
   fill(box, ...blocks, el('p', {}, 'loading flights…'));
   const [a, b] = await Promise.all([api(`/api/episodes/${pair[0]}/result`), api(`/api/episodes/${pair[1]}/result`)]);
   const names = ['base ' + pair[0], 'candidate ' + pair[1]];
