@@ -105,10 +105,16 @@ void HttpApi::DashboardRoutes() {
     };
   };
   server_->Get("/", asset("index.html", "text/html; charset=utf-8"));
-  server_->Get("/static/chart.min.js", asset("chart.min.js", "text/javascript; charset=utf-8"));
-  server_->Get("/static/plots.js", asset("plots.js", "text/javascript; charset=utf-8"));
-  server_->Get("/static/app.js", asset("app.js", "text/javascript; charset=utf-8"));
-  server_->Get("/static/style.css", asset("style.css", "text/css; charset=utf-8"));
+  // Every embedded script and the style sheet by its file name (server/http/CMakeLists.txt).
+  for (const auto& [name, content] : DashboardAssets()) {
+    const bool js = name.size() > 3 && name.compare(name.size() - 3, 3, ".js") == 0;
+    const bool css = name.size() > 4 && name.compare(name.size() - 4, 4, ".css") == 0;
+    if (js || css) {
+      std::string pattern = "/static/";  // the route is a regular expression: its dots escaped
+      for (const char c : name) pattern += c == '.' ? std::string("\\.") : std::string(1, c);
+      server_->Get(pattern, asset(name, js ? "text/javascript; charset=utf-8" : "text/css; charset=utf-8"));
+    }
+  }
 }
 
 }  // namespace enavi::server

@@ -18,6 +18,8 @@ seeded by seed_dashboard_db, and checks that
     planted regression (tx2 x s1) and a click on it overlays both flights; in exact mode it says a
     difference over few seeds can be a draw and links the paired test, which finds the same
     regression; with one seed pair paired mode says it cannot judge and links exact mode,
+  - a user's ROS stack as a method shows by its name in legends, tables and the overlay, and a
+    job whose ROS episodes no connected worker can run says so on the jobs list and its page,
   - the job named <img src=x onerror=alert(1)> shows as that text (no element, no alert),
   - the bird's-eye PNG loaded,
   - `enavi status --label` and GET /api/jobs?label= filter by label,
@@ -101,7 +103,8 @@ def start(args, tmp, name):
             proc.kill()
             raise RuntimeError(name + " did not start: " + open(log.name).read())
         time.sleep(0.05)
-    return proc, open(ready).read().strip()
+    with open(ready) as f:
+        return proc, f.read().strip()
 
 
 def chromium(tmp):
@@ -281,6 +284,51 @@ class DashboardBrowserTest(PageChecks, unittest.TestCase):
         self.wait_ready("return document.body.dataset.page === 'overlay'")
         self.assertIn("a=%s-00001&b=%s-00003" % (base, base), self.driver.execute_script("return location.hash"))
         self.assert_charts_drew(8)
+
+    def test_a_ros_method_shows_by_its_name(self):
+        """A user's ROS stack (docs/ros.md) is a method like ours on every page: legends, tables,
+        the overlay's choice and names."""
+        ros = self.ids["ros"]
+        self.open("#/job/" + ros)
+        charts = self.assert_charts_drew(5)
+        for c in charts:
+            self.assertEqual(c["legendItems"], ["enavi", "myplanner"], c["title"])
+            self.assert_each_painted(c, {"mean"})
+        methods = self.driver.execute_script(
+            "return [...document.querySelectorAll('#main > table:first-of-type tbody tr')].map(r => r.children[2].textContent)")
+        self.assertEqual(methods, ["enavi", "myplanner"])
+        episodes = [e for e in json.load(urllib.request.urlopen(self.url + "/api/jobs/%s/episodes" % ros))]
+        first = next(e["id"] for e in episodes if e["method"] == "myplanner" and e["seed"] == 1)
+        self.open("#/episode/" + first)
+        offered = self.driver.execute_script("return document.querySelector('#overlay-with select').selectedOptions[0].text")
+        self.assertTrue(offered.startswith("enavi seed 1"), offered)
+        self.driver.find_element("css selector", "#overlay-with button").click()
+        self.wait_ready("return document.body.dataset.page === 'overlay'")
+        charts = self.assert_charts_drew(8)
+        self.assertEqual(charts[0]["legendItems"], ["A: myplanner", "B: enavi"])
+
+    def test_a_job_no_connected_worker_can_run_says_why(self):
+        """A ROS method's episodes wait for a worker that offers ros: the jobs list and the job's
+        page say so, as `enavi status` does."""
+        db = os.path.join(self.tmp, "pending.db")
+        ros = json.loads(subprocess.check_output([SEED, db, "--pending-ros"], text=True))["ros"]
+        proc, url = start([ENAVI, "serve", "--db", db, "--http", "127.0.0.1:0", "--domain", str(100 + (os.getpid() + 2) % 100),
+                           "--partition", "browser-pending-%d" % os.getpid()], self.tmp, "serve-pending")
+        try:
+            self.driver.get(url + "/#/jobs")
+            self.wait_ready("return document.querySelector('tr.job .waiting') !== null")
+            row = self.driver.execute_script("return document.querySelector('tr.job[data-id=\"%s\"]').textContent" % ros)
+            self.assertIn("waiting: 2 episode(s) need a worker with ros, and no connected worker has it", row)
+            self.driver.get(url + "/#/job/" + ros)
+            self.wait_ready("return document.getElementById('waiting') !== null")
+            self.assertIn("2 episode(s) need a worker with ros",
+                          self.driver.execute_script("return document.getElementById('waiting').textContent"))
+        finally:
+            proc.terminate()
+            proc.wait(10)
+        # A finished job waits for nothing.
+        self.open("#/job/" + self.ids["ros"])
+        self.assertEqual(self.driver.find_elements("id", "waiting"), [])
 
     def test_hostile_job_page_shows_the_name_as_text(self):
         self.open("#/job/" + self.ids["hostile"])

@@ -7,8 +7,11 @@
 //   oneseed-1  suite=oneseed  tx2 x s1 x baseline, one seed
 //   oneseed-2  suite=oneseed  the same with planner.v_max 1.5: slower, but one seed pair cannot
 //                             tell it apart from the draw (paired mode: cannot judge)
-// Prints {"base", "candidate", "hostile", "oneseed_base", "oneseed_candidate"} job ids as JSON.
+//   ros-1      suite=ros      tx2 x s1 x a user's ROS stack `myplanner` and enavi x 2 seeds
+// Prints {"base", "candidate", "hostile", "oneseed_base", "oneseed_candidate", "ros"} job ids as JSON.
+// seed_dashboard_db DB --pending-ros: only ros-1, submitted and never flown (no worker offers ros).
 #include <iostream>
+#include <string>
 
 #include <nlohmann/json.hpp>
 
@@ -28,17 +31,34 @@ constexpr const char* kFailing = R"(  - match: {board: pi4b, scenario: s3, metho
     overrides: {fake.exit_code: 3}
 )";
 
+// A user's ROS 1 stack as a method (docs/ros.md): the pages name it as they name ours.
+constexpr const char* kRos = R"(name: ros-1
+labels: {suite: ros}
+boards: [tx2]
+scenarios: [s1]
+methods: [myplanner, enavi]
+seeds: 2
+clock: emulated
+ros_methods:
+  myplanner: {run: [rosrun, my_pkg, planner], topics: {command: /cmd}}
+)";
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 2) {
-    std::cerr << "usage: seed_dashboard_db DB\n";
+  const bool pending_ros = argc == 3 && std::string(argv[2]) == "--pending-ros";
+  if (argc != 2 && !pending_ros) {
+    std::cerr << "usage: seed_dashboard_db DB [--pending-ros]\n";
     return 2;
   }
   enavi::server::StoreOptions options;
   options.max_attempts = 1;
   enavi::server::Store store(argv[1], options);
   const std::int64_t t0 = 1764547200000;  // 2025-12-01 00:00 UTC; fixed so pages are reproducible
+  if (pending_ros) {
+    std::cout << nlohmann::json{{"ros", enavi::testing::SubmitJob(store, kRos, t0)}}.dump() << "\n";
+    return 0;
+  }
   const std::string base = enavi::testing::SeedJob(
       store, std::string("name: nightly-1\nlabels: {suite: nightly, branch: main}\n") + kNightly +
                  "episode_overrides:\n" + kFailing,
@@ -60,11 +80,13 @@ int main(int argc, char** argv) {
       store, std::string("name: oneseed-2\nlabels: {suite: oneseed}\n") + kOneSeed +
                  "overrides: {planner.v_max: 1.5}\n",
       t0 + 4 * 86400000);
+  const std::string ros = enavi::testing::SeedJob(store, kRos, t0 + 5 * 86400000);
   std::cout << nlohmann::json{{"base", base},
                               {"candidate", candidate},
                               {"hostile", hostile},
                               {"oneseed_base", oneseed_base},
-                              {"oneseed_candidate", oneseed_candidate}}
+                              {"oneseed_candidate", oneseed_candidate},
+                              {"ros", ros}}
                    .dump()
             << "\n";
   return 0;

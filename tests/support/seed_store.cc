@@ -11,8 +11,7 @@
 
 namespace enavi::testing {
 
-std::string SeedJob(server::Store& store, const std::string& spec_yaml, std::int64_t now_ms,
-                    const std::string& worker, int series_len) {
+std::string SubmitJob(server::Store& store, const std::string& spec_yaml, std::int64_t now_ms) {
   // Validated against the registry's methods, as `enavi serve` does; fake.* knobs pass.
   api::JobSpecOptions options;
   options.catalog = sim::FarmCatalog();
@@ -22,7 +21,12 @@ std::string SeedJob(server::Store& store, const std::string& spec_yaml, std::int
   meta.labels = job.labels;
   meta.provenance = {{"enavi_version", api::BuildVersion()}, {"git_commit", api::BuildCommit()},
                      {"clock", job.clock}, {"cost", job.cost}};
-  const std::string id = store.jobs().CreateJob(job.name, spec_yaml, api::ExpandJob(job), now_ms, meta);
+  return store.jobs().CreateJob(job.name, spec_yaml, api::ExpandJob(job), now_ms, meta);
+}
+
+std::string SeedJob(server::Store& store, const std::string& spec_yaml, std::int64_t now_ms,
+                    const std::string& worker, int series_len) {
+  const std::string id = SubmitJob(store, spec_yaml, now_ms);
   api::WorkerStatus status;
   status.worker_id = worker;
   status.host = worker.substr(0, worker.rfind('-'));
@@ -30,9 +34,11 @@ std::string SeedJob(server::Store& store, const std::string& spec_yaml, std::int
   status.version = api::BuildVersion();
   status.calibration_id = "reference";
   store.workers().RecordWorker(status, now_ms);
+  server::WorkerCapabilities caps;  // any board and clock
+  caps.features = {"ros"};
   // Lease and answer in batches, as a farm would.
   while (true) {
-    const auto leases = store.leases().LeaseEpisodes(worker, 500, {}, now_ms + 60000, now_ms);
+    const auto leases = store.leases().LeaseEpisodes(worker, 500, caps, now_ms + 60000, now_ms);
     if (leases.empty()) break;
     std::vector<api::ResultMessage> batch;
     for (const auto& l : leases) {

@@ -11,7 +11,11 @@
 
 namespace enavi::testing {
 
-/// Returns the job id. `worker` is recorded as the worker that ran every episode.
+/// Submits the job as `enavi submit` does and leaves its episodes pending; returns its id.
+std::string SubmitJob(server::Store& store, const std::string& spec_yaml, std::int64_t now_ms);
+
+/// Returns the job id. `worker` is recorded as the worker that ran every episode (ROS methods'
+/// too: it offers every feature).
 std::string SeedJob(server::Store& store, const std::string& spec_yaml, std::int64_t now_ms,
                     const std::string& worker = "seed-host-1", int series_len = 50);
 
