@@ -15,23 +15,25 @@ namespace enavi::server {
 const MetricRules& DefaultMetricRules() {
   // Thresholds: outcome counts (success, collisions, stops) regress on any drop; continuous
   // metrics on a change of a few percent, above what a one-grid-cell (0.1 m) path difference or a
-  // re-ordered job in the executor moves them.
+  // re-ordered job in the executor moves them. Every default metric is an outcome (0/1) or a
+  // quantity that cannot be negative.
+  constexpr MetricRange kOut = MetricRange::kOutcome, kNonNeg = MetricRange::kNonNegative;
   static const MetricRules rules = {
-      {"success", {Direction::kHigher, 0.0, 0.0, false}},
-      {"collided", {Direction::kLower, 0.0, 0.0, false}},
-      {"timed_out", {Direction::kLower, 0.0, 0.0, false}},
-      {"flight_time_s", {Direction::kLower, 0.0, 0.05, true}},
-      {"path_length_m", {Direction::kLower, 0.0, 0.05, true}},
-      {"velocity_std_mps", {Direction::kLower, 0.0, 0.10, false}},
-      {"accel_peak_mps2", {Direction::kLower, 0.0, 0.10, false}},
-      {"nav_cpu_util_pct", {Direction::kLower, 1.0, 0.05, false}},
-      {"deadline_miss_ratio", {Direction::kLower, 0.01, 0.10, false}},
-      {"deadline_misses", {Direction::kLower, 1.0, 0.10, false}},
-      {"replans", {Direction::kLower, 1.0, 0.20, false}},
-      {"emergency_stops", {Direction::kLower, 0.0, 0.0, false}},
-      {"plan_failures", {Direction::kLower, 0.0, 0.0, false}},
-      {"time_stopped_s", {Direction::kLower, 0.1, 0.10, false}},
-      {"setpoint_lag_p95_m", {Direction::kLower, 0.0, 0.10, false}},
+      {"success", {Direction::kHigher, 0.0, 0.0, false, kOut}},
+      {"collided", {Direction::kLower, 0.0, 0.0, false, kOut}},
+      {"timed_out", {Direction::kLower, 0.0, 0.0, false, kOut}},
+      {"flight_time_s", {Direction::kLower, 0.0, 0.05, true, kNonNeg}},
+      {"path_length_m", {Direction::kLower, 0.0, 0.05, true, kNonNeg}},
+      {"velocity_std_mps", {Direction::kLower, 0.0, 0.10, false, kNonNeg}},
+      {"accel_peak_mps2", {Direction::kLower, 0.0, 0.10, false, kNonNeg}},
+      {"nav_cpu_util_pct", {Direction::kLower, 1.0, 0.05, false, kNonNeg}},
+      {"deadline_miss_ratio", {Direction::kLower, 0.01, 0.10, false, kNonNeg}},
+      {"deadline_misses", {Direction::kLower, 1.0, 0.10, false, kNonNeg}},
+      {"replans", {Direction::kLower, 1.0, 0.20, false, kNonNeg}},
+      {"emergency_stops", {Direction::kLower, 0.0, 0.0, false, kNonNeg}},
+      {"plan_failures", {Direction::kLower, 0.0, 0.0, false, kNonNeg}},
+      {"time_stopped_s", {Direction::kLower, 0.1, 0.10, false, kNonNeg}},
+      {"setpoint_lag_p95_m", {Direction::kLower, 0.0, 0.10, false, kNonNeg}},
   };
   return rules;
 }
@@ -43,6 +45,15 @@ const char* DirectionName(Direction d) {
     case Direction::kNone: return "none";
   }
   return "none";
+}
+
+const char* RangeName(MetricRange r) {
+  switch (r) {
+    case MetricRange::kAny: return "any";
+    case MetricRange::kNonNegative: return "non_negative";
+    case MetricRange::kOutcome: return "outcome";
+  }
+  return "any";
 }
 
 MetricRules ParseMetricRules(const std::string& yaml_text, const std::string& file) {

@@ -11,6 +11,11 @@ namespace enavi::server {
 
 enum class Direction { kLower, kHigher, kNone };  ///< which way is better; kNone: shown only
 
+/// The values a metric takes, for the dashboard's axes: kOutcome is 0 or 1 per flight (a cell's
+/// mean is a rate, drawn on 0..1), kNonNegative never goes below 0 (counts, times, lengths,
+/// ratios, a std), kAny is unbounded (a metric without a default rule).
+enum class MetricRange { kAny, kNonNegative, kOutcome };
+
 /// A change is beyond the threshold when |delta| > max(abs, rel x |base mean|).
 struct MetricRule {
   Direction direction = Direction::kNone;
@@ -19,6 +24,7 @@ struct MetricRule {
   /// Averaged over pairs where both flights succeeded (a crash's flight time is not a flight
   /// time), as the paper-style table does.
   bool success_only = false;
+  MetricRange range = MetricRange::kAny;
 };
 
 using MetricRules = std::map<std::string, MetricRule>;
@@ -35,5 +41,6 @@ MetricRules LoadMetricRules(const std::filesystem::path& path);
 MetricRules ParseMetricRules(const std::string& yaml_text, const std::string& file_name);
 
 const char* DirectionName(Direction d);
+const char* RangeName(MetricRange r);  ///< "any", "non_negative", "outcome"
 
 }  // namespace enavi::server

@@ -73,7 +73,7 @@ async function jobPage(id) {
   const charts = ruled.map(m => Plots.spread({
     title: m + (rules[m] && rules[m].success_only ? ' (successful flights)' : '') +
            (rules[m] ? ` — ${rules[m].direction} is better` : ''),
-    groups, methods,
+    groups, methods, range: rules[m] && rules[m].range,
     stats: (g, method) => { const c = cellOf.get(`${g}\n${method}`); return c ? statOf(c, m) || null : null; },
   }));
   const frows = failures.failures.map(f => el('tr', {},

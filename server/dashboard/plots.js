@@ -201,6 +201,38 @@ const Plots = (() => {
     for (const chart of Object.values(Chart.instances)) chart.destroy();
   }
 
+  // ------------------------------------------------------------ a metric's bounds
+
+  // The values a metric can take, from its rule's range (/api/info): an outcome is 0 or 1 per
+  // flight, so a cell's mean (a rate) lies in 0..1; a non-negative metric (a count, a time, a
+  // ratio) has a floor of 0; any other is unbounded.
+  function boundsOf(range) {
+    return range === 'outcome' ? {lo: 0, hi: 1} : range === 'non_negative' ? {lo: 0, hi: Infinity}
+                                                                             : {lo: -Infinity, hi: Infinity};
+  }
+  const clampTo = (b, v) => Math.min(Math.max(v, b.lo), b.hi);
+
+  // The y axis of a bounded metric, given the lowest and highest values drawn: an outcome's
+  // reads 0..1 with a small pad (the library pads a constant rate of 1 out to -0.5..2.5). One
+  // with a floor, if the drawn values come near it or never change (the library would centre a
+  // constant in +-1), stops just below the floor instead of reaching into values the metric
+  // cannot take: a constant v is drawn up to twice its height above the floor (at the floor: up
+  // to one above it). Ticks are the library's round values within the bounds: not the padded
+  // ends (includeBounds would put -0.05 in place of 0). Otherwise ({}), the library's own range.
+  function boundedAxis(b, lowest, highest) {
+    const bounded = (min, max) => ({min, max, grace: 0, ticks: {includeBounds: false},
+                                    afterBuildTicks: axis => { axis.ticks = axis.ticks.filter(t => t.value >= b.lo && t.value <= b.hi); }});
+    if (Number.isFinite(b.lo) && Number.isFinite(b.hi)) {
+      const pad = 0.05 * (b.hi - b.lo);
+      return bounded(b.lo - pad, b.hi + pad);
+    }
+    if (!Number.isFinite(b.lo) || !Number.isFinite(lowest)) return {};
+    const constant = highest === lowest;
+    if (!constant && lowest - 0.1 * (highest - lowest) > b.lo) return {};
+    const top = !constant ? highest + 0.08 * (highest - b.lo) : highest > b.lo ? b.lo + 2 * (highest - b.lo) : b.lo + 1;
+    return bounded(b.lo - 0.03 * (top - b.lo), top);
+  }
+
   // ------------------------------------------------------------ time series
 
   // Vertical dashed lines at the events' times, one dataset per kind (collisions red), on a
@@ -260,11 +292,18 @@ const Plots = (() => {
 
   // Per group (e.g. board x scenario) and method: a whisker from min to max, a box of mean ± std,
   // and a dot at the mean, side by side in the group's slot. stats(group, method) gives
-  // {n, mean, std, min, max} or null; methods are whatever the job flew.
-  function spread({title, groups, methods, stats, width = 560, height = 250}) {
+  // {n, mean, std, min, max} or null; methods are whatever the job flew; range is the metric's
+  // (boundsOf).
+  function spread({title, groups, methods, stats, range, width = 560, height = 250}) {
     const M = Math.max(methods.length, 1);
     const slot = 0.8 / M;
     const xOf = (gi, mi) => gi + (mi - (M - 1) / 2) * slot;
+    // mean ± std is drawn clamped to the metric's bounds: the box of a count that is mostly 0
+    // would reach below 0, a value it cannot take (the tooltip still gives the std itself).
+    const b = boundsOf(range);
+    const box = st => [clampTo(b, st.mean - (st.std || 0)), clampTo(b, st.mean + (st.std || 0))];
+    const drawn = methods.flatMap(m => groups.map(g => stats(g, m)).filter(st => st))
+                         .flatMap(st => [st.min, st.max, ...box(st)]).filter(Number.isFinite);
     const datasets = [];
     methods.forEach((m, mi) => {
       const c = color(mi);
@@ -274,7 +313,7 @@ const Plots = (() => {
            backgroundColor: c, maxBarThickness: 2, data: rows.map(r => ({x: r.x, y: [r.st.min, r.st.max]}))},
           {type: 'bar', label: m + ' mean ± std', method: m, role: 'box', inLegend: false, hoverable: false, grouped: false,
            backgroundColor: c + '55', borderColor: c, borderWidth: 1, borderSkipped: false, maxBarThickness: 14, minBarLength: 1,
-           data: rows.map(r => ({x: r.x, y: [r.st.mean - (r.st.std || 0), r.st.mean + (r.st.std || 0)]}))},
+           data: rows.map(r => ({x: r.x, y: box(r.st)}))},
           {type: 'scatter', label: m, method: m, role: 'mean', snap: 0.5, backgroundColor: c, borderColor: '#fff', borderWidth: 1,
            pointRadius: 4, pointHoverRadius: 5,
            data: rows.map(r => ({x: r.x, y: r.st.mean, group: r.g, st: r.st}))});
@@ -288,7 +327,8 @@ const Plots = (() => {
           x: {type: 'linear', min: -0.5, max: groups.length - 0.5, offset: false, grid: {display: false, offset: false},
               afterBuildTicks: axis => { axis.ticks = groups.map((g, i) => ({value: i})); },
               ticks: {autoSkip: false, maxRotation: 0, callback: v => groups[v] === undefined ? '' : groups[v]}},
-          y: {type: 'linear', beginAtZero: false, grace: '8%'},
+          y: {type: 'linear', beginAtZero: false, grace: '8%',
+              ...boundedAxis(b, Math.min(...drawn), Math.max(...drawn))},
         },
       }),
     };
@@ -313,8 +353,13 @@ const Plots = (() => {
 
   // points: [{series, x (1-based job #), mean, ci95 (half-width or null), text}], a line per
   // series, each mean with a bar of its 95 % interval; labels[x - 1] names job x. Series are
-  // nudged apart within a job so their bars do not hide each other.
-  function jobSeries({title, seriesNames, labels, points, width = 760, height = 280}) {
+  // nudged apart within a job so their bars do not hide each other; range is the metric's
+  // (boundsOf): an interval is drawn clamped to its bounds.
+  function jobSeries({title, seriesNames, labels, points, range, width = 760, height = 280}) {
+    const b = boundsOf(range);
+    const bar = p => [clampTo(b, p.mean - p.ci95), clampTo(b, p.mean + p.ci95)];
+    const hasBar = p => p.ci95 !== null && p.ci95 !== undefined;
+    const drawn = points.flatMap(p => hasBar(p) ? [p.mean, ...bar(p)] : [p.mean]).filter(Number.isFinite);
     const S = Math.max(seriesNames.length, 1);
     const nudge = i => (i - (S - 1) / 2) * Math.min(0.08, 0.5 / S);
     const datasets = [];
@@ -326,8 +371,7 @@ const Plots = (() => {
            data: pts.map(p => ({x: p.x + nudge(si), y: p.mean, ci95: p.ci95, text: p.text}))},
           {type: 'bar', label: name + ' 95 % interval', role: 'ci', inLegend: false, hoverable: false, grouped: false,
            backgroundColor: c, maxBarThickness: 2,
-           data: pts.filter(p => p.ci95 !== null && p.ci95 !== undefined)
-                    .map(p => ({x: p.x + nudge(si), y: [p.mean - p.ci95, p.mean + p.ci95]}))});
+           data: pts.filter(hasBar).map(p => ({x: p.x + nudge(si), y: bar(p)}))});
     });
     const config = {
       type: 'line',
@@ -341,7 +385,8 @@ const Plots = (() => {
                 axis.ticks = labels.map((l, i) => ({value: i + 1})).filter(t => t.value >= axis.min && t.value <= axis.max);
               },
               ticks: {autoSkip: true, maxRotation: 0, callback: v => String(v)}},
-          y: {type: 'linear', beginAtZero: false, grace: '8%'},
+          y: {type: 'linear', beginAtZero: false, grace: '8%',
+              ...boundedAxis(b, Math.min(...drawn), Math.max(...drawn))},
         },
       }),
     };

@@ -39,7 +39,8 @@ async function trendPage() {
   });
   show(el('h1', {}, 'Trend'), form,
        points.length ? Plots.jobSeries({title: `${metric} per board, ${method}, jobs with ${label}`, seriesNames: boards,
-                                        labels, points: chartPoints})
+                                        labels, points: chartPoints,
+                                        range: (info.metric_rules[metric] || {}).range})
                      : el('p', {class: 'muted'}, 'no results with this label and metric'),
        points.length ? el('p', {id: 'trend-note', class: 'muted'},
                           'bars: 95 % interval of each mean over the seeds\' draw (the spread over seeds within each ' +

@@ -84,7 +84,8 @@ void HttpApi::DashboardRoutes() {
     nlohmann::json rules = nlohmann::json::object();
     for (const auto& [name, rule] : DefaultMetricRules()) {
       rules[name] = {{"direction", DirectionName(rule.direction)}, {"abs", rule.abs},
-                     {"rel", rule.rel}, {"success_only", rule.success_only}};
+                     {"rel", rule.rel}, {"success_only", rule.success_only},
+                     {"range", RangeName(rule.range)}};
     }
     Reply(res, 200, {{"read_only", farm_ == nullptr}, {"enavi_version", api::BuildVersion()},
                      {"git_commit", api::BuildCommit()}, {"metric_rules", rules}});

@@ -14,6 +14,8 @@ seeded by seed_dashboard_db, and checks that
     flight) or ticked in a job's episode list, and from a compare cell (before vs after),
   - the trend draws a 95 % bar per job and board for the chosen method, and a series of one job
     still draws its point,
+  - nothing is drawn outside the values a metric can take: no mean ± std box or interval of a
+    non-negative metric below 0, an outcome (success) on a 0..1 axis,
   - the compare page lists how the two jobs' specs differ before the metrics, colours exactly the
     planted regression (tx2 x s1) and a click on it overlays both flights; in exact mode it says a
     difference over few seeds can be a draw and links the paired test, which finds the same
@@ -79,8 +81,11 @@ return [...document.querySelectorAll(arguments[0] || 'canvas.chart')].map(canvas
     const rgb = hex(ds.type === 'scatter' || ds.role === 'mean' ? ds.backgroundColor : ds.borderColor || ds.backgroundColor);
     const step = Math.max(1, Math.floor(inside.length / 20));
     const sample = inside.filter((p, k) => k % step === 0);
+    // The lowest and highest values drawn (a bar's ends, a point's y).
+    const ys = ds.data.flatMap(v => v === null || typeof v !== 'object' ? [v] : Array.isArray(v.y) ? v.y : [v.y])
+                      .filter(Number.isFinite);
     return {label: ds.label, role: ds.role || '', visible: chart.isDatasetVisible(i), n: els.length,
-            inside: inside.length, top, sampled: sample.length,
+            inside: inside.length, top, sampled: sample.length, low: Math.min(...ys), high: Math.max(...ys),
             painted: rgb ? sample.filter(p => painted(p.x, p.y, rgb)).length : -1};
   });
   return {title: chart.options.plugins.title.text, kind: canvas.classList[1],
@@ -88,7 +93,8 @@ return [...document.querySelectorAll(arguments[0] || 'canvas.chart')].map(canvas
           legend: (chart.legend.legendHitBoxes || []).map(b => ({left: b.left, top: b.top, right: b.left + b.width,
                                                                  bottom: b.top + b.height})),
           legendItems: (chart.legend.legendItems || []).map(i => i.text),
-          xRange: [chart.scales.x.min, chart.scales.x.max], datasets};
+          xRange: [chart.scales.x.min, chart.scales.x.max],
+          yRange: [chart.scales.y.min, chart.scales.y.max], yTicks: chart.scales.y.ticks.map(t => t.value), datasets};
 });
 """
 
@@ -184,6 +190,33 @@ class PageChecks:
                 self.assertGreaterEqual(d["top"], legend_bottom, "chart '%s', %s reaches the legend" % (title, d["label"]))
         return charts
 
+    def assert_within_metric_bounds(self, charts):
+        """A chart of a metric (its title's first word) with a range in /api/info draws nothing
+        outside the values the metric can take: no mean ± std box or interval of a non-negative
+        metric below 0, an outcome's axis 0..1 (a small pad, no tick outside). Returns the
+        number of charts checked."""
+        with urllib.request.urlopen(self.url + "/api/info") as r:
+            rules = json.load(r)["metric_rules"]
+        checked = 0
+        for c in charts:
+            rule = rules.get(c["title"].split(" ")[0])
+            if not rule or rule["range"] == "any":
+                continue
+            checked += 1
+            lo, hi = (0.0, 1.0) if rule["range"] == "outcome" else (0.0, float("inf"))
+            for d in c["datasets"]:
+                if d["n"]:
+                    self.assertGreaterEqual(d["low"], lo, "chart '%s', %s below the metric's floor" % (c["title"], d["label"]))
+                    self.assertLessEqual(d["high"], hi, "chart '%s', %s above the metric's ceiling" % (c["title"], d["label"]))
+            self.assertTrue(all(lo <= t <= hi for t in c["yTicks"]), (c["title"], c["yTicks"]))
+            self.assertGreaterEqual(c["yRange"][0], lo - 0.1 * max(1.0, c["yRange"][1] - lo), (c["title"], c["yRange"]))
+            if c["yRange"][0] < lo:  # an axis padded below the floor labels the floor, not the padded end
+                self.assertIn(lo, c["yTicks"], (c["title"], c["yTicks"]))
+            if rule["range"] == "outcome":
+                self.assertTrue(-0.1 <= c["yRange"][0] < 0 and 1 < c["yRange"][1] <= 1.1, (c["title"], c["yRange"]))
+                self.assertIn(1, c["yTicks"], (c["title"], c["yTicks"]))
+        return checked
+
     def assert_each_painted(self, chart, roles):
         """Every visible dataset of these roles painted its own points (none hidden under another)."""
         for d in chart["datasets"]:
@@ -257,6 +290,7 @@ class DashboardBrowserTest(PageChecks, unittest.TestCase):
                 # 2 boards x 2 scenarios, each method's whisker, box and mean in every group.
                 self.assertEqual(d["n"], 4, (c["title"], d["label"]))
             self.assert_each_painted(c, {"mean"})
+        self.assertEqual(self.assert_within_metric_bounds(charts), len(charts))
         # Hovering a group lists each method's numbers there.
         flight = titles.index(next(t for t in titles if t.startswith("flight_time_s")))
         canvas = self.driver.find_elements("css selector", "canvas.chart")[flight]
@@ -539,6 +573,31 @@ class DashboardBrowserTest(PageChecks, unittest.TestCase):
         self.wait_ready("return location.hash.includes('method=enavi')")
         self.assertIn("enavi", self.charts()[0]["title"])
 
+    def test_spread_and_interval_stop_at_the_metrics_bounds(self):
+        # crashes-1: one of 7 flights collides with 400 deadline misses. Its mean ± std of success
+        # passes 1, of collided and deadline_misses 0; the charts stop them at the bounds.
+        crashes = self.ids["crashes"]
+        with urllib.request.urlopen(self.url + "/api/jobs/%s/summary?limit=1000" % crashes) as r:
+            st = json.load(r)["cells"][0]["metrics"]
+        self.assertGreater(st["success"]["mean"] + st["success"]["std"], 1, st["success"])
+        for m in ("collided", "deadline_misses"):
+            self.assertLess(st[m]["mean"] - st[m]["std"], 0, st[m])
+        self.open("#/job/" + crashes)
+        charts = self.assert_charts_drew(5)
+        self.assertEqual(self.assert_within_metric_bounds(charts), len(charts))
+        boxes = {c["title"].split(" ")[0]: next(d for d in c["datasets"] if d["role"] == "box") for c in charts}
+        self.assertEqual(boxes["success"]["high"], 1.0)
+        self.assertEqual(boxes["collided"]["low"], 0.0)
+        self.assertEqual(boxes["deadline_misses"]["low"], 0.0)
+        # The success rate's 95 % interval over the 7 seeds reaches past 1 too.
+        with urllib.request.urlopen(self.url + "/api/trend?label=suite%3Dcrashes&metric=success") as r:
+            point = json.load(r)["points"][0]
+        self.assertGreater(point["mean"] + point["ci95"], 1, point)
+        self.open("#/trend?label=suite%3Dcrashes&metric=success")
+        charts = self.assert_charts_drew(1)
+        self.assertEqual(self.assert_within_metric_bounds(charts), 1)
+        self.assertEqual(next(d for d in charts[0]["datasets"] if d["role"] == "ci")["high"], 1.0)
+
     def test_trend_of_one_job_draws_its_point(self):
         self.open("#/trend?label=suite%3Dhostile&metric=flight_time_s")
         charts = self.assert_charts_drew(1)
@@ -659,7 +718,7 @@ class RealFlightScreenshots(PageChecks, unittest.TestCase):
         first = jobs[0]["id"]
         self.open("#/jobs", "dashboard-jobs.png")
         self.open("#/job/" + first, "dashboard-job.png")
-        self.assert_charts_drew(5)
+        self.assertEqual(self.assert_within_metric_bounds(self.assert_charts_drew(5)), len(self.charts()))
 
         episodes = [e for e in self.get("/api/jobs/%s/episodes" % first) if e["state"] == "done"]
         self.open("#/episode/" + episodes[0]["id"])
@@ -688,7 +747,7 @@ class RealFlightScreenshots(PageChecks, unittest.TestCase):
 
         label = sorted(jobs[0]["labels"].items())[0]
         self.open("#/trend?label=%s&metric=flight_time_s" % urllib.parse.quote("%s=%s" % label), "dashboard-trend.png")
-        self.assert_charts_drew(1)
+        self.assertEqual(self.assert_within_metric_bounds(self.assert_charts_drew(1)), 1)
 
 
 if __name__ == "__main__":

@@ -8,7 +8,11 @@
 //   oneseed-2  suite=oneseed  the same with planner.v_max 1.5: slower, but one seed pair cannot
 //                             tell it apart from the draw (paired mode: cannot judge)
 //   ros-1      suite=ros      tx2 x s1 x a user's ROS stack `myplanner` and enavi x 2 seeds
-// Prints {"base", "candidate", "hostile", "oneseed_base", "oneseed_candidate", "ros"} job ids as JSON.
+//   crashes-1  suite=crashes  tx2 x s1 x baseline x 7 seeds: seed 7 collides with 400 deadline
+//                             misses (the others 50), so mean ± std of success passes 1 and of
+//                             collided and deadline misses 0
+// Prints {"base", "candidate", "hostile", "oneseed_base", "oneseed_candidate", "ros", "crashes"}
+// job ids as JSON.
 // seed_dashboard_db DB --pending-ros: only ros-1, submitted and never flown (no worker offers ros).
 #include <iostream>
 #include <string>
@@ -81,12 +85,17 @@ int main(int argc, char** argv) {
                  "overrides: {planner.v_max: 1.5}\n",
       t0 + 4 * 86400000);
   const std::string ros = enavi::testing::SeedJob(store, kRos, t0 + 5 * 86400000);
+  const std::string crashes = enavi::testing::SeedJob(
+      store, "name: crashes-1\nlabels: {suite: crashes}\nboards: [tx2]\nscenarios: [s1]\nmethods: [baseline]\n"
+             "seeds: 7\nepisode_overrides:\n  - match: {seed: 7}\n    overrides: {fake.deadline_misses: 400}\n",
+      t0 + 6 * 86400000);
   std::cout << nlohmann::json{{"base", base},
                               {"candidate", candidate},
                               {"hostile", hostile},
                               {"oneseed_base", oneseed_base},
                               {"oneseed_candidate", oneseed_candidate},
-                              {"ros", ros}}
+                              {"ros", ros},
+                              {"crashes", crashes}}
                    .dump()
             << "\n";
   return 0;

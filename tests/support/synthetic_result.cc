@@ -38,6 +38,8 @@ api::EpisodeResult SyntheticResult(const api::EpisodeSpec& spec, int series_len)
   r.nav_cpu_util_pct = r.task_cpu_util_pct.Sum();
   r.jobs_released = 1000;
   r.deadline_misses = enavi ? 5 : 50;
+  if (const auto misses = spec.overrides.find("fake.deadline_misses"); misses != spec.overrides.end())
+    r.deadline_misses = static_cast<int>(misses->second);
   r.deadline_miss_ratio = r.deadline_misses / 1000.0;
   r.replans = 12;
   r.eci = {0.1, 0.4, 0.8};

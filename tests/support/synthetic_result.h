@@ -4,7 +4,8 @@
 // and benchmark seed their databases with. Real episodes take ~20 s of CPU each.
 //
 // Flights cruise at a nominal 2 m/s: a `planner.v_max` override below that stretches the flight
-// time by 2 / v_max (a slower flight, as the real planner's would be).
+// time by 2 / v_max (a slower flight, as the real planner's would be). A seed divisible by 7
+// collides; `fake.deadline_misses` sets the deadline misses.
 
 #include "api/episode.h"
 
