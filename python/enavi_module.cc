@@ -46,7 +46,7 @@ PYBIND11_MODULE(_enavi, m) {
            }),
            py::arg("world"), py::arg("board"), py::arg("policy"), py::arg("timeout_s"),
            py::arg("world_params"), py::arg("overrides"))
-      // Both wait for the episode thread: the GIL is released meanwhile.
+      // Both fly the episode to its next decision: the GIL is released meanwhile.
       .def("reset", [](EnvCore& e, std::uint64_t seed) {
              Transition t;
              {

@@ -1,22 +1,22 @@
 #pragma once
 // E-Navi's frequency-adaptation problem as a step-by-step environment: each step is one decision
-// of the Strategy Controller (paper Sec. V) in a real virtual-clock flight episode. The episode
-// runs on its own thread; a decision hook (navstack/rl/decision_hook.h) hands each observation
-// and feasible-action mask out and waits for the action, and reports each action's reward.
+// of the Strategy Controller (paper Sec. V) in a real virtual-clock flight episode. The
+// environment steps the episode (sim::Episode) itself, in the caller's thread: a sampled decision
+// waits in a DecisionPort (navstack/rl/decision_port.h) with the episode stopped at its instant,
+// and the action supplied continues it as if it had been chosen there. Rewards are the rollout's
+// the stack records.
 
-#include <condition_variable>
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <mutex>
-#include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <Eigen/Core>
 
-#include "api/episode.h"
+#include "navstack/rl/decision_port.h"
+#include "navstack/rl/rollout.h"
+#include "workers/sim/episode.h"
 
 namespace enavi::python {
 
@@ -43,13 +43,14 @@ struct Transition {
 
 class EnvCore {
  public:
-  /// @throws std::invalid_argument for an unknown board or a clock other than virtual.
+  /// @throws std::invalid_argument for an unknown board, or strategy.explore among the overrides.
   explicit EnvCore(EnvConfig config);
   ~EnvCore();
   EnvCore(const EnvCore&) = delete;
   EnvCore& operator=(const EnvCore&) = delete;
 
-  /// Starts a new episode (world and episode seed `seed`); returns its first decision.
+  /// Starts a new episode (world and episode seed `seed`), abandoning one in progress; returns
+  /// its first decision.
   /// @throws std::invalid_argument for a bad world or overrides, std::runtime_error when the
   ///   episode ends before its first decision.
   Transition Reset(std::uint64_t seed);
@@ -61,12 +62,17 @@ class EnvCore {
   int action_size() const;
 
  private:
-  class Hook;
-  void Abort();
+  /// Steps the episode to its next decision or its end.
+  Transition Advance();
 
   EnvConfig config_;
-  std::unique_ptr<Hook> hook_;
-  std::thread episode_;
+  // One episode: its world, the port its decisions wait in, its rollout (rewards), the episode.
+  std::shared_ptr<const sim::PreparedWorld> world_;
+  std::unique_ptr<navstack::rl::DecisionPort> decisions_;
+  std::unique_ptr<navstack::rl::Rollout> rollout_;
+  std::unique_ptr<sim::Episode> episode_;
+  Eigen::VectorXd last_obs_;
+  bool finished_ = true;
 };
 
 }  // namespace enavi::python

@@ -2,13 +2,16 @@
 
 #include <stdexcept>
 
-#include "navstack/rl/decision_hook.h"
 
 namespace enavi::navstack::rl {
 
 FrequencyAdapter::FrequencyAdapter(PolicyFile policy, const ConstraintOptions& constraints,
-                                   const PolicyStateOptions& state, ActionChoice choice)
-    : policy_(std::move(policy)), constraint_options_(constraints), state_options_(state), choice_(choice) {
+                                   const PolicyStateOptions& state, ActionChoice choice, DecisionPort* decisions)
+    : policy_(std::move(policy)),
+      constraint_options_(constraints),
+      state_options_(state),
+      choice_(choice),
+      decisions_(decisions) {
   if (!policy_.action_grid) {
     throw std::invalid_argument("frequency adapter: the policy has no action grid");
   }
@@ -60,17 +63,15 @@ FrequencyDecision FrequencyAdapter::Decide(const ConstraintInputs& constraints,
   PolicyOutput out =
       policy_.net.Act(obs_, feasible.mask, mode, rng, &ws_, /*want_log_prob=*/recording,
                       /*want_value=*/recording);
-  // A sampled decision may be taken outside the stack (decision_hook.h); the network's own
-  // numbers stay in the record, its action does not count.
-  if (DecisionHook* hook = CurrentDecisionHook(); hook != nullptr && mode == ActMode::kSample) {
-    const int action = hook->Choose(obs_, feasible.mask);
-    if (action < 0 || action >= grid().size() || !feasible.mask[static_cast<std::size_t>(action)]) {
-      throw std::invalid_argument("decision hook: action " + std::to_string(action) + " is not feasible");
-    }
-    out.action = action;
+  // A sampled decision may be taken outside the stack (decision_port.h): it waits there, and
+  // the network's own numbers stay in the record while its action does not count.
+  d.pending = decisions_ != nullptr && mode == ActMode::kSample;
+  if (d.pending) {
+    decisions_->Open(obs_, feasible.mask);
+  } else {
+    d.action = out.action;
+    d.f = grid().At(out.action);
   }
-  d.action = out.action;
-  d.f = grid().At(out.action);
   d.log_prob = out.log_prob;
   d.value = out.value;
   // The onboard work is the actor's: the critic runs only to fill a training record, off board,
@@ -80,7 +81,7 @@ FrequencyDecision FrequencyAdapter::Decide(const ConstraintInputs& constraints,
   if (work != nullptr) work->Add(WorkUnit::kPolicyFlop, d.macs);
   if (recording) {
     record->obs = obs_;
-    record->action = out.action;
+    record->action = d.action;
     record->mask = feasible.mask;
     record->log_prob = out.log_prob;
     record->value = out.value;
@@ -88,6 +89,14 @@ FrequencyDecision FrequencyAdapter::Decide(const ConstraintInputs& constraints,
     record->done = false;
   }
   return d;
+}
+
+void FrequencyAdapter::Resolve(FrequencyDecision* decision, RolloutStep* record) {
+  if (!decision->pending) return;
+  decision->action = decisions_->Take();
+  decision->f = grid().At(decision->action);
+  decision->pending = false;
+  if (record != nullptr) record->action = decision->action;
 }
 
 }  // namespace enavi::navstack::rl

@@ -12,6 +12,7 @@
 #include "navstack/adapt/frequency_constraints.h"
 #include "navstack/adapt/policy_state.h"
 #include "navstack/common/work.h"
+#include "navstack/rl/decision_port.h"
 #include "navstack/rl/policy_io.h"
 #include "navstack/rl/rollout.h"
 
@@ -45,15 +46,19 @@ struct FrequencyDecision {
   double log_prob = 0.0;          ///< filled when a rollout step is recorded
   double value = 0.0;             ///< filled when a rollout step is recorded
   std::int64_t macs = 0;          ///< multiply-adds of this decision (also added to WorkCounts)
+  /// The action waits in the DecisionPort: `action` and `f` are not known until Resolve().
+  bool pending = false;
 };
 
 class FrequencyAdapter {
  public:
   /// @throws std::invalid_argument when the policy has no action grid or its features are not
   ///   PolicyStateFeatureNames() (e.g. a policy for another build).
+  /// `decisions`: where sampled decisions are left for an action from outside (decision_port.h),
+  /// or null; it must outlive the adapter.
   explicit FrequencyAdapter(PolicyFile policy, const ConstraintOptions& constraints = {},
                             const PolicyStateOptions& state = {},
-                            ActionChoice choice = ActionChoice::kPolicy);
+                            ActionChoice choice = ActionChoice::kPolicy, DecisionPort* decisions = nullptr);
 
   /// Decides the frequencies for the next epoch. Greedy for flights, kSample (with `rng`) for
   /// training. When `record` is given it receives obs, mask, action, log-prob and value (the
@@ -62,9 +67,15 @@ class FrequencyAdapter {
   /// with ActionChoice::kLeastLoad the mask's only (the network does not run).
   /// @throws std::invalid_argument when `record` is given with ActionChoice::kLeastLoad: the
   ///   rule's actions are not the policy's, so they cannot train it.
+  /// With a DecisionPort and kSample, the decision is left pending there (`pending`): the
+  /// network still samples (its numbers stay in the record, its action does not count), and
+  /// Resolve() completes the decision with the action supplied.
   FrequencyDecision Decide(const ConstraintInputs& constraints, const FlightContext& context,
                            ActMode mode, Rng* rng = nullptr, WorkCounts* work = nullptr,
                            RolloutStep* record = nullptr);
+  /// Completes a pending decision with the port's action (and the record's action, if given).
+  /// @throws std::logic_error when no action was supplied.
+  void Resolve(FrequencyDecision* decision, RolloutStep* record = nullptr);
 
   /// Multiply-adds C3 and C4 need per grid action.
   static constexpr std::int64_t kMaskMacsPerAction = 6;
@@ -77,6 +88,7 @@ class FrequencyAdapter {
   ConstraintOptions constraint_options_;
   PolicyStateOptions state_options_;
   ActionChoice choice_;
+  DecisionPort* decisions_;
   ActorCritic::Workspace ws_;
   Eigen::VectorXd obs_;
 };

@@ -337,6 +337,8 @@ void RealtimeExecutor::WorkerLoop(int worker) {
       const double cpu0 = ThreadCpuSeconds();
       const double sim0 = clock_->Now();
       out = fn();
+      if (out.awaits_decision)
+        throw std::logic_error("a decision taken outside the stack stops the virtual clock only");
       cpu += ThreadCpuSeconds() - cpu0;
       wall += Seconds(Clock::now() - wall0);
       elapsed += clock_->Now() - sim0;

@@ -35,6 +35,11 @@ inline constexpr bool IsNavigationTask(TaskId id) {
 struct JobOutput {
   WorkCounts work;
   std::function<void()> commit;
+  /// The job left a decision to be taken outside the stack (navstack/rl/decision_port.h) that its
+  /// commit needs: the virtual executor stops at this instant, once the jobs given a core with it
+  /// have run their code, until AdvanceTo is called again (VirtualExecutor::paused). Other
+  /// executors refuse such a job.
+  bool awaits_decision = false;
 };
 
 using JobFn = std::function<JobOutput()>;

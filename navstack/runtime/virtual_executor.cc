@@ -4,6 +4,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "navstack/common/cpu_time.h"
 
@@ -86,6 +87,7 @@ void VirtualExecutor::Start(TaskId task) {
   job.commit = std::move(out.commit);
   job.work = out.work;
   job.host_cpu_s = host_cpu;
+  awaiting_ = awaiting_ || out.awaits_decision;
   ++s.stats.started;
   s.stats.cost_sum_s += cost;
   s.stats.cost_max_s = std::max(s.stats.cost_max_s, cost);
@@ -121,19 +123,31 @@ void VirtualExecutor::Finish(TaskId task) {
 
 void VirtualExecutor::AdvanceTo(double t) {
   while (true) {
-    // Releases due now come first, so a job released at `now_` competes for the cores.
-    for (int i = 0; i < kTaskCount; ++i) {
-      Slot& s = slots_[i];
-      while (s.rate_hz > 0 && s.next_release <= now_ + kEps) {
-        const double period = 1.0 / s.rate_hz;
-        Release(static_cast<TaskId>(i), period);
-        s.next_release += period;
+    std::vector<TaskId> running;
+    if (paused_round_) {
+      // Resumed: the round that stopped has been released and dispatched already.
+      running = std::move(*paused_round_);
+      paused_round_.reset();
+    } else {
+      // Releases due now come first, so a job released at `now_` competes for the cores.
+      for (int i = 0; i < kTaskCount; ++i) {
+        Slot& s = slots_[i];
+        while (s.rate_hz > 0 && s.next_release <= now_ + kEps) {
+          const double period = 1.0 / s.rate_hz;
+          Release(static_cast<TaskId>(i), period);
+          s.next_release += period;
+        }
+      }
+      // Dispatch: jobs that just got a core run their code now, with the data available now.
+      running = Running();
+      for (TaskId id : running)
+        if (!slot(id).job->started) Start(id);
+      // A decision is to be taken outside: nothing more happens until it is.
+      if (std::exchange(awaiting_, false)) {
+        paused_round_ = std::move(running);
+        return;
       }
     }
-    // Dispatch: jobs that just got a core run their code now, with the data available now.
-    const std::vector<TaskId> running = Running();
-    for (TaskId id : running)
-      if (!slot(id).job->started) Start(id);
     // Zero-cost jobs finish on the spot; their cores are dispatched again at the same instant.
     bool finished_any = false;
     for (TaskId id : running) {

@@ -34,7 +34,11 @@ class VirtualExecutor final : public TaskExecutor {
   void SetRate(TaskId task, double hz) override;
   double rate(TaskId task) const override { return slot(task).rate_hz; }
   void Trigger(TaskId task, double relative_deadline) override;
+  /// Runs the schedule up to `t`, or stops at the instant a started job awaits a decision from
+  /// outside (JobOutput::awaits_decision), after the round of jobs dispatched with it has run its
+  /// code: paused() is then true, and the next AdvanceTo (with the same t) goes on from there.
   void AdvanceTo(double t) override;
+  bool paused() const { return paused_round_.has_value(); }
   double now() const override { return now_; }
   int cores() const override { return cores_; }
   const TaskStats& stats(TaskId task) const override { return slot(task).stats; }
@@ -77,6 +81,8 @@ class VirtualExecutor final : public TaskExecutor {
   std::array<Slot, kTaskCount> slots_;
   JobObserver observer_;
   double job_cpu0_ = 0;  ///< host thread CPU when the job whose code runs now started
+  bool awaiting_ = false;  ///< a job started in this dispatch round awaits a decision
+  std::optional<std::vector<TaskId>> paused_round_;  ///< the round AdvanceTo stopped in
 };
 
 }  // namespace enavi::navstack

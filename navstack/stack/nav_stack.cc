@@ -422,7 +422,9 @@ JobOutput NavStack::AdapterJob() {
   const StrategyInputs in = GatherStrategyInputs(executor_->now());
   auto decision = std::make_shared<StrategyDecision>(strategy_->Decide(in, options_.goal));
   out.work = decision->work;
+  out.awaits_decision = decision->pending;
   out.commit = [this, decision] {
+    strategy_->Resolve(decision.get());
     TaskRates r = rates_;
     r.f_per = decision->f.f_per;
     r.f_col = decision->f.f_col;

@@ -5,7 +5,6 @@
 #include <limits>
 #include <stdexcept>
 
-#include "navstack/rl/decision_hook.h"
 
 namespace enavi::navstack {
 namespace {
@@ -46,7 +45,7 @@ rl::PolicyFile RequirePolicy(const StrategyOptions& o) {
 
 StrategyController::StrategyController(const StrategyOptions& options)
     : options_(options),
-      adapter_(RequirePolicy(options), options.constraints, {}, options.choice),
+      adapter_(RequirePolicy(options), options.constraints, {}, options.choice, options.decisions),
       resolution_(options.resolution),
       overload_(options.overload),
       rng_(options.seed) {}
@@ -70,35 +69,19 @@ double StrategyController::Reward(const StrategyInputs& in, bool collided, bool 
 StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eigen::Vector3d& goal_W) {
   StrategyDecision d;
   // The previous action's reward is known now: what its epoch cost and achieved.
-  if (options_.record && !rollout_.steps.empty()) {
-    rollout_.steps.back().reward = Reward(in, false, false);
-    if (rl::DecisionHook* hook = rl::CurrentDecisionHook()) hook->Reward(rollout_.steps.back().reward);
-  }
+  if (options_.record && !rollout_.steps.empty()) rollout_.steps.back().reward = Reward(in, false, false);
 
-  const ConstraintInputs constraints = ToConstraints(in);
   rl::RolloutStep step;
-  const rl::FrequencyDecision f = adapter_.Decide(constraints, in.flight, options_.mode, &rng_, &d.work,
+  const rl::FrequencyDecision f = adapter_.Decide(ToConstraints(in), in.flight, options_.mode, &rng_, &d.work,
                                                   options_.record ? &step : nullptr);
-  d.f = f.f;
   d.fallback = f.fallback_used;
   d.reaction_infeasible = f.reaction_infeasible;
   if (options_.record) rollout_.steps.push_back(std::move(step));
+  d.pending = f.pending;
+  if (f.pending) pending_.emplace(f, in);
+  else ApplyFrequencies(f, in, &d);
 
-  // Paper Sec. V.D: over capacity, periods are scaled down proportionally, and overload that
-  // persists sends the vehicle into a hover.
-  if (in.u_cur > in.cores * options_.constraints.capacity_fraction) {
-    const ScaledFrequencies scaled = ScaleToCapacity(constraints, options_.constraints);
-    d.f = scaled.f;
-    d.scaled = scaled.scaled;
-  }
-  // When even the quickest rates cannot stop in time, new plans fly no faster than the chosen
-  // rates (possibly scaled above) can stop from. Otherwise the rates carry it: limiting every plan
-  // by the nearest obstacle ahead held the vehicle back round every corner (canyon seed 1 on
-  // three boards: 4-8 % longer flights) for walls the chosen rates would have caught anyway.
-  if (d.reaction_infeasible) {
-    d.v_limit = std::max(kMinSpeedLimit, SafeSpeed(in.d_ahead, ReactionMargin(in), in.a_brake,
-                                                   ReactionTime(d.f, in.wcet, in.f_sen)));
-  }
+  // Paper Sec. V.D: overload that persists sends the vehicle into a hover.
   const OverloadMonitor::Update overload = overload_.Observe(in.t, in.u_cur, in.cores);
   failsafe_ = overload.mode == OverloadMonitor::Mode::kFailSafe;
   d.failsafe = failsafe_;
@@ -107,6 +90,35 @@ StrategyDecision StrategyController::Decide(const StrategyInputs& in, const Eige
   d.resolution = resolution_.Select(in.flight.p_WB, goal_W).resolution;
   previous_ = in;
   return d;
+}
+
+void StrategyController::ApplyFrequencies(const rl::FrequencyDecision& f, const StrategyInputs& in,
+                                          StrategyDecision* d) const {
+  d->f = f.f;
+  // Paper Sec. V.D: over capacity, periods are scaled down proportionally.
+  if (in.u_cur > in.cores * options_.constraints.capacity_fraction) {
+    const ScaledFrequencies scaled = ScaleToCapacity(ToConstraints(in), options_.constraints);
+    d->f = scaled.f;
+    d->scaled = scaled.scaled;
+  }
+  // When even the quickest rates cannot stop in time, new plans fly no faster than the chosen
+  // rates (possibly scaled above) can stop from. Otherwise the rates carry it: limiting every plan
+  // by the nearest obstacle ahead held the vehicle back round every corner (canyon seed 1 on
+  // three boards: 4-8 % longer flights) for walls the chosen rates would have caught anyway.
+  if (d->reaction_infeasible) {
+    d->v_limit = std::max(kMinSpeedLimit, SafeSpeed(in.d_ahead, ReactionMargin(in), in.a_brake,
+                                                    ReactionTime(d->f, in.wcet, in.f_sen)));
+  }
+}
+
+void StrategyController::Resolve(StrategyDecision* decision) {
+  if (!decision->pending) return;
+  if (!pending_) throw std::logic_error("strategy: no decision of this controller is pending");
+  auto& [f, in] = *pending_;
+  adapter_.Resolve(&f, options_.record ? &rollout_.steps.back() : nullptr);
+  ApplyFrequencies(f, in, decision);
+  decision->pending = false;
+  pending_.reset();
 }
 
 void StrategyController::OnCoarserMapRejected(double resolution) {
@@ -121,11 +133,16 @@ void StrategyController::OnPlanned(double t, bool found, const PathScoreInputs& 
 }
 
 void StrategyController::Finish(const StrategyInputs& last, bool collided, bool reached_goal) {
+  // A decision whose action came but whose job did not finish before the episode ended: the
+  // rollout records the action taken.
+  if (pending_) {
+    adapter_.Resolve(&pending_->first, options_.record ? &rollout_.steps.back() : nullptr);
+    pending_.reset();
+  }
   if (!options_.record || rollout_.steps.empty()) return;
   rl::RolloutStep& tail = rollout_.steps.back();
   tail.reward = Reward(last, collided, reached_goal);
   tail.done = collided || reached_goal;
-  if (rl::DecisionHook* hook = rl::CurrentDecisionHook()) hook->Reward(tail.reward);
   if (!tail.done) {
     // Time-out: not a terminal; bootstrap from the critic's value of the final state.
     rl::RolloutStep probe;

@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "navstack/adapt/frequency_constraints.h"
@@ -29,6 +30,8 @@ struct StrategyOptions {
   rl::ActionChoice choice = rl::ActionChoice::kPolicy;  ///< kLeastLoad: the ablation rule
   std::uint64_t seed = 1;                        ///< sampling seed
   bool record = false;                           ///< keep the rollout for training
+  /// Sampled decisions wait here for an action from outside (rl/decision_port.h), or null.
+  rl::DecisionPort* decisions = nullptr;
   ResolutionAdapterOptions resolution;
   ConstraintOptions constraints;
   OverloadMonitorOptions overload;
@@ -71,6 +74,9 @@ struct StrategyDecision {
   double v_limit = std::numeric_limits<double>::infinity();
   bool reaction_infeasible = false;  ///< no action could react in time at the current speed
   WorkCounts work;              ///< the decision's own work (network multiply-adds)
+  /// The frequency action waits in the DecisionPort: `f` and `v_limit` are known after
+  /// StrategyController::Resolve().
+  bool pending = false;
 };
 
 class StrategyController {
@@ -80,6 +86,9 @@ class StrategyController {
   explicit StrategyController(const StrategyOptions& options);
 
   StrategyDecision Decide(const StrategyInputs& in, const Eigen::Vector3d& goal_W);
+  /// Completes a pending decision (StrategyDecision::pending) with the action supplied to the
+  /// DecisionPort. @throws std::logic_error when none was supplied.
+  void Resolve(StrategyDecision* decision);
 
   // Events the stack reports to the Resolution Adapter (paper Sec. V.A).
   void ObserveEci(double t, double eci) { resolution_.ObserveEci(t, eci); }
@@ -100,6 +109,8 @@ class StrategyController {
 
  private:
   double Reward(const StrategyInputs& in, bool collided, bool reached_goal) const;
+  /// The part of a decision that follows from the chosen frequencies.
+  void ApplyFrequencies(const rl::FrequencyDecision& f, const StrategyInputs& in, StrategyDecision* d) const;
 
   StrategyOptions options_;
   rl::FrequencyAdapter adapter_;
@@ -108,6 +119,8 @@ class StrategyController {
   rl::Rng rng_;
   rl::Rollout rollout_;
   std::optional<StrategyInputs> previous_;  ///< inputs of the previous decision (reward baseline)
+  /// A decision waiting for its action: the adapter's part and the inputs it was made from.
+  std::optional<std::pair<rl::FrequencyDecision, StrategyInputs>> pending_;
   bool failsafe_ = false;
 };
 

@@ -7,6 +7,7 @@
 
 #include "api/provenance.h"
 #include "server/cli/commands.h"
+#include "workers/emulation/emulated_nav_link.h"
 #ifdef ENAVI_WITH_ROS
 #include "workers/ros/ros_nav_link.h"
 #endif
@@ -17,6 +18,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "enavi " + enavi::api::BuildVersion() + " (commit " + enavi::api::BuildCommit() + ")",
                        "print the version and the commit it was built from");
   app.require_subcommand(1);
+  // The links beyond the built-in virtual clock's, before any help text lists the clocks.
+  enavi::emulation::RegisterEmulatedLink();  // --clock emulated (docs/design.md, "Time: two clocks")
 #ifdef ENAVI_WITH_ROS
   enavi::ros::RegisterRosLink();  // ROS methods fly here (docs/ros.md)
 #endif

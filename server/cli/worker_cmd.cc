@@ -59,10 +59,10 @@ void RunWorker(const WorkerFlags& f, const CLI::App& root) {
   o.boards = Served("--boards", "board", f.boards, catalog.boards);
   o.clocks = Served("--clocks", "clock", f.clocks, catalog.clocks);
   // ROS methods wherever this host can fly them (the bridge built, ROS installed).
-  if (sim::RosLinkAvailable()) {
+  if (const std::string why = sim::LinkUnavailableReason(sim::kRosMethod, "emulated"); why.empty()) {
     o.features.push_back("ros");
   } else {
-    spdlog::info("not serving ROS methods: {}", sim::RosLinkUnavailableReason());
+    spdlog::info("not serving ROS methods: {}", why);
   }
   o.calibration_id = f.calibration_id;
   if (!f.episode_cmd.empty()) o.episode_command = worker::SplitCommand(f.episode_cmd);

@@ -27,6 +27,7 @@
 #include "workers/board/calibration_flights.h"
 #include "workers/board/host_calibration.h"
 #include "workers/emulation/cgroup_manager.h"
+#include "workers/emulation/emulated_nav_link.h"
 #include "workers/sim/episode.h"
 
 namespace enavi::sim {
@@ -35,6 +36,9 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 using integration::SuiteCalibration;
+
+// These tests fly on the emulated clock in this process: its link is registered as enavi's main does.
+const bool kEmulatedLinkRegistered = (emulation::RegisterEmulatedLink(), true);
 
 std::vector<std::string> EnaviCgroups() {
   std::vector<std::string> found;

@@ -39,6 +39,7 @@
 #include "workers/emulation/emulated_wire.h"
 #include "workers/emulation/shm_channel.h"
 #include "workers/emulation/termination_signals.h"
+#include "workers/sim/link_registry.h"
 
 namespace enavi::emulation {
 namespace {
@@ -117,6 +118,12 @@ struct EmulatedNavLink::Impl {
   ~Impl() { Shutdown(); }
 
   void Start();
+  void TakeBoardSlot();
+  void MapSharedMemory();
+  void ForkNavstack();
+  void WaitUntilWorkersRun();
+  void TakeFirstReference();
+  void PaceSimulator();
   void Shutdown();
   void SetEpoch();
   Clock::time_point Due(double t) const {
@@ -134,22 +141,37 @@ struct EmulatedNavLink::Impl {
   void SampleProc() const;
 };
 
+// Starting an emulated episode, step by step; a throw at any step leaves ~Impl to undo the
+// steps before it (Shutdown).
 void EmulatedNavLink::Impl::Start() {
-  // 1. The board on this host: speed, dilation, quotas, the episode's cgroups.
+  TakeBoardSlot();
+  MapSharedMemory();
+  ForkNavstack();
+  WaitUntilWorkersRun();
+  TakeFirstReference();
+  PaceSimulator();
+}
+
+// The board on this host: speed, dilation, quotas, the episode's cgroups.
+void EmulatedNavLink::Impl::TakeBoardSlot() {
   signals.emplace();
   slot = std::make_unique<BoardSlot>(board, dilation, emulation);
   speed = slot->speed();
   dilation = slot->dilation();
   notes.insert(slot->notes().begin(), slot->notes().end());
-  EpisodeCgroup* group = &slot->group();
+}
 
-  // 2. Shared memory.
+// The frame channel and the mapping the navstack process writes its outputs to.
+void EmulatedNavLink::Impl::MapSharedMemory() {
   channel.emplace(emulation::ShmChannel::Create({options.camera.width, options.camera.height}));
   void* mem = mmap(nullptr, sizeof(LinkShared), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
   if (mem == MAP_FAILED) throw std::runtime_error(std::string("emulated clock: mmap: ") + std::strerror(errno));
   shared = new (mem) LinkShared();
+}
 
-  // 3. The navstack process: forked, waits until it is inside the board's groups.
+// The navstack process: forked, it waits on a pipe until it is inside the board's groups, so no
+// navstack instruction runs unthrottled.
+void EmulatedNavLink::Impl::ForkNavstack() {
   int go[2];
   if (pipe2(go, O_CLOEXEC) != 0) throw std::runtime_error(std::string("emulated clock: pipe: ") + std::strerror(errno));
   ChildArgs args;
@@ -187,10 +209,10 @@ void EmulatedNavLink::Impl::Start() {
   }
   child = pid;
   close(go[0]);
-  if (emulation::CgroupStatus s = group->AddProcess(child); !s.ok) {
+  EpisodeCgroup& group = slot->group();
+  if (emulation::CgroupStatus s = group.AddProcess(child); !s.ok) {
     close(go[1]);
-    throw std::runtime_error("emulated clock: cannot move the navstack process into " + group->name() + ": " +
-                             s.message);
+    throw std::runtime_error("emulated clock: cannot move the navstack process into " + group.name() + ": " + s.message);
   }
   const char byte = 'g';
   const bool sent = write(go[1], &byte, 1) == 1;
@@ -199,8 +221,11 @@ void EmulatedNavLink::Impl::Start() {
   notes["emulation.process"] = "navstack in its own process (fork, pid " + std::to_string(child) +
                                "), simulator outside the throttled groups";
   if (emulation.on_navstack_started) emulation.on_navstack_started(child);
+}
 
-  // 4. Wait until its workers run (and asked for SCHED_DEADLINE), then give every thread its group.
+// Waits until the navstack's workers run (and asked for SCHED_DEADLINE), then gives every
+// thread its group.
+void EmulatedNavLink::Impl::WaitUntilWorkersRun() {
   const auto give_up = Clock::now() + std::chrono::seconds(30);
   while (shared->child_state.load(std::memory_order_acquire) == kStarting) {
     CheckSignal("while the navstack process started");
@@ -210,7 +235,7 @@ void EmulatedNavLink::Impl::Start() {
   }
   CheckChild();
   emulation::CgroupStatus sweep;
-  const int placed = group->SweepThreads(&sweep);
+  const int placed = slot->group().SweepThreads(&sweep);
   if (!sweep.ok) throw std::runtime_error("emulated clock: per-thread cgroups: " + sweep.message);
   notes["emulation.threads"] = std::to_string(placed) + " navstack threads in per-thread groups (" +
                                std::to_string(threads) + " worker(s), release, IPC)";
@@ -220,13 +245,21 @@ void EmulatedNavLink::Impl::Start() {
       std::to_string(threads) + " worker thread(s), releases in sim time = wall / " + Fixed(dilation, 2) +
       "; jobs under a shared lock, commits exclusive";
   notes["cost"] = "measured (job thread CPU time / board speed)";
+}
+
+// The stack's first output: the hover reference it publishes before sim time starts.
+void EmulatedNavLink::Impl::TakeFirstReference() {
   mirror = ReferenceMirror(options.planner);
   TakeOutputs();
   if (!mirror.has_message()) throw std::runtime_error("emulated clock: the navstack process published no reference");
   next_liveness_check = next_sweep = Clock::now();
-  // The simulator must keep its schedule whatever else runs on the host: its paced threads run
-  // SCHED_FIFO (above every CFS task, below the board's SCHED_DEADLINE servers). The navstack
-  // process was forked before, so it does not inherit this.
+}
+
+// The simulator must keep its schedule whatever else runs on the host: its paced threads run
+// SCHED_FIFO (above every CFS task, below the board's SCHED_DEADLINE servers; the navstack
+// process was forked before, so it does not inherit this), and the publisher thread hands frames
+// and odometry over at their due times.
+void EmulatedNavLink::Impl::PaceSimulator() {
   if (emulation.simulator_fifo) {
     pthread_getschedparam(pthread_self(), &sim_old_policy, &sim_old_param);
     sched_param fifo{};
@@ -389,6 +422,8 @@ EmulatedNavLink::EmulatedNavLink(const navstack::MethodInfo& method, const navst
   if (threads < 1) throw std::invalid_argument("emulated clock: threads must be >= 1");
   if (options.strategy && options.strategy->record)
     throw std::invalid_argument("emulated clock: E-Navi rollouts (training) are recorded on the virtual clock only");
+  if (options.strategy && options.strategy->decisions)
+    throw std::invalid_argument("emulated clock: decisions taken outside the stack stop the virtual clock only");
   impl_->method = &method;
   impl_->options = options;
   impl_->initial = initial;
@@ -596,6 +631,16 @@ sim::NavAccounting EmulatedNavLink::Accounting() const {
                                 Fixed(1e3 * s.lock.commit_wait_s, 1) + " ms in total (longest " +
                                 Fixed(1e3 * s.lock.commit_wait_max_s, 1) + " ms wall) for running jobs";
   return acc;
+}
+
+void RegisterEmulatedLink() {
+  sim::RegisterLink({sim::kNavstackMethod, "emulated",
+                     "the stack in its own process, throttled by cgroups to the board's speed, in dilated wall time",
+                     [](const sim::LinkRequest& r) -> std::unique_ptr<sim::NavLink> {
+                       return std::make_unique<EmulatedNavLink>(*r.method, *r.nav, r.threads, r.policy, *r.board,
+                                                                r.spec->dilation, r.initial, *r.emulation);
+                     },
+                     ""});
 }
 
 }  // namespace enavi::emulation

@@ -75,4 +75,9 @@ class EmulatedNavLink final : public sim::NavLink {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Makes the emulated clock one episodes in this process can run on (sim::RegisterLink, method
+/// kind navstack, clock "emulated"). The composition roots that fly on it call it once (enavi's
+/// main; the emulated clock's tests).
+void RegisterEmulatedLink();
+
 }  // namespace enavi::emulation

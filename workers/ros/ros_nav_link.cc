@@ -28,7 +28,7 @@
 #include "workers/ros/launch_plan.h"
 #include "workers/ros/process_supervisor.h"
 #include "workers/ros/stack_cpu.h"
-#include "workers/sim/episode.h"
+#include "workers/sim/link_registry.h"
 
 extern char** environ;
 
@@ -597,38 +597,38 @@ sim::NavAccounting RosNavLink::Accounting() const {
 }
 
 void RegisterRosLink() {
+  sim::LinkInfo link{sim::kRosMethod, "emulated", "a user's ROS 1 stack in the board's cgroups, in dilated wall time",
+                     [](const sim::LinkRequest& r) -> std::unique_ptr<sim::NavLink> {
+                       RosLinkOptions o;
+                       o.stack = *r.spec->ros;
+                       o.board = *r.board;
+                       o.dilation = r.spec->dilation;
+                       o.geometry.start = r.start;
+                       o.geometry.goal = r.goal;
+                       o.geometry.start_yaw = r.start_yaw;
+                       o.geometry.bounds = r.bounds;
+                       o.geometry.camera = r.camera;
+                       o.geometry.X_BC = r.X_BC;
+                       o.geometry.board = r.board->id;
+                       o.geometry.cores = r.board->cores;
+                       o.initial = r.initial;
+                       o.output_dir = r.output_dir;
+                       o.bag_file = r.bag_file;
+                       o.emulation = *r.emulation;  // the spec's speed_probe applied
+                       return std::make_unique<RosNavLink>(std::move(o));
+                     },
+                     ""};
   // The bridge was built; the host must also have the ROS programs it starts.
   for (const char* program : {"rosmaster", "roslaunch", "rosbag"}) {
     bool found = false;
     for (const char* dir : {"/usr/bin", "/usr/local/bin"}) found = found || access((std::string(dir) + "/" + program).c_str(), X_OK) == 0;
     if (!found) {
-      sim::SetRosLinkUnavailable(std::string("this host has no ") + program +
-                                 " (Debian's python3-rosmaster, python3-roslaunch, python3-rosbag: "
-                                 "scripts/install-deps.sh)");
-      return;
+      link.unavailable = std::string("this host has no ") + program +
+                         " (Debian's python3-rosmaster, python3-roslaunch, python3-rosbag: scripts/install-deps.sh)";
+      break;
     }
   }
-  sim::SetRosLinkFactory([](const sim::RosLinkRequest& r) -> std::unique_ptr<sim::NavLink> {
-    RosLinkOptions o;
-    o.stack = *r.spec->ros;
-    o.board = *r.board;
-    o.dilation = r.spec->dilation;
-    o.geometry.start = r.start;
-    o.geometry.goal = r.goal;
-    o.geometry.start_yaw = r.start_yaw;
-    o.geometry.bounds = r.bounds;
-    o.geometry.camera = r.camera;
-    o.geometry.X_BC = r.X_BC;
-    o.geometry.board = r.board->id;
-    o.geometry.cores = r.board->cores;
-    o.initial = r.initial;
-    o.output_dir = r.options->ros_output_dir;
-    o.bag_file = r.bag_file;
-    o.emulation = r.options->emulation;
-    if (r.spec->speed_probe == "off") o.emulation.probe_host_speed = nullptr;
-    o.emulation.use_probed_speed = r.spec->speed_probe == "use";
-    return std::make_unique<RosNavLink>(std::move(o));
-  });
+  sim::RegisterLink(std::move(link));
 }
 
 }  // namespace enavi::ros

@@ -74,7 +74,8 @@ class RosNavLink final : public sim::NavLink {
 };
 
 /// Makes ROS methods fly in this process: registers the bridge's link with the episode
-/// (sim::SetRosLinkFactory). The composition roots call it where the bridge was built.
+/// (sim::RegisterLink, method kind ros, clock emulated). The composition roots call it where the
+/// bridge was built.
 void RegisterRosLink();
 
 }  // namespace enavi::ros

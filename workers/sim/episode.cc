@@ -2,24 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
-#include <numbers>
 #include <stdexcept>
 
-#include "api/fixed.h"
 #include "navstack/common/cpu_time.h"
-#include "navstack/control/controller.h"
-#include "navstack/eci/eci.h"
-#include "workers/board/board_profile.h"
-#include "workers/emulation/emulated_nav_link.h"
-#include "workers/sim/depth_camera.h"
 #include "workers/sim/embree_scene.h"
-#include "workers/sim/episode_config.h"
+#include "workers/sim/episode_monitors.h"
 #include "workers/sim/episode_provenance.h"
-#include "workers/sim/flight_recorder.h"
-#include "workers/sim/quadrotor.h"
 #include "workers/sim/static_world.h"
-#include "workers/sim/virtual_nav_link.h"
 #include "worlds/mesh.h"
 #include "worlds/resolve.h"
 
@@ -27,17 +16,6 @@ namespace enavi::sim {
 namespace {
 
 using navstack::TaskId;
-
-api::Vec3 ToVec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
-
-std::unique_ptr<navstack::CostModel> MakeCostModel(const api::EpisodeSpec& spec, const board::BoardProfile& b,
-                                                   const std::string& cost_family) {
-  if (spec.cost == "model")
-    return std::make_unique<navstack::WorkCountCostModel>(
-        board::BoardCoefficients(b, board::LoadReferenceCosts(), cost_family));
-  if (spec.cost == "measured") return std::make_unique<navstack::MeasuredCostModel>(1.0 / b.per_core_speed);
-  throw std::invalid_argument("cost: unknown cost mode '" + spec.cost + "' (known: model, measured)");
-}
 
 void CheckSpeedProbeMode(const std::string& mode) {
   for (const char* known : api::kSpeedProbeModes)
@@ -52,17 +30,57 @@ emulation::EmulationOptions WithSpeedProbe(const api::EpisodeSpec& spec, emulati
   return e;
 }
 
-// Navigation busy time: the four tasks the paper counts as navigation workload, or every process
-// of a stack that runs as processes (the paper's figure is the planner process's CPU).
-double NavBusy(const NavAccounting& acc) {
-  double busy = 0;
-  if (!acc.process_cpu_board_s.empty()) {
-    for (const auto& [name, board_s] : acc.process_cpu_board_s) busy += board_s;
-    return busy;
-  }
-  for (int i = 0; i < navstack::kTaskCount; ++i)
-    if (navstack::IsNavigationTask(static_cast<TaskId>(i))) busy += acc.tasks[i].busy_s;
-  return busy;
+// How the result was produced, as far as it is known before the flight.
+std::map<std::string, std::string> ModelNotes(const EpisodeModel& m) {
+  const api::EpisodeSpec& spec = m.spec;
+  std::map<std::string, std::string> notes;
+  notes["clock"] = spec.clock;
+  notes["board_cores"] = std::to_string(m.board.cores);
+  if (!spec.ros)
+    notes["scheduler"] = std::string(m.config.scheduler.policy == navstack::SchedulingPolicy::kGlobalEdf
+                                         ? "global EDF"
+                                         : "FIFO, no preemption") +
+                         " on " + std::to_string(m.threads) + " thread(s)";
+  notes["triangles"] = std::to_string(m.world->triangles);
+  if (!m.world->world.metadata.import_note.empty()) notes["world_import"] = m.world->world.metadata.import_note;
+  notes["depth_stream"] = std::to_string(m.config.nav.camera.width) + "x" + std::to_string(m.config.nav.camera.height);
+  notes.merge(EpisodeProvenance(spec, m.board, m.config.method ? m.config.method->cost_family : "",
+                                m.config.nav.strategy.has_value()));
+  return notes;
+}
+
+// The link the stack runs on, from the registry (link_registry.h).
+std::unique_ptr<NavLink> MakeEpisodeLink(const EpisodeModel& m, const navstack::VehicleState& initial,
+                                         const emulation::EmulationOptions& emulation) {
+  LinkRequest r;
+  r.spec = &m.spec;
+  r.board = &m.board;
+  r.method = m.config.method;
+  r.nav = &m.config.nav;
+  r.threads = m.threads;
+  r.policy = m.config.scheduler.policy;
+  r.initial = initial;
+  r.start = m.world->world.start;
+  r.goal = m.world->world.goal;
+  r.start_yaw = m.start_yaw;
+  r.bounds = m.world->world.bounds;
+  r.camera = m.config.nav.camera;
+  r.X_BC = CameraPoseInWorld(Eigen::Isometry3d::Identity(), m.vehicle);
+  r.job_observer = m.options.job_observer;
+  r.emulation = &emulation;
+  r.output_dir = m.options.ros_output_dir;
+  r.bag_file = m.options.ros_bag_file;
+  if (r.bag_file.empty() && !m.spec.rosbag_dir.empty())
+    r.bag_file = m.spec.rosbag_dir + "/" + m.scenario + "-" + m.spec.board + "-" + m.spec.method + "-s" +
+                 std::to_string(m.spec.seed) + ".bag";
+  return MakeLink(r);
+}
+
+QuadrotorOptions QuadOptions(const EpisodeModel& m) {
+  QuadrotorOptions o;
+  o.vehicle = m.vehicle;
+  o.dt = m.options.physics_dt;
+  return o;
 }
 
 }  // namespace
@@ -89,325 +107,175 @@ worlds::WorldRequest WorldRequestOf(const api::EpisodeSpec& spec) {
   return request;
 }
 
-api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const EpisodeOptions& options) {
-  const auto world = PrepareWorld(worlds::ResolveWorld(WorldRequestOf(spec)));
-  return RunEpisode(spec, *world, options);
-}
-
-namespace {
-
-// The clock registry: each clock's name, help line and the link that runs the stack on it.
-struct ClockEntry {
-  ClockInfo info;
-  std::unique_ptr<NavLink> (*make)(const api::EpisodeSpec& spec, const EpisodeConfig& config,
-                                   const board::BoardProfile& board, int threads,
-                                   const navstack::VehicleState& initial, const EpisodeOptions& options);
-};
-
-const std::vector<ClockEntry>& ClockEntries() {
-  static const std::vector<ClockEntry> entries = {
-      {{"virtual", "sim-time EDF on the board's cores, job costs from the cost model (deterministic)"},
-       [](const api::EpisodeSpec& spec, const EpisodeConfig& config, const board::BoardProfile& board, int threads,
-          const navstack::VehicleState& initial, const EpisodeOptions& options) -> std::unique_ptr<NavLink> {
-         return std::make_unique<VirtualNavLink>(*config.method, config.nav, threads, config.scheduler.policy,
-                                                 MakeCostModel(spec, board, config.method->cost_family), initial, options.job_observer);
-       }},
-      {{"emulated", "the stack in its own process, throttled by cgroups to the board's speed, in dilated wall time"},
-       [](const api::EpisodeSpec& spec, const EpisodeConfig& config, const board::BoardProfile& board, int threads,
-          const navstack::VehicleState& initial, const EpisodeOptions& options) -> std::unique_ptr<NavLink> {
-         return std::make_unique<emulation::EmulatedNavLink>(*config.method, config.nav, threads, config.scheduler.policy, board,
-                                                  spec.dilation, initial, WithSpeedProbe(spec, options.emulation));
-       }},
-  };
-  return entries;
-}
-
-RosLinkFactory& RosFactory() {
-  static RosLinkFactory factory;
-  return factory;
-}
-
-std::unique_ptr<NavLink> MakeNavLink(const api::EpisodeSpec& spec, const EpisodeConfig& config,
-                                     const board::BoardProfile& board, const navstack::VehicleState& initial,
-                                     const EpisodeOptions& options) {
-  const int threads = config.scheduler.threads > 0 ? std::min(config.scheduler.threads, board.cores) : board.cores;
-  std::string known;
-  for (const ClockEntry& c : ClockEntries()) {
-    if (c.info.name == spec.clock) return c.make(spec, config, board, threads, initial, options);
-    known += (known.empty() ? "" : ", ") + c.info.name;
-  }
-  throw std::invalid_argument("clock: unknown clock '" + spec.clock + "' (known: " + known + ")");
-}
-
-}  // namespace
-
-std::string& RosUnavailable() {
-  static std::string reason = "this enavi was built without the ROS bridge (Debian's ROS packages: "
-                              "scripts/install-deps.sh, then rebuild)";
-  return reason;
-}
-
-void SetRosLinkFactory(RosLinkFactory factory) {
-  RosFactory() = std::move(factory);
-  RosUnavailable().clear();
-}
-
-void SetRosLinkUnavailable(std::string reason) { RosUnavailable() = std::move(reason); }
-
-bool RosLinkAvailable() { return static_cast<bool>(RosFactory()) && RosUnavailable().empty(); }
-
-std::string RosLinkUnavailableReason() { return RosUnavailable(); }
-
-const std::vector<ClockInfo>& Clocks() {
-  static const std::vector<ClockInfo> infos = [] {
-    std::vector<ClockInfo> v;
-    for (const ClockEntry& c : ClockEntries()) v.push_back(c.info);
-    return v;
-  }();
-  return infos;
-}
-
-api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld& prepared,
+EpisodeModel MakeEpisodeModel(const api::EpisodeSpec& spec, const PreparedWorld& world,
                               const EpisodeOptions& options) {
-  const worlds::World& world = prepared.world;
   CheckSpeedProbeMode(spec.speed_probe);
-  const board::BoardProfile board = board::LoadBoard(spec.board);
+  board::BoardProfile board = board::LoadBoard(spec.board);
   EpisodeConfig config = MakeEpisodeConfig(spec);
   if (options.rollout && config.nav.strategy) config.nav.strategy->record = true;
-
-  api::EpisodeResult result;
-  result.spec = spec;
-  result.scenario = world.metadata.scenario.empty() ? "custom" : world.metadata.scenario;
-  result.straight_line_m = (world.goal - world.start).norm();
-  result.notes["clock"] = spec.clock;
-  result.notes["board_cores"] = std::to_string(board.cores);
-  if (!spec.ros) result.notes["scheduler"] =
-      std::string(config.scheduler.policy == navstack::SchedulingPolicy::kGlobalEdf ? "global EDF" : "FIFO, no preemption") +
-      " on " + std::to_string(config.scheduler.threads > 0 ? std::min(config.scheduler.threads, board.cores) : board.cores) +
-      " thread(s)";
-  result.notes["triangles"] = std::to_string(prepared.triangles);
-  if (!world.metadata.import_note.empty()) result.notes["world_import"] = world.metadata.import_note;
-  result.notes["depth_stream"] = std::to_string(config.nav.camera.width) + "x" + std::to_string(config.nav.camera.height);
-  result.notes.merge(EpisodeProvenance(spec, board, config.method ? config.method->cost_family : "",
-                                       config.nav.strategy.has_value()));
-
-  // Vehicle: hovering at the start, facing the goal.
+  if (options.decisions) {
+    if (!config.nav.strategy)
+      throw std::invalid_argument("method: '" + spec.method + "' takes no frequency decisions from outside");
+    config.nav.strategy->decisions = options.decisions;
+  }
   const navstack::VehicleParams vehicle;
-  const Eigen::Vector3d to_goal = world.goal - world.start;
-  QuadrotorOptions quad_options;
-  quad_options.vehicle = vehicle;
-  quad_options.dt = options.physics_dt;
-  QuadrotorSim quad(prepared.collision, quad_options, world.start, std::atan2(to_goal.y(), to_goal.x()));
-  navstack::Controller controller(vehicle);
-  const DepthCamera camera(config.nav.camera, config.noise);
+  DepthCamera camera(config.nav.camera, config.noise);
+  EpisodeModel m{.spec = spec,
+                 .world = &world,
+                 .board = std::move(board),
+                 .config = std::move(config),
+                 .vehicle = vehicle,
+                 .camera = std::move(camera),
+                 .options = options};
+  const worlds::World& w = world.world;
+  m.scenario = w.metadata.scenario.empty() ? "custom" : w.metadata.scenario;
+  m.straight_line_m = (w.goal - w.start).norm();
+  const Eigen::Vector3d to_goal = w.goal - w.start;
+  m.start_yaw = std::atan2(to_goal.y(), to_goal.x());
+  // The stack's mission: this world's goal and bounds, obstacles inflated by at least the body.
+  navstack::NavStackOptions& nav = m.config.nav;
+  nav.goal = w.goal;
+  nav.flight_bounds = w.bounds;
+  nav.planner.robot_radius = std::max(nav.planner.robot_radius, vehicle.collision_radius);
+  m.timeout_s = spec.timeout_s > 0 ? spec.timeout_s : 20.0 + 6.0 * m.straight_line_m / nav.planner.v_max;
+  m.frame_dt = 1.0 / nav.f_sen;
+  m.control_every = std::max(1L, std::lround(options.control_dt / options.physics_dt));
+  m.record_every = std::max(1L, std::lround(0.01 / options.physics_dt));
+  m.series_every = std::max(1L, std::lround(options.series_dt / options.physics_dt));
+  m.threads = m.config.scheduler.threads > 0 ? std::min(m.config.scheduler.threads, m.board.cores) : m.board.cores;
+  m.notes = ModelNotes(m);
+  return m;
+}
 
-  // The navigation stack under the board's emulation.
-  config.nav.goal = world.goal;
-  config.nav.flight_bounds = world.bounds;
-  config.nav.planner.robot_radius = std::max(config.nav.planner.robot_radius, vehicle.collision_radius);
-  std::unique_ptr<NavLink> nav;
-  if (spec.ros) {
-    if (!RosLinkAvailable())
-      throw std::invalid_argument("method: '" + spec.method + "' is a ROS stack, and " + RosLinkUnavailableReason());
-    RosLinkRequest request;
-    request.spec = &spec;
-    request.board = &board;
-    request.start = world.start;
-    request.goal = world.goal;
-    request.start_yaw = std::atan2(to_goal.y(), to_goal.x());
-    request.bounds = world.bounds;
-    request.camera = config.nav.camera;
-    request.X_BC = CameraPoseInWorld(Eigen::Isometry3d::Identity(), vehicle);
-    request.initial = quad.State();
-    request.options = &options;
-    request.bag_file = options.ros_bag_file;
-    if (request.bag_file.empty() && !spec.rosbag_dir.empty())
-      request.bag_file = spec.rosbag_dir + "/" + result.scenario + "-" + spec.board + "-" + spec.method + "-s" +
-                         std::to_string(spec.seed) + ".bag";
-    nav = RosFactory()(request);
-  } else {
-    nav = MakeNavLink(spec, config, board, quad.State(), options);
+Episode::Episode(const api::EpisodeSpec& spec, const PreparedWorld& world, const EpisodeOptions& options)
+    : model_(MakeEpisodeModel(spec, world, options)),
+      quad_(world.collision, QuadOptions(model_), world.world.start, model_.start_yaw),
+      controller_(model_.vehicle),
+      vehicle_(quad_.State()),
+      p_ref_(world.world.start) {
+  link_ = MakeEpisodeLink(model_, quad_.State(), WithSpeedProbe(spec, options.emulation));
+  monitors_ = EpisodeMonitors(model_);
+  end_conditions_ = EndConditions();
+}
+
+Episode::~Episode() = default;
+
+double Episode::t() const { return k_ * model_.options.physics_dt; }
+
+// The sensor at t: a depth frame rendered with Embree (noise seeded by the episode seed and the
+// frame index), its eci computed for the metrics, handed to the stack.
+void Episode::Sense(double t) {
+  next_frame_t_ += model_.frame_dt;
+  auto frame = std::make_shared<navstack::DepthFrame>();
+  frame->index = frame_index_++;
+  frame->t = t;
+  Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+  X_WB.linear() = vehicle_.q_WB.toRotationMatrix();
+  X_WB.translation() = vehicle_.p_WB;
+  frame->X_WC = CameraPoseInWorld(X_WB, model_.vehicle);
+  frame->v_W = vehicle_.v_WB;
+  model_.camera.Render(*model_.world->scene, frame->X_WC, &frame->image, model_.spec.seed * 1000003ULL + frame->index);
+  navstack::WorkCounts eci_work;
+  const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * vehicle_.v_WB;
+  const double eci_cpu0 = navstack::ThreadCpuSeconds();
+  const navstack::EciResult eci =
+      navstack::ComputeEci(frame->image, model_.config.nav.camera, v_C, model_.config.nav.eci, &eci_work);
+  const double eci_cpu = navstack::ThreadCpuSeconds() - eci_cpu0;
+  if (model_.options.job_observer) model_.options.job_observer(TaskId::kEci, eci_work, eci_cpu);
+  const double board_s = link_->OffBoardSeconds(TaskId::kEci, eci_work, eci_cpu);
+  for (const auto& m : monitors_) m->OnFrame({*frame, eci, vehicle_}, board_s);
+  link_->OnFrame(std::move(frame));
+}
+
+StepStatus Episode::Step() {
+  if (end_) throw std::logic_error("Step: the episode has ended");
+  const double t = this->t();
+  if (!resuming_) {
+    // Odometry to the stack, and a frame at f_sen.
+    vehicle_ = quad_.State();
+    link_->OnState(vehicle_);
+    if (t >= next_frame_t_ - 1e-9) Sense(t);
+  } else if (model_.options.decisions && model_.options.decisions->pending()) {
+    throw std::logic_error("Step: the pending decision has no action yet (DecisionPort::Supply)");
   }
 
-  const double timeout = spec.timeout_s > 0 ? spec.timeout_s
-                                            : 20.0 + 6.0 * result.straight_line_m / config.nav.planner.v_max;
-  const double frame_dt = 1.0 / config.nav.f_sen;
-  const long control_every = std::max(1L, std::lround(options.control_dt / options.physics_dt));
-  const long record_every = std::max(1L, std::lround(0.01 / options.physics_dt));
-  const long series_every = std::max(1L, std::lround(options.series_dt / options.physics_dt));
+  // The board runs the stack's jobs up to t; a decision taken outside stops it at its instant.
+  link_->AdvanceTo(t);
+  resuming_ = link_->paused();
+  if (resuming_) return StepStatus::kAwaitingDecision;
+  const std::vector<navstack::NavEvent> events = link_->TakeEvents();
+  for (const auto& m : monitors_) m->OnEvents(events);
 
-  FlightRecorder recorder(record_every * options.physics_dt);
-  Eigen::Vector3d p_ref = world.start;
-  double next_frame_t = 0.0;
-  std::int64_t frame_index = 0;
-  double eci_latest = 0, eci_sum = 0, eci_min = std::numeric_limits<double>::infinity(), eci_max = 0;
-  // eci along the flight itself: from the first frame at take-off speed on (api::EciSummary).
-  bool took_off = false;
-  double flight_eci_min = std::numeric_limits<double>::infinity(), flight_eci_max = 0;
-  std::int64_t flight_frames = 0;
-  double eci_cost_sum = 0;
-  double last_busy = 0;
-  std::string interval_events;
-  double next_progress = 1.0;
-
-  for (long k = 0;; ++k) {
-    const double t = k * options.physics_dt;
-    const navstack::VehicleState state = quad.State();
-    nav->OnState(state);
-
-    // Sensor: a depth frame at f_sen; eci of every frame for the metrics.
-    if (t >= next_frame_t - 1e-9) {
-      next_frame_t += frame_dt;
-      auto frame = std::make_shared<navstack::DepthFrame>();
-      frame->index = frame_index++;
-      frame->t = t;
-      Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
-      X_WB.linear() = state.q_WB.toRotationMatrix();
-      X_WB.translation() = state.p_WB;
-      frame->X_WC = CameraPoseInWorld(X_WB, vehicle);
-      frame->v_W = state.v_WB;
-      camera.Render(*prepared.scene, frame->X_WC, &frame->image, spec.seed * 1000003ULL + frame->index);
-      navstack::WorkCounts eci_work;
-      const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * state.v_WB;
-      const double eci_cpu0 = navstack::ThreadCpuSeconds();
-      const navstack::EciResult eci_frame = navstack::ComputeEci(frame->image, config.nav.camera, v_C, config.nav.eci,
-                                                                 &eci_work);
-      eci_latest = eci_frame.eci;
-      const double eci_cpu = navstack::ThreadCpuSeconds() - eci_cpu0;
-      if (options.job_observer) options.job_observer(TaskId::kEci, eci_work, eci_cpu);
-      eci_cost_sum += nav->OffBoardSeconds(TaskId::kEci, eci_work, eci_cpu);
-      eci_sum += eci_latest;
-      eci_min = std::min(eci_min, eci_latest);
-      eci_max = std::max(eci_max, eci_latest);
-      took_off = took_off || state.v_WB.norm() > FlightRecorder::kMovingSpeed;
-      if (took_off) {
-        ++flight_frames;
-        flight_eci_min = std::min(flight_eci_min, eci_latest);
-        flight_eci_max = std::max(flight_eci_max, eci_latest);
-      }
-      if (options.eci_observer) {
-        const double up = std::clamp(frame->X_WC.linear().col(2).z(), -1.0, 1.0);  // optical axis, world z
-        options.eci_observer(
-            {t, eci_frame, state.v_WB.norm(), std::asin(up) * 180.0 / std::numbers::pi, took_off});
-      }
-      nav->OnFrame(std::move(frame));
-    }
-
-    nav->AdvanceTo(t);
-    for (const auto& e : nav->TakeEvents()) {
-      if (e.kind == "replan") {
-        ++result.replans;
-        ++result.replans_by_trigger[e.detail.empty() ? "unspecified" : e.detail];
-      }
-      if (e.kind == "emergency_stop") ++result.emergency_stops;
-      interval_events += (interval_events.empty() ? "" : ";") + e.kind;
-      if (result.events.size() < 5000) result.events.push_back({e.t, e.kind, e.detail});
-    }
-
-    // A stack that runs as processes may end the episode itself (it exited, misbehaved).
-    if (const std::optional<LinkFailure> failure = nav->failure()) {
-      result.end_reason = failure->reason;
-      result.notes["end_detail"] = failure->detail;
-      break;
-    }
-
-    if (k % control_every == 0) {
-      const navstack::TrajectorySample ref = nav->Reference(t);
-      p_ref = ref.p;
-      quad.SetCommand(controller.Update(state, ref));
-    }
-    if (k % record_every == 0) recorder.Sample(state.p_WB, state.v_WB, p_ref);
-    if (k % series_every == 0) {
-      api::TimeSeries& s = result.series;
-      const double busy = NavBusy(nav->Accounting());
-      s.t.push_back(t);
-      s.position.push_back(ToVec3(state.p_WB));
-      s.velocity.push_back(ToVec3(state.v_WB));
-      s.eci.push_back(eci_latest);
-      const navstack::TaskRates r = nav->rates();
-      s.f_per.push_back(r.f_per);
-      s.f_col.push_back(r.collision_on_map_update ? r.f_per : r.f_col);
-      s.f_dif.push_back(r.f_dif);
-      s.res.push_back(nav->map_resolution());
-      s.utilisation.push_back(k == 0 ? 0.0 : 100.0 * (busy - last_busy) / options.series_dt);
-      last_busy = busy;
-      s.events.push_back(std::exchange(interval_events, {}));
-    }
-    if (options.progress && t >= next_progress) {
-      next_progress += 1.0;
-      options.progress(t, (state.p_WB - world.goal).norm());
-    }
-
-    // End conditions: goal reached, collision, timeout.
-    if ((state.p_WB - world.goal).norm() < options.goal_radius) {
-      result.success = true;
-      result.end_reason = "goal_reached";
-      break;
-    }
-    if (const auto contact = quad.contact()) {
-      result.collided = true;
-      result.end_reason = "collision";
-      result.collision_point = ToVec3(contact->point_W);
-      result.events.push_back({contact->t, "collision", ""});
-      break;
-    }
-    if (t >= timeout) {
-      result.timed_out = true;
-      result.end_reason = "timeout";
-      break;
-    }
-    quad.Step();
+  // A stack that runs as processes may end the episode itself (it exited, misbehaved).
+  if (const std::optional<LinkFailure> failure = link_->failure()) {
+    end_ = EpisodeEnd{.reason = failure->reason, .detail = failure->detail};
+    return StepStatus::kEnded;
   }
 
-  nav->FinishEpisode(result.collided, result.success);
-  if (options.rollout) {
-    if (const navstack::rl::Rollout* r = nav->rollout()) *options.rollout = *r;
+  // The flight controller tracks the stack's reference every control_dt (it costs no board time).
+  if (k_ % model_.control_every == 0) {
+    const navstack::TrajectorySample ref = link_->Reference(t);
+    p_ref_ = ref.p;
+    quad_.SetCommand(controller_.Update(vehicle_, ref));
+  }
+  const StepView step{k_, t, vehicle_, p_ref_, *link_};
+  for (const auto& m : monitors_) m->OnStep(step);
+  for (const EndCondition& c : end_conditions_) {
+    if ((end_ = c.check(model_, step, quad_))) return StepStatus::kEnded;
+  }
+  quad_.Step();
+  ++k_;
+  return StepStatus::kRunning;
+}
+
+api::EpisodeResult Episode::Finish() {
+  if (!end_) throw std::logic_error("Finish: the episode has not ended");
+  if (finished_) throw std::logic_error("Finish: called twice");
+  finished_ = true;
+  link_->FinishEpisode(end_->collided, end_->success);
+  if (model_.options.rollout) {
+    if (const navstack::rl::Rollout* r = link_->rollout()) *model_.options.rollout = *r;
   }
 
   // Results (README.md, "One flight" and api/episode.h).
-  const NavAccounting acc = nav->Accounting();
-  const double T = quad.time();
+  api::EpisodeResult result;
+  result.spec = model_.spec;
+  result.scenario = model_.scenario;
+  result.straight_line_m = model_.straight_line_m;
+  result.notes = model_.notes;
+  const NavAccounting acc = link_->Accounting();
+  const double T = quad_.time();
   result.sim_time_s = T;
   result.flight_time_s = T;
-  result.path_length_m = recorder.path_length();
-  result.velocity_mean_mps = recorder.speed_mean();
-  result.velocity_std_mps = recorder.speed_std();
-  result.accel_peak_mps2 = recorder.accel_peak();
-  result.time_stopped_s = recorder.time_stopped();
-  result.setpoint_lag_p95_m = recorder.setpoint_lag_p95();
-  result.plan_failures = acc.plan_failures;
-  auto util = [&](TaskId id) { return T > 0 ? 100.0 * acc[id].busy_s / T : 0.0; };
-  result.task_cpu_util_pct = {util(TaskId::kPerception), util(TaskId::kPlanning), util(TaskId::kCollision),
-                              util(TaskId::kDifference)};
-  result.nav_cpu_util_pct = acc.process_cpu_board_s.empty() ? result.task_cpu_util_pct.Sum()
-                                                              : (T > 0 ? 100.0 * NavBusy(acc) / T : 0.0);
-  for (const auto& [name, board_s] : acc.process_cpu_board_s)
-    result.notes["process." + name] = api::Fixed(T > 0 ? 100.0 * board_s / T : 0.0, 2) + " % of a board core";
-  for (int i = 0; i < navstack::kTaskCount; ++i) {
-    const auto id = static_cast<TaskId>(i);
-    if (!navstack::IsNavigationTask(id)) continue;
-    const navstack::TaskStats& st = acc[id];
-    result.jobs_released += st.released;
-    result.deadline_misses += st.misses();
-    if (!config.method) continue;  // a stack of its own processes: no tasks of ours
-    const std::string& label = config.method->task_labels[i];
-    if (label != navstack::TaskName(id)) result.notes["task." + std::string(navstack::TaskName(id)) + ".is"] = label;
-    result.notes["task." + std::string(navstack::TaskName(id))] =
-        "released " + std::to_string(st.released) + ", late " + std::to_string(st.late) + ", skipped " +
-        std::to_string(st.skipped) + ", mean job " + std::to_string(1e3 * st.MeanCost()) + " ms, max " +
-        std::to_string(1e3 * st.cost_max_s) + " ms";
+  for (const auto& m : monitors_) m->Write({T, acc}, &result);
+  result.end_reason = end_->reason;
+  result.success = end_->success;
+  result.collided = end_->collided;
+  result.timed_out = end_->timed_out;
+  if (end_->detail) result.notes["end_detail"] = *end_->detail;
+  if (end_->contact) {
+    const Eigen::Vector3d& p = end_->contact->point_W;
+    result.collision_point = api::Vec3{p.x(), p.y(), p.z()};
+    result.events.push_back({end_->contact->t, "collision", ""});
   }
-  result.deadline_miss_ratio =
-      result.jobs_released > 0 ? static_cast<double>(result.deadline_misses) / result.jobs_released : 0.0;
-  result.eci = {frame_index > 0 ? eci_min : 0.0, frame_index > 0 ? eci_sum / frame_index : 0.0, eci_max,
-                flight_frames > 0 ? flight_eci_min : 0.0, flight_eci_max, flight_frames};
-  // E-Navi runs the eci on the board (a task); for the baseline it is what it would cost there.
-  result.eci_time_ms_mean = acc[TaskId::kEci].started > 0 ? 1e3 * acc[TaskId::kEci].MeanCost()
-                            : frame_index > 0             ? 1e3 * eci_cost_sum / frame_index
-                                                          : 0.0;
-  result.adapter_time_ms_mean = 1e3 * acc[TaskId::kAdapter].MeanCost();
   for (const auto& [k, v] : acc.notes) result.notes[k] = v;
   return result;
+}
+
+api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld& world,
+                              const EpisodeOptions& options) {
+  Episode episode(spec, world, options);
+  StepStatus status;
+  while ((status = episode.Step()) == StepStatus::kRunning) {
+  }
+  if (status != StepStatus::kEnded)
+    throw std::logic_error("RunEpisode: a decision waits for an action from outside; step the Episode instead");
+  return episode.Finish();
+}
+
+api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const EpisodeOptions& options) {
+  const auto world = PrepareWorld(worlds::ResolveWorld(WorldRequestOf(spec)));
+  return RunEpisode(spec, *world, options);
 }
 
 }  // namespace enavi::sim

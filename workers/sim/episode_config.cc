@@ -10,7 +10,7 @@
 #include "navstack/methods/registry.h"
 #include "navstack/rl/shipped_policy.h"
 #include "workers/board/board_profile.h"
-#include "workers/sim/episode.h"
+#include "workers/sim/link_registry.h"
 #include "worlds/generators.h"
 
 namespace enavi::sim {

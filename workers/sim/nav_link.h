@@ -1,7 +1,8 @@
 #pragma once
-// How the episode loop reaches the navigation stack: in-process on the virtual clock, or in a
-// throttled child process on the emulated clock. The loop (sensor, controller, physics,
-// metrics) is the same for both; only this link differs.
+// How the episode reaches the navigation stack: in-process on the virtual clock, in a throttled
+// child process on the emulated clock, or a stack of its own processes (a ROS stack). The
+// episode (sensor, controller, physics, metrics) is the same for all; only this link differs.
+// Links are registered by method kind and clock (link_registry.h).
 
 #include <array>
 #include <cstdint>
@@ -46,6 +47,11 @@ class NavLink {
   virtual void OnFrame(navstack::DepthFramePtr frame) = 0;
   /// Lets the stack run up to sim time t (virtual: the EDF schedule; emulated: wall-clock pacing).
   virtual void AdvanceTo(double t) = 0;
+  /// The last AdvanceTo stopped before t: a decision of the stack waits for its action from
+  /// outside (navstack/rl/decision_port.h, the Python environment). Supply it, then call
+  /// AdvanceTo(t) again: the stack goes on from the same instant as if it had been there at once.
+  /// Only the virtual clock's link stops; the others never do.
+  virtual bool paused() const { return false; }
   /// The reference the flight controller tracks at t.
   virtual navstack::TrajectorySample Reference(double t) = 0;
   virtual std::vector<navstack::NavEvent> TakeEvents() = 0;

@@ -1,6 +1,17 @@
 #include "workers/sim/virtual_nav_link.h"
 
+#include <stdexcept>
+
 namespace enavi::sim {
+
+std::unique_ptr<navstack::CostModel> MakeCostModel(const api::EpisodeSpec& spec, const board::BoardProfile& board,
+                                                   const std::string& cost_family) {
+  if (spec.cost == "model")
+    return std::make_unique<navstack::WorkCountCostModel>(
+        board::BoardCoefficients(board, board::LoadReferenceCosts(), cost_family));
+  if (spec.cost == "measured") return std::make_unique<navstack::MeasuredCostModel>(1.0 / board.per_core_speed);
+  throw std::invalid_argument("cost: unknown cost mode '" + spec.cost + "' (known: model, measured)");
+}
 
 VirtualNavLink::VirtualNavLink(const navstack::MethodInfo& method, const navstack::NavStackOptions& options,
                                int threads, navstack::SchedulingPolicy policy,

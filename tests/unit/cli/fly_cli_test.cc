@@ -10,6 +10,7 @@
 
 #include "api/episode.h"
 #include "tests/unit/worlds/test_util.h"
+#include "workers/emulation/emulated_nav_link.h"
 #include "workers/sim/episode_config.h"
 
 namespace enavi::cli {
@@ -168,7 +169,9 @@ TEST(FlyCliInputTest, HelpListsEveryRegisteredBoardScenarioAndClock) {
   TempDir dir;
   const CliRun r = Fly(dir, "--help");
   ASSERT_EQ(r.code, 0) << r.err;
+  emulation::RegisterEmulatedLink();  // the clocks enavi's main registers
   const api::Catalog catalog = sim::FarmCatalog();
+  ASSERT_EQ(catalog.clocks.size(), 2u);
   for (const auto* names : {&catalog.boards, &catalog.scenarios, &catalog.clocks})
     for (const std::string& name : *names) EXPECT_TRUE(Has(r.out, "    " + name + ": ")) << name << " missing from:\n" << r.out;
 }

@@ -180,5 +180,45 @@ TEST(VirtualExecutorTest, SameScheduleTwiceIsIdentical) {
   EXPECT_EQ(run(), run());
 }
 
+// A job that leaves a decision to be taken outside the stack (JobOutput::awaits_decision): the
+// schedule stops at its start instant, after the other job dispatched with it has run its code
+// and before anything finishes; AdvanceTo again goes on, and the schedule is the one without the
+// stop, instant for instant.
+TEST(VirtualExecutorTest, AJobAwaitingADecisionStopsTheScheduleAtItsInstantUntilAdvancedAgain) {
+  const auto cost = MillisecondPerPixel();
+  auto run = [&](bool stop, std::vector<double>* starts, std::vector<double>* commits, int* stops) {
+    VirtualExecutor ex(2, cost);
+    ex.Register(TaskId::kPerception, FixedCost(3, starts, commits, &ex));
+    ex.Register(TaskId::kAdapter, [&ex, starts, commits, stop]() {
+      starts->push_back(100 + ex.now());
+      JobOutput out;
+      out.work.Add(WorkUnit::kPixel, 2);
+      out.awaits_decision = stop;
+      out.commit = [&ex, commits] { commits->push_back(100 + ex.now()); };
+      return out;
+    });
+    ex.SetRate(TaskId::kPerception, 50);
+    ex.SetRate(TaskId::kAdapter, 5);
+    for (double t = 0.001; t <= 0.5 + 1e-9; t += 0.001) {
+      ex.AdvanceTo(t);
+      while (ex.paused()) {
+        ++*stops;
+        // Stopped where the adapter's job started, both jobs' code run, nothing committed since.
+        EXPECT_DOUBLE_EQ(100 + ex.now(), starts->back());
+        EXPECT_LT(commits->empty() ? -1.0 : commits->back(), 100 + ex.now());
+        ex.AdvanceTo(t);
+      }
+    }
+  };
+  std::vector<double> starts, commits, stopped_starts, stopped_commits;
+  int stops = 0, none = 0;
+  run(false, &starts, &commits, &none);
+  run(true, &stopped_starts, &stopped_commits, &stops);
+  EXPECT_EQ(none, 0);
+  EXPECT_EQ(stops, 3) << "adapter jobs at 0.0, 0.2 and 0.4 s";
+  EXPECT_EQ(stopped_starts, starts);
+  EXPECT_EQ(stopped_commits, commits);
+}
+
 }  // namespace
 }  // namespace enavi::navstack
