@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""The dependency rules of the build (README, "How it is built"), checked two ways:
+"""The dependency rules of the build (docs/design.md, "The dependency rules and their check"),
+checked two ways:
 
   sources: every #include in api/, worlds/, navstack/, workers/ and server/ against the layer
            rules, every project header a library's sources include against the library's link

@@ -14,7 +14,7 @@ struct EmulationOptions;
 
 namespace enavi::cli {
 
-/// Exit codes shared by every subcommand (README.md, "What it does").
+/// Exit codes shared by every subcommand (README.md, "Commands").
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitBadInput = 2;

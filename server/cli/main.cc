@@ -1,4 +1,4 @@
-// enavi: one executable, subcommands with --help (README.md, "What it does").
+// enavi: one executable, subcommands with --help (README.md, "Commands").
 #include <cstdio>
 #include <exception>
 #include <stdexcept>
