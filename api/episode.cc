@@ -1,5 +1,7 @@
 #include "api/episode.h"
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -7,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "api/fixed.h"
 #include "api/json_read.h"
 
 namespace enavi::api {
@@ -66,6 +69,27 @@ class Fields {
   std::string at_;
 };
 
+void ReadWind(const Fields& f, WindSpec& w) {
+  f.Optional("speed_mps", w.speed_mps);
+  f.Optional("direction_deg", w.direction_deg);
+  f.Optional("turbulence", w.turbulence);
+  if (const auto g = f.Child("gust")) {
+    g->Optional("start_s", w.gust.start_s);
+    g->Optional("rise_s", w.gust.rise_s);
+    g->Optional("hold_s", w.gust.hold_s);
+    g->Optional("speed_mps", w.gust.speed_mps);
+    g->Optional("direction_deg", w.gust.direction_deg);
+  }
+}
+
+nlohmann::json WindJson(const WindSpec& w) {
+  nlohmann::json j = {{"speed_mps", w.speed_mps}, {"direction_deg", w.direction_deg}, {"turbulence", w.turbulence}};
+  if (w.gust.speed_mps > 0.0)
+    j["gust"] = {{"start_s", w.gust.start_s}, {"rise_s", w.gust.rise_s}, {"hold_s", w.gust.hold_s},
+                 {"speed_mps", w.gust.speed_mps}, {"direction_deg", w.gust.direction_deg}};
+  return j;
+}
+
 // The spec's fields under `f`: each optional (a spec file may name only what differs from the
 // defaults), each checked for its type.
 void ReadSpec(const Fields& f, EpisodeSpec& s) {
@@ -91,6 +115,8 @@ void ReadSpec(const Fields& f, EpisodeSpec& s) {
   f.Optional("model_path", s.model_path);
   if (const nlohmann::json* ros = f.Find("ros")) s.ros = ros->get<RosStack>();
   f.Optional("rosbag_dir", s.rosbag_dir);
+  if (const auto wind = f.Child("wind")) ReadWind(*wind, s.wind);
+  f.Optional("odometry_noise", s.odometry_noise);
   if (s.ros && s.ros->name != s.method)
     throw std::invalid_argument("episode spec: method '" + s.method + "' is not its ROS stack's name '" + s.ros->name + "'");
 }
@@ -112,10 +138,37 @@ nlohmann::json SpecFields(const EpisodeSpec& s) {
   if (s.speed_probe != "check") j["speed_probe"] = s.speed_probe;
   if (s.ros) j["ros"] = *s.ros;
   if (!s.rosbag_dir.empty()) j["rosbag_dir"] = s.rosbag_dir;
+  // Absent in still air with perfect odometry, so the specs of such episodes read as before.
+  if (s.wind != WindSpec{}) j["wind"] = WindJson(s.wind);
+  if (s.odometry_noise != "none") j["odometry_noise"] = s.odometry_noise;
   return j;
 }
 
 }  // namespace
+
+std::string WindSpecError(const WindSpec& w) {
+  const auto speed = [](double v) { return std::isfinite(v) && v >= 0.0 && v <= kMaxWindSpeed; };
+  const std::string speed_range = "must be in [0, " + Fixed(kMaxWindSpeed, 0) + "] m/s";
+  if (!speed(w.speed_mps)) return "wind.speed_mps: " + speed_range;
+  const auto angle = [](double a) { return std::isfinite(a) && std::abs(a) <= 360.0; };
+  if (!angle(w.direction_deg)) return "wind.direction_deg: must be in [-360, 360] degrees";
+  if (std::find_if(kTurbulenceLevels.begin(), kTurbulenceLevels.end(),
+                   [&](const char* l) { return w.turbulence == l; }) == kTurbulenceLevels.end())
+    return "wind.turbulence: '" + w.turbulence + "' is not one of none, light, moderate, severe";
+  const GustSpec& g = w.gust;
+  if (!(std::isfinite(g.start_s) && g.start_s >= 0.0)) return "wind.gust.start_s: must be finite and >= 0 s";
+  if (!(std::isfinite(g.rise_s) && g.rise_s > 0.0)) return "wind.gust.rise_s: must be finite and > 0 s";
+  if (!(std::isfinite(g.hold_s) && g.hold_s >= 0.0)) return "wind.gust.hold_s: must be finite and >= 0 s";
+  if (!speed(g.speed_mps)) return "wind.gust.speed_mps: " + speed_range;
+  if (!angle(g.direction_deg)) return "wind.gust.direction_deg: must be in [-360, 360] degrees";
+  return "";
+}
+
+std::string OdometryNoiseError(const std::string& preset) {
+  for (const char* p : kOdometryNoisePresets)
+    if (preset == p) return "";
+  return "odometry_noise: '" + preset + "' is not one of none, good, typical, poor";
+}
 
 void to_json(nlohmann::json& j, const EpisodeSpec& s) { j = SpecFields(s); }
 
@@ -185,6 +238,9 @@ void to_json(nlohmann::json& j, const EpisodeResult& r) {
                  {"eci", s.eci}, {"f_per", s.f_per},       {"f_col", s.f_col},
                  {"f_dif", s.f_dif}, {"res", s.res},       {"utilisation", s.utilisation},
                  {"events", s.events}};
+  // Only when the episode has them, so the results of still air and perfect odometry read as before.
+  if (!s.wind_speed.empty()) j["series"]["wind_speed"] = s.wind_speed;
+  if (!s.odometry_error.empty()) j["series"]["odometry_error"] = s.odometry_error;
 }
 
 void from_json(const nlohmann::json& j, EpisodeResult& r) {
@@ -254,6 +310,8 @@ void from_json(const nlohmann::json& j, EpisodeResult& r) {
     series->Optional("f_dif", s.f_dif);
     series->Optional("res", s.res);
     series->Optional("utilisation", s.utilisation);
+    series->Optional("wind_speed", s.wind_speed);
+    series->Optional("odometry_error", s.odometry_error);
     series->Optional("events", s.events);
   }
 }

@@ -26,6 +26,40 @@ inline constexpr std::array<const char*, 2> kCostModes = {"model", "measured"};
 /// measures nothing.
 inline constexpr std::array<const char*, 3> kSpeedProbeModes = {"check", "use", "off"};
 
+/// Dryden turbulence severities (MIL-F-8785C low altitude; workers/sim/wind.h).
+inline constexpr std::array<const char*, 4> kTurbulenceLevels = {"none", "light", "moderate", "severe"};
+/// Imperfect-odometry presets (workers/sim/odometry_noise.h); "none" hands the stack the truth.
+inline constexpr std::array<const char*, 4> kOdometryNoisePresets = {"none", "good", "typical", "poor"};
+/// Largest mean wind or gust speed a spec may ask for, m/s.
+inline constexpr double kMaxWindSpeed = 40.0;
+
+/// A discrete "1-cosine" gust (MIL-F-8785C Sec. 3.7.5) in time: from start_s it rises over rise_s
+/// to speed_mps, holds for hold_s and falls back over rise_s. speed_mps 0: no gust.
+struct GustSpec {
+  double start_s = 0.0;
+  double rise_s = 1.0;
+  double hold_s = 0.0;
+  double speed_mps = 0.0;
+  double direction_deg = 0.0;  ///< where it blows to, degrees from world +x toward +y
+  bool operator==(const GustSpec&) const = default;
+};
+
+/// The air an episode flies in (workers/sim/wind.h): a mean wind, a gust and Dryden turbulence.
+/// The stack is never told; the vehicle's drag feels it. Default: still air.
+struct WindSpec {
+  double speed_mps = 0.0;      ///< mean wind, horizontal
+  double direction_deg = 0.0;  ///< where it blows to, degrees from world +x toward +y
+  std::string turbulence = "none";  ///< one of kTurbulenceLevels
+  GustSpec gust;
+  bool Active() const { return speed_mps > 0.0 || turbulence != "none" || gust.speed_mps > 0.0; }
+  bool operator==(const WindSpec&) const = default;
+};
+
+/// Why `wind` is not valid, as "wind.FIELD: reason", or "" when it is.
+std::string WindSpecError(const WindSpec& wind);
+/// Why `preset` is not an odometry-noise preset, as "odometry_noise: reason", or "" when it is.
+std::string OdometryNoiseError(const std::string& preset);
+
 /// A tunable as job validation sees it.
 struct TunableRange {
   std::string name;
@@ -83,6 +117,8 @@ struct EpisodeSpec {
   std::optional<RosStack> ros;
   /// ROS methods: record the episode's topics into episode.bag in this directory (empty: none).
   std::string rosbag_dir;
+  WindSpec wind;  ///< still air by default
+  std::string odometry_noise = "none";  ///< the stack's odometry: one of kOdometryNoisePresets
 };
 
 /// Per-task CPU utilisation, % of one board core (psutil convention).
@@ -112,6 +148,11 @@ struct TimeSeries {
   std::vector<double> t;
   std::vector<Vec3> position, velocity;
   std::vector<double> eci, f_per, f_col, f_dif, res, utilisation;
+  /// Speed of the air at the vehicle, m/s: empty unless the episode flies in wind (spec.wind).
+  std::vector<double> wind_speed;
+  /// |estimated - true position| of the odometry the stack was given, m: empty unless the
+  /// episode has odometry noise (spec.odometry_noise); the other columns are the truth.
+  std::vector<double> odometry_error;
   std::vector<std::string> events;  ///< event kinds in the interval ending at t, ';'-separated
   std::size_t size() const { return t.size(); }
 };

@@ -228,6 +228,8 @@ void ToSample(const ResultMessage& m, ResultSample* out) {
     PointSeq(c.series.f_dif, s.f_dif);
     PointSeq(c.series.res, s.res);
     PointSeq(c.series.utilisation, s.utilisation);
+    PointSeq(c.series.wind_speed, s.wind_speed);
+    PointSeq(c.series.odometry_error, s.odometry_error);
   }
   c.result_json = Str(out->result_json);
   PointSeq(c.events, out->events);
@@ -258,6 +260,8 @@ ResultMessage FromSample(const enavi_farm_EpisodeResult& c) {
   s.f_dif = CopyDoubles(c.series.f_dif);
   s.res = CopyDoubles(c.series.res);
   s.utilisation = CopyDoubles(c.series.utilisation);
+  s.wind_speed = CopyDoubles(c.series.wind_speed);
+  s.odometry_error = CopyDoubles(c.series.odometry_error);
   return m;
 }
 

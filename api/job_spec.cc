@@ -406,6 +406,27 @@ bool Matches(const EpisodeOverride& o, const EpisodeSpec& e) {
 
 // ros_methods: name -> a stack file under the allowed roots (its errors name that file) or the
 // stack inline (they name the job spec).
+// The air of every episode of the job (api::WindSpec); the ranges are WindSpecError's.
+WindSpec Wind(const Context& ctx, const YAML::Node& n) {
+  if (!n.IsMap()) ctx.Fail(n, "wind", "expected a map of speed_mps, direction_deg, turbulence, gust");
+  CheckKeys(ctx, n, "wind", {"speed_mps", "direction_deg", "turbulence", "gust"});
+  WindSpec w;
+  if (n["speed_mps"]) w.speed_mps = Number(ctx, n["speed_mps"], "wind.speed_mps", 0, kMaxWindSpeed);
+  if (n["direction_deg"]) w.direction_deg = Number(ctx, n["direction_deg"], "wind.direction_deg", -360, 360);
+  if (n["turbulence"])
+    w.turbulence = Choices(ctx, n["turbulence"], "wind.turbulence", kTurbulenceLevels, "turbulence level").front();
+  if (const YAML::Node g = n["gust"]) {
+    if (!g.IsMap()) ctx.Fail(g, "wind.gust", "expected a map of speed_mps, direction_deg, start_s, rise_s, hold_s");
+    CheckKeys(ctx, g, "wind.gust", {"speed_mps", "direction_deg", "start_s", "rise_s", "hold_s"});
+    if (g["speed_mps"]) w.gust.speed_mps = Number(ctx, g["speed_mps"], "wind.gust.speed_mps", 0, kMaxWindSpeed);
+    if (g["direction_deg"]) w.gust.direction_deg = Number(ctx, g["direction_deg"], "wind.gust.direction_deg", -360, 360);
+    if (g["start_s"]) w.gust.start_s = Number(ctx, g["start_s"], "wind.gust.start_s", 0, kMaxTimeoutS);
+    if (g["rise_s"]) w.gust.rise_s = Number(ctx, g["rise_s"], "wind.gust.rise_s", 0.01, kMaxTimeoutS);
+    if (g["hold_s"]) w.gust.hold_s = Number(ctx, g["hold_s"], "wind.gust.hold_s", 0, kMaxTimeoutS);
+  }
+  return w;
+}
+
 std::map<std::string, RosStack> RosMethods(const Context& ctx, const YAML::Node& n) {
   if (!n.IsMap() || n.size() == 0) ctx.Fail(n, "ros_methods", "expected a map of method name: stack file or stack");
   CheckKeys(ctx, n, "ros_methods", {});
@@ -457,7 +478,7 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
   CheckKeys(ctx, root, "",
             {"name", "boards", "scenarios", "methods", "seeds", "clock", "cost", "dilation", "speed_probe",
              "timeout_s", "policy", "world_params", "overrides", "episode_overrides", "episodes",
-             "collect", "sample", "labels", "ros_methods", "rosbag"});
+             "collect", "sample", "labels", "ros_methods", "rosbag", "wind", "odometry_noise"});
   // Either the matrix or an explicit episode list.
   if (root["episodes"]) {
     for (const char* matrix : {"boards", "scenarios", "seeds"}) {
@@ -526,6 +547,10 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
     job.rosbag_dir = fs::weakly_canonical(given.is_absolute() ? given : ctx.roots().front() / given).string();
   }
   if (root["timeout_s"]) job.timeout_s = Number(ctx, root["timeout_s"], "timeout_s", 0, kMaxTimeoutS);
+  if (root["wind"]) job.wind = Wind(ctx, root["wind"]);
+  if (root["odometry_noise"])
+    job.odometry_noise =
+        Choices(ctx, root["odometry_noise"], "odometry_noise", kOdometryNoisePresets, "odometry noise preset").front();
   if (root["policy"]) {
     job.policy = Policy(ctx, root["policy"], "policy");
   }
@@ -633,6 +658,8 @@ std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
           e.cost = job.cost;
           e.dilation = job.dilation;
           e.speed_probe = job.speed_probe;
+          e.wind = job.wind;
+          e.odometry_noise = job.odometry_noise;
           e.timeout_s = job.timeout_s;
           e.policy = job.policy;
           e.overrides = job.overrides;

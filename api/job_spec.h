@@ -21,6 +21,10 @@
 //   dilation: 1.0                 # emulated clock only: 1 sim s = dilation wall s, or auto
 //   speed_probe: check            # emulated clock only: check | use | off (api/episode.h)
 //   timeout_s: 0                  # 0: derived from the start-goal distance
+//   wind:                         # the air (api/episode.h; default still): mean wind, gust, turbulence
+//     {speed_mps: 4, direction_deg: 90, turbulence: moderate,
+//      gust: {speed_mps: 6, direction_deg: 0, start_s: 10, rise_s: 1.5, hold_s: 2}}
+//   odometry_noise: typical       # what the stack is told of its state: none | good | typical | poor
 //   policy: policies/enavi.json   # E-Navi policy file under an allowed root; default: shipped
 //   world_params: {density: "0.3"}
 //   overrides: {planner.v_max: 1.5}  # tunables of every listed method, checked here
@@ -150,6 +154,8 @@ struct JobSpec {
   /// The job's ROS methods by name (each also listed in `methods`).
   std::map<std::string, RosStack> ros_methods;
   std::string rosbag_dir;  ///< canonical directory for the ROS episodes' bags; empty: none
+  WindSpec wind;  ///< every episode's air
+  std::string odometry_noise = "none";  ///< every episode's odometry preset
 
   std::size_t MatrixSize() const {
     if (!episodes.empty()) return episodes.size() * methods.size();

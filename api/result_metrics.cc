@@ -72,7 +72,8 @@ std::string ResultError(const EpisodeResult& r, const EpisodeSpec& expected) {
   const std::pair<const char*, std::size_t> columns[] = {
       {"position", s.position.size()}, {"velocity", s.velocity.size()}, {"eci", s.eci.size()},
       {"f_per", s.f_per.size()},       {"f_col", s.f_col.size()},       {"f_dif", s.f_dif.size()},
-      {"res", s.res.size()},           {"utilisation", s.utilisation.size()}, {"events", s.events.size()}};
+      {"res", s.res.size()},           {"utilisation", s.utilisation.size()}, {"events", s.events.size()},
+      {"wind_speed", s.wind_speed.size()}, {"odometry_error", s.odometry_error.size()}};
   for (const auto& [column, n] : columns) {
     if (n != 0 && n != s.t.size()) {
       return std::string("series.") + column + ": " + std::to_string(n) + " samples, t has " +
@@ -81,7 +82,8 @@ std::string ResultError(const EpisodeResult& r, const EpisodeSpec& expected) {
   }
   const std::pair<const char*, const std::vector<double>*> numbers[] = {
       {"t", &s.t},         {"eci", &s.eci}, {"f_per", &s.f_per}, {"f_col", &s.f_col},
-      {"f_dif", &s.f_dif}, {"res", &s.res}, {"utilisation", &s.utilisation}};
+      {"f_dif", &s.f_dif}, {"res", &s.res}, {"utilisation", &s.utilisation},
+      {"wind_speed", &s.wind_speed}, {"odometry_error", &s.odometry_error}};
   const auto finite = [](double v) { return std::isfinite(v); };
   for (const auto& [column, values] : numbers) {
     if (!std::all_of(values->begin(), values->end(), finite)) return std::string("series.") + column + ": not a finite number";

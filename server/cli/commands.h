@@ -8,6 +8,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "api/episode.h"
+
 namespace enavi::emulation {
 struct EmulationOptions;
 }
@@ -37,6 +39,9 @@ void AddPlacementOptions(CLI::App* app, std::string* units, double* scale, std::
 /// --speed-probe check|use|off of the commands that start emulated episodes (`enavi fly`,
 /// `enavi eval`): an episode spec's or a job's `speed_probe` (server/cli/fly_cmd.cc).
 void AddSpeedProbeOption(CLI::App* app, std::string* mode);
+/// --wind, --wind-dir, --turbulence, --gust*, --odometry-noise of `enavi fly` and `enavi eval`:
+/// the air an episode flies in and the odometry its stack is given (server/cli/fly_cmd.cc).
+void AddAirOptions(CLI::App* app, api::WindSpec* wind, std::string* odometry_noise);
 
 /// `enavi world gen|check|show|convert` (server/cli/world_cmd.cc).
 void RegisterWorldCommands(CLI::App& app);

@@ -188,6 +188,7 @@ void RegisterEvalCommand(CLI::App& app) {
                   "each board fits this host when its episode starts")
       ->capture_default_str();
   AddSpeedProbeOption(sub, &o.speed_probe);
+  AddAirOptions(sub, &o.wind, &o.odometry_noise);
   sub->add_option("--set", f->overrides,
                   "override a tunable, NAME=VALUE for every listed method or METHOD:NAME=VALUE for one "
                   "(repeatable; `enavi fly --help` lists each method's tunables)");

@@ -152,6 +152,34 @@ void AddSpeedProbeOption(CLI::App* app, std::string* mode) {
       ->check(CLI::IsMember(std::vector<std::string>(api::kSpeedProbeModes.begin(), api::kSpeedProbeModes.end())));
 }
 
+void AddAirOptions(CLI::App* app, api::WindSpec* wind, std::string* odometry_noise) {
+  const auto levels = std::vector<std::string>(api::kTurbulenceLevels.begin(), api::kTurbulenceLevels.end());
+  const auto presets = std::vector<std::string>(api::kOdometryNoisePresets.begin(), api::kOdometryNoisePresets.end());
+  const auto speed = CLI::Range(0.0, api::kMaxWindSpeed);
+  const auto angle = CLI::Range(-360.0, 360.0);
+  app->add_option("--wind", wind->speed_mps, "mean wind, m/s (the stack is not told; the vehicle's drag feels it)")
+      ->check(speed)->group("Air and odometry");
+  app->add_option("--wind-dir", wind->direction_deg, "where the mean wind blows to, degrees from world +x toward +y")
+      ->check(angle)->group("Air and odometry");
+  app->add_option("--turbulence", wind->turbulence,
+                  "Dryden turbulence of MIL-F-8785C, low altitude: none, light, moderate, severe")
+      ->capture_default_str()->check(CLI::IsMember(levels))->group("Air and odometry");
+  app->add_option("--gust", wind->gust.speed_mps, "a 1-cosine gust (MIL-F-8785C) of this speed, m/s")
+      ->check(speed)->group("Air and odometry");
+  app->add_option("--gust-dir", wind->gust.direction_deg, "where the gust blows to, degrees from +x toward +y")
+      ->check(angle)->group("Air and odometry");
+  app->add_option("--gust-start", wind->gust.start_s, "the gust's start, sim s")
+      ->capture_default_str()->check(CLI::Range(0.0, api::kMaxTimeoutS))->group("Air and odometry");
+  app->add_option("--gust-rise", wind->gust.rise_s, "its rise (and fall) time, s")
+      ->capture_default_str()->check(CLI::Range(0.01, api::kMaxTimeoutS))->group("Air and odometry");
+  app->add_option("--gust-hold", wind->gust.hold_s, "how long it holds its speed, s")
+      ->capture_default_str()->check(CLI::Range(0.0, api::kMaxTimeoutS))->group("Air and odometry");
+  app->add_option("--odometry-noise", *odometry_noise,
+                  "the stack's odometry as a VIO gives it (white noise and drift of position and yaw): none, good, "
+                  "typical, poor; metrics use the truth")
+      ->capture_default_str()->check(CLI::IsMember(presets))->group("Air and odometry");
+}
+
 void RegisterFlyCommand(CLI::App& app) {
   auto args = std::make_shared<FlyArgs>();
   CLI::App* fly = app.add_subcommand("fly", "Fly one episode locally (no server) and print or write its results");
@@ -198,6 +226,7 @@ void RegisterFlyCommand(CLI::App& app) {
                   "emulated clock: host calibration file (default: $ENAVI_CALIBRATION, else "
                   "$XDG_STATE_HOME/enavi/calibration.json or ~/.local/state/enavi/calibration.json)");
   AddSpeedProbeOption(fly, &args->spec.speed_probe);
+  AddAirOptions(fly, &args->spec.wind, &args->spec.odometry_noise);
   // Experiments with the emulation itself (defaults documented in workers/emulation/emulation_options.h).
   fly->add_option("--emulation-server-period-us", args->emulation.server_period_us)->group("")->check(CLI::Range(100, 1000000));
   fly->add_option("--emulation-lead-us", args->emulation.lead_us)->group("")->check(CLI::Range(0, 1000000));

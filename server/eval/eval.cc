@@ -70,6 +70,15 @@ std::string FlagOf(const EvalOptions& o, const std::string& field) {
   if (is("dilation")) return "--dilation " + o.dilation;
   if (is("speed_probe")) return "--speed-probe " + o.speed_probe;
   if (is("policy")) return "--policy " + o.policy;
+  if (is("odometry_noise")) return "--odometry-noise " + o.odometry_noise;
+  if (is("wind.gust.speed_mps")) return "--gust";
+  if (is("wind.gust.direction_deg")) return "--gust-dir";
+  if (is("wind.gust.start_s")) return "--gust-start";
+  if (is("wind.gust.rise_s")) return "--gust-rise";
+  if (is("wind.gust.hold_s")) return "--gust-hold";
+  if (is("wind.direction_deg")) return "--wind-dir";
+  if (is("wind.turbulence")) return "--turbulence " + o.wind.turbulence;
+  if (is("wind")) return "--wind";
   if (field == "matrix") return "--boards x --scenarios x --methods x --seeds";
   if (field.rfind("labels.", 0) == 0) {
     const std::string key = field.substr(7);
@@ -117,6 +126,19 @@ std::string EvalJobYaml(const EvalOptions& o) {
   if (o.clock == "emulated" || o.speed_probe != "check") y << "speed_probe: " << YamlQuoted(o.speed_probe) << "\n";
   if (!o.policy.empty()) y << "policy: " << YamlQuoted(o.policy) << "\n";
   if (o.timeout_s > 0) y << "timeout_s: " << o.timeout_s << "\n";
+  if (o.wind != api::WindSpec{}) {
+    // Shortest text that reads back to the same double: the job flies exactly what was typed.
+    const auto num = [](double v) {
+      char buf[32];
+      return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
+    };
+    const api::GustSpec& g = o.wind.gust;
+    y << "wind: {speed_mps: " << num(o.wind.speed_mps) << ", direction_deg: " << num(o.wind.direction_deg)
+      << ", turbulence: " << YamlQuoted(o.wind.turbulence) << ", gust: {speed_mps: " << num(g.speed_mps)
+      << ", direction_deg: " << num(g.direction_deg) << ", start_s: " << num(g.start_s)
+      << ", rise_s: " << num(g.rise_s) << ", hold_s: " << num(g.hold_s) << "}}\n";
+  }
+  if (o.odometry_noise != "none") y << "odometry_noise: " << YamlQuoted(o.odometry_noise) << "\n";
   if (!o.labels.empty()) y << "labels: " << YamlMap(o.labels) << "\n";
   if (!o.ros_stacks.empty()) {
     y << "ros_methods:\n";

@@ -38,6 +38,8 @@ struct EvalOptions {
   std::string dilation = "auto";
   std::string speed_probe = "check";  ///< emulated clock: api::kSpeedProbeModes
   std::string policy;  ///< E-Navi's policy file (under an allowed root); empty: the shipped one
+  api::WindSpec wind;  ///< every episode's air (the job's `wind`)
+  std::string odometry_noise = "none";  ///< the job's `odometry_noise`
   std::map<std::string, std::string> labels;  ///< the job's labels (dashboard, `enavi compare`)
   /// `--set NAME=VALUE`: a tunable of every listed method (the job's `overrides`).
   std::map<std::string, double> overrides;

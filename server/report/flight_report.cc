@@ -10,7 +10,10 @@
 namespace enavi::report {
 
 std::string TimeSeriesCsv(const api::TimeSeries& s) {
-  std::string out = "t,x,y,z,vx,vy,vz,speed,eci,f_per,f_col,f_dif,res,utilisation,events\n";
+  // wind_speed and odometry_error only when the episode has them (api::TimeSeries).
+  const bool wind = !s.wind_speed.empty(), odometry = !s.odometry_error.empty();
+  std::string out = "t,x,y,z,vx,vy,vz,speed,eci,f_per,f_col,f_dif,res,utilisation,";
+  out += std::string(wind ? "wind_speed," : "") + (odometry ? "odometry_error," : "") + "events\n";
   char line[512];
   for (std::size_t i = 0; i < s.size(); ++i) {
     const api::Vec3& p = s.position[i];
@@ -20,6 +23,14 @@ std::string TimeSeriesCsv(const api::TimeSeries& s) {
                   s.t[i], p[0], p[1], p[2], v[0], v[1], v[2], speed, s.eci[i], s.f_per[i], s.f_col[i], s.f_dif[i],
                   s.res[i], s.utilisation[i]);
     out += line;
+    if (wind) {
+      std::snprintf(line, sizeof line, "%.3f,", s.wind_speed[i]);
+      out += line;
+    }
+    if (odometry) {
+      std::snprintf(line, sizeof line, "%.4f,", s.odometry_error[i]);
+      out += line;
+    }
     out += i < s.events.size() ? s.events[i] : "";
     out += '\n';
   }
@@ -71,6 +82,9 @@ void WriteFlightPlots(const api::EpisodeResult& result, const worlds::World& wor
   ChartStack motion(what);
   motion.AddPanel("speed", "m/s").AddSeries("|v|", s.t, speed);
   motion.AddPanel("navigation CPU utilisation (% of one core)", "%").AddSeries("nav tasks", s.t, s.utilisation);
+  if (!s.wind_speed.empty()) motion.AddPanel("wind at the vehicle", "m/s").AddSeries("|air|", s.t, s.wind_speed);
+  if (!s.odometry_error.empty())
+    motion.AddPanel("odometry error (estimate - truth)", "m").AddSeries("|dp|", s.t, s.odometry_error);
   motion.SavePng((out / "speed.png").string());
 
   // Adaptation: eci with the task frequencies and map resolution (paper Fig. "eci, perception,

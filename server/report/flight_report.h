@@ -12,7 +12,8 @@
 
 namespace enavi::report {
 
-/// t, position, velocity, speed, eci, f_per, f_col, f_dif, res, utilisation, events.
+/// t, position, velocity, speed, eci, f_per, f_col, f_dif, res, utilisation, [wind_speed],
+/// [odometry_error], events (the bracketed columns when the episode has them).
 std::string TimeSeriesCsv(const api::TimeSeries& series);
 
 /// Writes DIR/flight_topdown.png, DIR/speed.png and DIR/adaptation.png. Throws

@@ -7,8 +7,10 @@ namespace enavi::server {
 namespace {
 
 // Series blob: "ENS1", then per column (t, position, velocity, eci, f_per, f_col, f_dif, res,
-// utilisation) a u32 element count and the doubles (vectors flattened xyz). Host byte order:
-// every platform the farm runs on (x86-64, aarch64) is little-endian.
+// utilisation, then wind_speed and odometry_error) a u32 element count and the doubles (vectors
+// flattened xyz). The last two came later: a blob that ends before them has them empty, so the
+// series stored before them still read. Host byte order: every platform the farm runs on
+// (x86-64, aarch64) is little-endian.
 constexpr char kSeriesMagic[4] = {'E', 'N', 'S', '1'};
 
 void PutColumn(std::vector<std::uint8_t>* out, const double* data, std::uint32_t count) {
@@ -37,6 +39,8 @@ std::vector<std::uint8_t> PackSeries(const api::TimeSeries& s) {
   put(s.f_dif);
   put(s.res);
   put(s.utilisation);
+  put(s.wind_speed);
+  put(s.odometry_error);
   return out;
 }
 
@@ -74,6 +78,9 @@ api::TimeSeries UnpackSeries(const std::vector<std::uint8_t>& blob) {
   get(&s.f_dif);
   get(&s.res);
   get(&s.utilisation);
+  if (at < blob.size()) get(&s.wind_speed);
+  if (at < blob.size()) get(&s.odometry_error);
+  if (at != blob.size()) throw std::invalid_argument("series blob: trailing bytes");
   return s;
 }
 

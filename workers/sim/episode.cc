@@ -76,10 +76,23 @@ std::unique_ptr<NavLink> MakeEpisodeLink(const EpisodeModel& m, const navstack::
   return MakeLink(r);
 }
 
+Eigen::Isometry3d BodyPose(const navstack::VehicleState& s) {
+  Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+  X_WB.linear() = s.q_WB.toRotationMatrix();
+  X_WB.translation() = s.p_WB;
+  return X_WB;
+}
+
+constexpr std::uint64_t kWindStream = 0x77696e64;      // "wind"
+constexpr std::uint64_t kOdometryStream = 0x6f646f6d;  // "odom"
+
 QuadrotorOptions QuadOptions(const EpisodeModel& m) {
   QuadrotorOptions o;
   o.vehicle = m.vehicle;
   o.dt = m.options.physics_dt;
+  // Body drag only in wind: in still air the episode keeps the drag-free airframe its flights
+  // were measured with (the controller then flies the same as before the wind came).
+  if (m.spec.wind.Active()) o.body_drag_cda = kX500BodyDragCdA;
   return o;
 }
 
@@ -152,7 +165,12 @@ Episode::Episode(const api::EpisodeSpec& spec, const PreparedWorld& world, const
       quad_(world.collision, QuadOptions(model_), world.world.start, model_.start_yaw),
       controller_(model_.vehicle),
       vehicle_(quad_.State()),
+      estimate_(vehicle_),
       p_ref_(world.world.start) {
+  // Their own random streams, from the episode's seed (the camera's is seed * 1000003 + frame).
+  if (model_.spec.wind.Active()) wind_.emplace(model_.spec.wind, model_.options.physics_dt, model_.spec.seed ^ kWindStream);
+  if (model_.spec.odometry_noise != "none")
+    odometry_.emplace(OdometryNoisePreset(model_.spec.odometry_noise), model_.spec.seed ^ kOdometryStream);
   link_ = MakeEpisodeLink(model_, quad_.State(), WithSpeedProbe(spec, options.emulation));
   monitors_ = EpisodeMonitors(model_);
   end_conditions_ = EndConditions();
@@ -163,16 +181,14 @@ Episode::~Episode() = default;
 double Episode::t() const { return k_ * model_.options.physics_dt; }
 
 // The sensor at t: a depth frame rendered with Embree (noise seeded by the episode seed and the
-// frame index), its eci computed for the metrics, handed to the stack.
+// frame index) from the true pose, its eci computed for the metrics, handed to the stack with the
+// pose the odometry gives (the truth, or the VIO-like estimate).
 void Episode::Sense(double t) {
   next_frame_t_ += model_.frame_dt;
   auto frame = std::make_shared<navstack::DepthFrame>();
   frame->index = frame_index_++;
   frame->t = t;
-  Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
-  X_WB.linear() = vehicle_.q_WB.toRotationMatrix();
-  X_WB.translation() = vehicle_.p_WB;
-  frame->X_WC = CameraPoseInWorld(X_WB, model_.vehicle);
+  frame->X_WC = CameraPoseInWorld(BodyPose(vehicle_), model_.vehicle);
   frame->v_W = vehicle_.v_WB;
   model_.camera.Render(*model_.world->scene, frame->X_WC, &frame->image, model_.spec.seed * 1000003ULL + frame->index);
   navstack::WorkCounts eci_work;
@@ -184,6 +200,10 @@ void Episode::Sense(double t) {
   if (model_.options.job_observer) model_.options.job_observer(TaskId::kEci, eci_work, eci_cpu);
   const double board_s = link_->OffBoardSeconds(TaskId::kEci, eci_work, eci_cpu);
   for (const auto& m : monitors_) m->OnFrame({*frame, eci, vehicle_}, board_s);
+  if (odometry_) {
+    frame->X_WC = CameraPoseInWorld(BodyPose(estimate_), model_.vehicle);
+    frame->v_W = estimate_.v_WB;
+  }
   link_->OnFrame(std::move(frame));
 }
 
@@ -191,10 +211,16 @@ StepStatus Episode::Step() {
   if (end_) throw std::logic_error("Step: the episode has ended");
   const double t = this->t();
   if (!resuming_) {
-    // Odometry to the stack, and a frame at f_sen.
+    // Odometry to the stack, and a frame at f_sen. A VIO's error moves when it delivers a pose
+    // (at the camera's frames); between them the IMU carries it unchanged.
     vehicle_ = quad_.State();
-    link_->OnState(vehicle_);
-    if (t >= next_frame_t_ - 1e-9) Sense(t);
+    const bool frame_due = t >= next_frame_t_ - 1e-9;
+    if (odometry_) {
+      if (frame_due) odometry_->Update(t);
+      estimate_ = odometry_->Apply(vehicle_);
+    }
+    link_->OnState(odometry_ ? estimate_ : vehicle_);
+    if (frame_due) Sense(t);
   } else if (model_.options.decisions && model_.options.decisions->pending()) {
     throw std::logic_error("Step: the pending decision has no action yet (DecisionPort::Supply)");
   }
@@ -216,13 +242,17 @@ StepStatus Episode::Step() {
   if (k_ % model_.control_every == 0) {
     const navstack::TrajectorySample ref = link_->Reference(t);
     p_ref_ = ref.p;
-    quad_.SetCommand(controller_.Update(vehicle_, ref));
+    quad_.SetCommand(controller_.Update(odometry_ ? estimate_ : vehicle_, ref));
   }
-  const StepView step{k_, t, vehicle_, p_ref_, *link_};
+  const StepView step{.k = k_, .t = t, .vehicle = vehicle_, .p_ref = p_ref_, .link = *link_,
+                      .estimate = odometry_ ? &estimate_ : nullptr,
+                      .air_W = wind_ ? &wind_->air_velocity_W() : nullptr};
   for (const auto& m : monitors_) m->OnStep(step);
   for (const EndCondition& c : end_conditions_) {
     if ((end_ = c.check(model_, step, quad_))) return StepStatus::kEnded;
   }
+  // The air at the vehicle for this step (the stack is never told; the drag feels it).
+  if (wind_) quad_.SetAirVelocity(wind_->Step(vehicle_.p_WB.z(), vehicle_.v_WB));
   quad_.Step();
   ++k_;
   return StepStatus::kRunning;

@@ -26,7 +26,9 @@
 #include "workers/sim/episode_monitor.h"
 #include "workers/sim/link_registry.h"
 #include "workers/sim/nav_link.h"
+#include "workers/sim/odometry_noise.h"
 #include "workers/sim/quadrotor.h"
+#include "workers/sim/wind.h"
 #include "worlds/resolve.h"
 #include "worlds/world.h"
 
@@ -168,7 +170,10 @@ class Episode {
   std::vector<EndCondition> end_conditions_;
   long k_ = 0;                 ///< physics steps taken
   bool resuming_ = false;      ///< step k_ stopped in the stack, waiting for a decision
-  navstack::VehicleState vehicle_;
+  navstack::VehicleState vehicle_;   ///< the truth
+  navstack::VehicleState estimate_;  ///< what the stack and the controller are told (odometry_)
+  std::optional<WindField> wind_;    ///< the spec's air; none in still air
+  std::optional<OdometryNoise> odometry_;  ///< the spec's odometry noise; none: the truth
   Eigen::Vector3d p_ref_;      ///< the reference position the controller tracks
   double next_frame_t_ = 0;
   std::int64_t frame_index_ = 0;

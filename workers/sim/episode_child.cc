@@ -27,6 +27,8 @@ void CheckSpecFields(const nlohmann::json& j, const std::string& file) {
   every.speed_probe = "use";
   every.ros = api::RosStack{};
   every.rosbag_dir = "d";
+  every.wind.speed_mps = 1.0;
+  every.odometry_noise = "good";
   const nlohmann::json known = every;
   for (const auto& item : j.items()) {
     if (known.contains(item.key())) continue;

@@ -33,6 +33,10 @@ struct StepView {
   const navstack::VehicleState& vehicle;  ///< at t
   const Eigen::Vector3d& p_ref;           ///< the reference position the controller tracks
   const NavLink& link;
+  /// The odometry the stack was given, when it is not the truth (spec.odometry_noise).
+  const navstack::VehicleState* estimate = nullptr;
+  /// The air at the vehicle during the last step, when the episode flies in wind (spec.wind).
+  const Eigen::Vector3d* air_W = nullptr;
 };
 
 /// What the episode came to, for the monitors' results.

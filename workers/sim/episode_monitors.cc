@@ -113,6 +113,8 @@ void SeriesSampler::OnStep(const StepView& s) {
   series_.utilisation.push_back(s.k == 0 ? 0.0 : 100.0 * (busy - last_busy_) / dt_);
   last_busy_ = busy;
   series_.events.push_back(std::exchange(interval_events_, {}));
+  if (s.air_W) series_.wind_speed.push_back(s.air_W->norm());
+  if (s.estimate) series_.odometry_error.push_back((s.estimate->p_WB - s.vehicle.p_WB).norm());
 }
 
 // --- CPU -------------------------------------------------------------------------------------

@@ -1,7 +1,7 @@
 #pragma once
 // Imperfect odometry as a visual-inertial odometry (VIO) gives it: white noise on position and
-// yaw plus a random-walk drift of both, seeded per episode. The stack is handed the corrupted
-// estimate; the metrics keep using the truth.
+// yaw plus a random-walk drift of both, seeded per episode. The stack (and the flight controller,
+// which flies on the same estimate) is handed the corrupted state; the metrics keep the truth.
 
 #include <cstdint>
 #include <string>
@@ -14,7 +14,7 @@
 namespace enavi::sim {
 
 struct OdometryNoiseOptions {
-  double position_white_m = 0.0;          ///< std of the white position noise, per axis
+  double position_white_m = 0.0;            ///< std of the white position noise, per axis
   double position_walk_m_per_sqrt_s = 0.0;  ///< random-walk drift density of position, per axis
   double yaw_white_rad = 0.0;
   double yaw_walk_rad_per_sqrt_s = 0.0;
@@ -24,36 +24,41 @@ struct OdometryNoiseOptions {
   }
 };
 
-/// Named presets: none (default), good, typical, poor.
+/// The presets of api::kOdometryNoisePresets: none (the default: the truth), good, typical, poor.
 ///
-/// The drift densities are set from the translation drift that monocular VIO pipelines reach on
-/// flying-robot data: roughly 0.5 % (best), 1-2 % (typical) and several % (poor) of the distance
-/// flown (Delmerico and Scaramuzza, "A Benchmark Comparison of Monocular Visual-Inertial Odometry
-/// Algorithms for Flying Robots", ICRA 2018, EuRoC results). A random walk grows with sqrt(t)
-/// rather than with distance; the densities below give those percentages after a 20 m flight at
-/// 2 m/s (10 s): sigma_drift = fraction * 20 m / sqrt(10 s). This conversion and the white-noise
-/// and yaw values (a few cm, tenths of a degree: the jitter of a VIO pose at camera rate) are our
-/// estimates, not numbers read from the benchmark.
-/// @throws std::invalid_argument listing the names for anything else.
+/// Drift: monocular VIO pipelines on the EuRoC flights (40-130 m each) end a few decimetres off
+/// (Delmerico and Scaramuzza, "A Benchmark Comparison of Monocular Visual-Inertial Odometry
+/// Algorithms for Flying Robots", ICRA 2018): about 0.5 % of the distance flown for the best
+/// pipelines, 1-2 % typical, several % for those that struggle. These percentages are our reading
+/// of the benchmark's plots, rounded. A random walk grows with sqrt(t), not with distance; the
+/// densities give 0.5 / 1.5 / 5 % after a 20 m flight at 2 m/s (10 s): sigma = fraction * 20 m /
+/// sqrt(10 s). The white noise (1-10 cm) and the yaw values (tenths of a degree, a yaw drift of
+/// 0.05-0.5 deg/sqrt(s)) are our estimates of a VIO pose's jitter and heading drift, not numbers
+/// from the benchmark.
+/// @throws std::invalid_argument "odometry_noise: ..." naming the presets for anything else.
 OdometryNoiseOptions OdometryNoisePreset(const std::string& name);
 
-/// @throws std::invalid_argument naming the field when a value is negative or not finite.
-void ValidateOdometryNoise(const OdometryNoiseOptions& options);
-
+/// Corrupts the true state as a VIO would. Update() draws a new error when the VIO delivers a
+/// pose (the episode calls it at every depth frame: the camera rate); Apply() adds the current
+/// error to a true state (between frames the IMU propagation keeps the error as it was).
 class OdometryNoise {
  public:
-  /// @throws std::invalid_argument as ValidateOdometryNoise.
+  /// @throws std::invalid_argument naming the field when a value is negative or not finite.
   OdometryNoise(const OdometryNoiseOptions& options, std::uint64_t seed);
 
-  /// The estimate the stack receives for the true state at time t (s, non-decreasing): the drift
-  /// advances over the time since the last call, white noise is drawn fresh. Velocity,
-  /// acceleration and rates stay true (a VIO's velocity is far better than its position).
-  /// The orientation is rotated about world z by the yaw error.
-  navstack::VehicleState Corrupt(const navstack::VehicleState& truth, double t);
+  /// The error at time t (s, non-decreasing): the drift walks over the time since the last
+  /// update, the white noise is drawn afresh.
+  /// @throws std::invalid_argument when t goes backwards.
+  void Update(double t);
+  /// The estimate of `truth`: position plus the position error; orientation, velocity and
+  /// acceleration rotated about world z by the yaw error (a VIO's world frame turned by its
+  /// heading error); body rates true (the gyro's).
+  navstack::VehicleState Apply(const navstack::VehicleState& truth) const;
 
-  /// Error of the last Corrupt(): position (m) and yaw (rad), estimate minus truth.
-  const Eigen::Vector3d& last_position_error() const { return last_dp_; }
-  double last_yaw_error() const { return last_dyaw_; }
+  bool active() const { return options_.Active(); }
+  /// Current error: position (m) and yaw (rad), estimate minus truth.
+  const Eigen::Vector3d& position_error() const { return error_p_; }
+  double yaw_error() const { return error_yaw_; }
 
  private:
   OdometryNoiseOptions options_;
@@ -61,8 +66,8 @@ class OdometryNoise {
   double t_last_ = 0.0;
   Eigen::Vector3d drift_p_ = Eigen::Vector3d::Zero();
   double drift_yaw_ = 0.0;
-  Eigen::Vector3d last_dp_ = Eigen::Vector3d::Zero();
-  double last_dyaw_ = 0.0;
+  Eigen::Vector3d error_p_ = Eigen::Vector3d::Zero();
+  double error_yaw_ = 0.0;
 };
 
 }  // namespace enavi::sim

@@ -56,22 +56,6 @@ double TurbulenceW20(Turbulence t) {
   return 0.0;
 }
 
-void ValidateWindOptions(const WindOptions& o) {
-  Require(std::isfinite(o.mean_speed_mps) && o.mean_speed_mps >= 0.0 && o.mean_speed_mps <= 40.0,
-          "wind.speed", "must be in [0, 40] m/s");
-  Require(std::isfinite(o.mean_direction_deg), "wind.direction", "must be finite (degrees)");
-  Require(std::isfinite(o.gust.start_s) && o.gust.start_s >= 0.0, "wind.gust.start",
-          "must be finite and >= 0 s");
-  Require(std::isfinite(o.gust.rise_s) && o.gust.rise_s > 0.0, "wind.gust.rise",
-          "must be finite and > 0 s");
-  Require(std::isfinite(o.gust.hold_s) && o.gust.hold_s >= 0.0, "wind.gust.hold",
-          "must be finite and >= 0 s");
-  Require(std::isfinite(o.gust.amplitude_mps) && o.gust.amplitude_mps >= 0.0 &&
-              o.gust.amplitude_mps <= 40.0,
-          "wind.gust.speed", "must be in [0, 40] m/s");
-  Require(std::isfinite(o.gust.direction_deg), "wind.gust.direction", "must be finite (degrees)");
-}
-
 Eigen::Vector3d WindField::ScaleLengths(double altitude_m) {
   const double f = AltitudeFactor(altitude_m);
   const double h_ft = std::max(altitude_m * kFtPerM, kMinAltitudeFt);
@@ -85,12 +69,12 @@ Eigen::Vector3d WindField::Intensities(Turbulence t, double altitude_m) {
   return {sigma_uv, sigma_uv, sigma_w};
 }
 
-double WindField::GustSpeed(const Gust& g, double t) {
-  if (g.amplitude_mps <= 0.0 || t <= g.start_s) return 0.0;
+double WindField::GustSpeed(const api::GustSpec& g, double t) {
+  if (g.speed_mps <= 0.0 || t <= g.start_s) return 0.0;
   const double s = t - g.start_s;
-  const double half = 0.5 * g.amplitude_mps;
+  const double half = 0.5 * g.speed_mps;
   if (s < g.rise_s) return half * (1.0 - std::cos(std::numbers::pi * s / g.rise_s));
-  if (s < g.rise_s + g.hold_s) return g.amplitude_mps;
+  if (s < g.rise_s + g.hold_s) return g.speed_mps;
   const double d = s - g.rise_s - g.hold_s;
   if (d < g.rise_s) return half * (1.0 + std::cos(std::numbers::pi * d / g.rise_s));
   return 0.0;
@@ -114,23 +98,24 @@ double DrydenTransverseStep(Eigen::Vector2d* x, double a, double dt, double n1, 
   return std::sqrt(3.0) * a * (*x)(0) + (1.0 - std::sqrt(3.0)) * a * a * (*x)(1);
 }
 
-WindField::WindField(const WindOptions& options, double dt, std::uint64_t seed)
-    : options_(options), dt_(dt), rng_(navstack::rl::DeriveSeed(seed, 0x77696e64 /* "wind" */)) {
-  ValidateWindOptions(options_);
+WindField::WindField(const api::WindSpec& wind, double dt, std::uint64_t seed)
+    : spec_(wind), dt_(dt), rng_(navstack::rl::DeriveSeed(seed, 0x77696e64 /* "wind" */)) {
+  if (const std::string error = api::WindSpecError(spec_); !error.empty()) throw std::invalid_argument(error);
   Require(std::isfinite(dt) && dt > 0.0, "dt", "must be > 0");
-  mean_W_ = Horizontal(options_.mean_speed_mps, options_.mean_direction_deg);
-  axis_u_W_ = Horizontal(1.0, options_.mean_direction_deg);
+  turbulence_ = ParseTurbulence(spec_.turbulence);
+  mean_W_ = Horizontal(spec_.speed_mps, spec_.direction_deg);
+  axis_u_W_ = Horizontal(1.0, spec_.direction_deg);
   air_W_ = mean_W_;
 }
 
 Eigen::Vector3d WindField::Step(double altitude_m, const Eigen::Vector3d& v_W) {
   t_ += dt_;
   Eigen::Vector3d air = mean_W_;
-  air += Horizontal(GustSpeed(options_.gust, t_), options_.gust.direction_deg);
-  if (options_.turbulence != Turbulence::kNone) {
+  air += Horizontal(GustSpeed(spec_.gust, t_), spec_.gust.direction_deg);
+  if (turbulence_ != Turbulence::kNone) {
     const double V = std::max((v_W - mean_W_).norm(), kMinRelativeSpeed);
     const Eigen::Vector3d L = ScaleLengths(altitude_m);
-    const Eigen::Vector3d sigma = Intensities(options_.turbulence, altitude_m);
+    const Eigen::Vector3d sigma = Intensities(turbulence_, altitude_m);
     // Always five draws per step, so the stream position depends only on the step count.
     double n[5];
     for (double& ni : n) ni = rng_.Normal();

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include "api/episode.h"
 #include "navstack/rl/random.h"
 
 namespace enavi::sim {
@@ -16,36 +17,12 @@ namespace enavi::sim {
 /// at 20 ft, W20, that sets the intensities is 15 kt (light), 30 kt (moderate), 45 kt (severe).
 enum class Turbulence { kNone, kLight, kModerate, kSevere };
 
+/// The severity of one of api::kTurbulenceLevels.
 /// @throws std::invalid_argument naming the accepted names for anything else.
 Turbulence ParseTurbulence(const std::string& name);
 const char* TurbulenceName(Turbulence t);
 /// W20 of the severity, m/s (0 for kNone).
 double TurbulenceW20(Turbulence t);
-
-/// Discrete gust of MIL-F-8785C Sec. 3.7.5 ("1-cosine" shape), given in time: from start_s it
-/// rises as (amplitude / 2)(1 - cos(pi (t - start_s) / rise_s)) and then holds the amplitude for
-/// hold_s before falling back with the mirrored shape. amplitude 0 disables it.
-struct Gust {
-  double start_s = 0.0;
-  double rise_s = 1.0;
-  double hold_s = 0.0;
-  double amplitude_mps = 0.0;
-  double direction_deg = 0.0;  ///< where the gust blows TO, degrees from world +x toward +y
-};
-
-struct WindOptions {
-  double mean_speed_mps = 0.0;
-  double mean_direction_deg = 0.0;  ///< where the mean wind blows TO, degrees from +x toward +y
-  Turbulence turbulence = Turbulence::kNone;
-  Gust gust;
-  bool Active() const {
-    return mean_speed_mps > 0.0 || turbulence != Turbulence::kNone || gust.amplitude_mps > 0.0;
-  }
-};
-
-/// @throws std::invalid_argument naming the field (wind.speed, wind.direction, wind.gust.*) when a
-/// value is not finite or out of range.
-void ValidateWindOptions(const WindOptions& options);
 
 /// Dryden forming filters driven by seeded white noise, discretised exactly for the step dt: the
 /// sampled sequence has exactly the continuous model's variance and autocorrelation at multiples
@@ -66,8 +43,9 @@ class WindField {
   static constexpr double kMinRelativeSpeed = 1.0;  ///< m/s
   static constexpr double kMinAltitudeFt = 10.0;
 
-  /// @throws std::invalid_argument as ValidateWindOptions, or for dt <= 0.
-  WindField(const WindOptions& options, double dt, std::uint64_t seed);
+  /// The mean wind, gust and turbulence of `wind`, stepped by dt, its noise seeded by `seed`.
+  /// @throws std::invalid_argument with api::WindSpecError's message, or for dt <= 0.
+  WindField(const api::WindSpec& wind, double dt, std::uint64_t seed);
 
   /// Advances one step of dt at altitude_m (above ground) with the vehicle's velocity v_W and
   /// returns the air velocity at the new instant, world frame (m/s).
@@ -75,16 +53,18 @@ class WindField {
   /// Air velocity of the last Step() (zero before the first).
   const Eigen::Vector3d& air_velocity_W() const { return air_W_; }
   double time() const { return t_; }
-  const WindOptions& options() const { return options_; }
+  const api::WindSpec& spec() const { return spec_; }
 
   /// Scale lengths (u, v, w) and intensities (u, v, w), metres and m/s, at altitude_m.
   static Eigen::Vector3d ScaleLengths(double altitude_m);
   static Eigen::Vector3d Intensities(Turbulence t, double altitude_m);
-  /// The gust's speed at time t, m/s.
-  static double GustSpeed(const Gust& gust, double t);
+  /// The gust's speed at time t, m/s: (speed / 2)(1 - cos(pi (t - start) / rise)) rising, then
+  /// held, then the mirrored fall (MIL-F-8785C Sec. 3.7.5 "1-cosine", in time instead of distance).
+  static double GustSpeed(const api::GustSpec& gust, double t);
 
  private:
-  WindOptions options_;
+  api::WindSpec spec_;
+  Turbulence turbulence_ = Turbulence::kNone;
   double dt_;
   double t_ = 0.0;
   navstack::rl::Rng rng_;

@@ -192,6 +192,36 @@ TEST_F(JobSpecTest, AnEmulatedJobSaysWhatItsWorkersDoWithTheHostsSpeedProbe) {
             "job.yaml:6: speed_probe: the emulated clock's (this job's clock is virtual)");
 }
 
+TEST_F(JobSpecTest, WindAndOdometryNoiseReachEveryEpisodeAndBadValuesNameTheirField) {
+  const JobSpec job = Parse(std::string(kMinimal) + R"(wind:
+  speed_mps: 4
+  direction_deg: 90
+  turbulence: moderate
+  gust: {speed_mps: 6, start_s: 10, rise_s: 1.5, hold_s: 2}
+odometry_noise: typical
+)");
+  for (const EpisodeSpec& e : ExpandJob(job)) {
+    EXPECT_EQ(e.wind.speed_mps, 4.0);
+    EXPECT_EQ(e.wind.turbulence, "moderate");
+    EXPECT_EQ(e.wind.gust.rise_s, 1.5);
+    EXPECT_EQ(e.odometry_noise, "typical");
+    const nlohmann::json j = e;
+    EXPECT_EQ(j.get<EpisodeSpec>().wind, e.wind) << "the worker's spec file carries it";
+    EXPECT_EQ(j.get<EpisodeSpec>().odometry_noise, "typical");
+  }
+  for (const EpisodeSpec& e : ExpandJob(Parse(kMinimal))) {
+    const nlohmann::json j = e;
+    EXPECT_FALSE(j.contains("wind") || j.contains("odometry_noise")) << "still air is not written: specs stay as they were";
+  }
+  EXPECT_EQ(Error(std::string(kMinimal) + "wind: {turbulence: stormy}\n"),
+            "job.yaml:6: wind.turbulence: unknown turbulence level 'stormy' (known: none, light, moderate, severe)");
+  EXPECT_EQ(Error(std::string(kMinimal) + "wind:\n  speed_mps: 41\n").rfind("job.yaml:7: wind.speed_mps:", 0), 0u);
+  EXPECT_EQ(Error(std::string(kMinimal) + "wind: {gust: {rise: 1}}\n").rfind("job.yaml:6: wind.gust", 0), 0u)
+      << Error(std::string(kMinimal) + "wind: {gust: {rise: 1}}\n");
+  EXPECT_EQ(Error(std::string(kMinimal) + "odometry_noise: awful\n"),
+            "job.yaml:6: odometry_noise: unknown odometry noise preset 'awful' (known: none, good, typical, poor)");
+}
+
 TEST_F(JobSpecTest, WorldFilesResolveUnderTheAllowedRoot) {
   const JobSpec job = Parse(R"(boards: tx2
 methods: enavi

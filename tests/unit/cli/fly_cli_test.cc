@@ -63,6 +63,18 @@ TEST(FlyCliInputTest, UnknownBoardMethodOrWorldIsRefusedWithTheKnownOnes) {
                 "world parameter out of range");
 }
 
+TEST(FlyCliInputTest, BadAirOrOdometryIsRefusedNamingTheFlag) {
+  TempDir dir;
+  ExpectRefused(Fly(dir, "--world empty --turbulence stormy"), {"--turbulence", "stormy", "severe"}, "unknown level");
+  ExpectRefused(Fly(dir, "--world empty --wind 41"), {"--wind", "41"}, "wind above the limit");
+  ExpectRefused(Fly(dir, "--world empty --wind -1"), {"--wind"}, "negative wind");
+  ExpectRefused(Fly(dir, "--world empty --gust-rise 0"), {"--gust-rise", "0"}, "a gust that rises in no time");
+  ExpectRefused(Fly(dir, "--world empty --odometry-noise awful"), {"--odometry-noise", "awful", "typical"},
+                "unknown odometry preset");
+  // The same checks guard eval's flags (its job spec).
+  ExpectRefused(Enavi(dir, "eval --turbulence stormy"), {"--turbulence", "stormy"}, "eval: unknown level");
+}
+
 TEST(FlyCliInputTest, MalformedStartOrGoalIsRefused) {
   TempDir dir;
   ExpectRefused(Fly(dir, "--world empty --start 1,2"), {"--start", "x,y,z", "'1,2'"}, "two coordinates");

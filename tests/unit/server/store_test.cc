@@ -385,5 +385,27 @@ TEST(SeriesBlobTest, PackUnpackRoundTripsAndRejectsGarbage) {
   EXPECT_THROW(UnpackSeries({'x', 'y'}), std::invalid_argument);
 }
 
+TEST(SeriesCodecTest, WindAndOdometryColumnsRoundTripAndSeriesStoredBeforeThemStillRead) {
+  api::TimeSeries s;
+  s.t = {0.0, 0.1};
+  s.wind_speed = {3.5, 4.25};
+  s.odometry_error = {0.01, 0.02};
+  const auto back = UnpackSeries(PackSeries(s));
+  EXPECT_EQ(back.wind_speed, s.wind_speed);
+  EXPECT_EQ(back.odometry_error, s.odometry_error);
+  // A blob written before the two columns existed ends after utilisation: 8 bytes shorter.
+  s.wind_speed.clear();
+  s.odometry_error.clear();
+  auto old = PackSeries(s);
+  old.resize(old.size() - 8);
+  const auto read = UnpackSeries(old);
+  EXPECT_EQ(read.t, s.t);
+  EXPECT_TRUE(read.wind_speed.empty());
+  EXPECT_TRUE(read.odometry_error.empty());
+  auto longer = PackSeries(s);
+  longer.push_back(0);
+  EXPECT_THROW(UnpackSeries(longer), std::invalid_argument) << "trailing bytes";
+}
+
 }  // namespace
 }  // namespace enavi::server

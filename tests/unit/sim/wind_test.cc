@@ -51,10 +51,10 @@ TEST(DrydenTransverseStep, UnitVarianceAndDrydenAutocorrelationForCoarseAndFineS
 }
 
 TEST(WindField, TurbulenceHasTheStandardsIntensitiesAlongWindAcrossAndVertical) {
-  WindOptions o;
-  o.mean_speed_mps = 5.0;
-  o.mean_direction_deg = 90.0;  // blowing toward +y: u along y, v along -x
-  o.turbulence = Turbulence::kSevere;
+  api::WindSpec o;
+  o.speed_mps = 5.0;
+  o.direction_deg = 90.0;  // blowing toward +y: u along y, v along -x
+  o.turbulence = "severe";
   WindField wind(o, 0.01, 3);
   const double h = 2.0;
   std::vector<double> ux, uy, uz;
@@ -89,13 +89,13 @@ TEST(WindField, LowAltitudeScaleLengthsAndIntensitiesFollowMilF8785C) {
 }
 
 TEST(WindField, OneMinusCosineGustRisesHoldsAndFalls) {
-  Gust g{.start_s = 1.0, .rise_s = 2.0, .hold_s = 1.0, .amplitude_mps = 6.0, .direction_deg = 0};
+  const api::GustSpec g{.start_s = 1.0, .rise_s = 2.0, .hold_s = 1.0, .speed_mps = 6.0, .direction_deg = 0};
   EXPECT_EQ(WindField::GustSpeed(g, 0.5), 0.0);
   EXPECT_NEAR(WindField::GustSpeed(g, 2.0), 3.0, 1e-12);  // half way up
   EXPECT_NEAR(WindField::GustSpeed(g, 3.5), 6.0, 1e-12);
   EXPECT_NEAR(WindField::GustSpeed(g, 5.0), 3.0, 1e-12);  // half way down
   EXPECT_EQ(WindField::GustSpeed(g, 7.0), 0.0);
-  WindOptions o;
+  api::WindSpec o;
   o.gust = g;
   WindField wind(o, 0.5, 1);
   Eigen::Vector3d a;
@@ -105,8 +105,8 @@ TEST(WindField, OneMinusCosineGustRisesHoldsAndFalls) {
 }
 
 TEST(WindField, SameSeedSameAirDifferentSeedDifferentAir) {
-  WindOptions o;
-  o.turbulence = Turbulence::kLight;
+  api::WindSpec o;
+  o.turbulence = "light";
   WindField a(o, 0.001, 11), b(o, 0.001, 11), c(o, 0.001, 12);
   bool differs = false;
   for (int i = 0; i < 1000; ++i) {
@@ -119,7 +119,7 @@ TEST(WindField, SameSeedSameAirDifferentSeedDifferentAir) {
 }
 
 TEST(WindField, RejectsBadValuesNamingTheField) {
-  const auto message = [](const WindOptions& o) {
+  const auto message = [](const api::WindSpec& o) {
     try {
       WindField w(o, 0.001, 1);
     } catch (const std::invalid_argument& e) {
@@ -127,16 +127,25 @@ TEST(WindField, RejectsBadValuesNamingTheField) {
     }
     return std::string("accepted");
   };
-  WindOptions o;
-  o.mean_speed_mps = -1.0;
-  EXPECT_EQ(message(o).rfind("wind.speed:", 0), 0u) << message(o);
+  api::WindSpec o;
+  o.speed_mps = -1.0;
+  EXPECT_EQ(message(o).rfind("wind.speed_mps:", 0), 0u) << message(o);
   o = {};
-  o.mean_direction_deg = std::nan("");
-  EXPECT_EQ(message(o).rfind("wind.direction:", 0), 0u) << message(o);
+  o.direction_deg = std::nan("");
+  EXPECT_EQ(message(o).rfind("wind.direction_deg:", 0), 0u) << message(o);
   o = {};
   o.gust.rise_s = 0.0;
-  EXPECT_EQ(message(o).rfind("wind.gust.rise:", 0), 0u) << message(o);
+  EXPECT_EQ(message(o).rfind("wind.gust.rise_s:", 0), 0u) << message(o);
+  o = {};
+  o.turbulence = "strong";
+  EXPECT_EQ(message(o).rfind("wind.turbulence:", 0), 0u) << message(o);
+  o = {};
+  o.gust.speed_mps = 41.0;
+  EXPECT_EQ(message(o).rfind("wind.gust.speed_mps:", 0), 0u) << message(o);
+  EXPECT_EQ(message(api::WindSpec{}), "accepted");
   EXPECT_THROW(ParseTurbulence("strong"), std::invalid_argument);
+  // Every level the spec accepts is a severity of the model.
+  for (const char* level : api::kTurbulenceLevels) EXPECT_EQ(TurbulenceName(ParseTurbulence(level)), std::string(level));
   EXPECT_EQ(ParseTurbulence("severe"), Turbulence::kSevere);
 }
 
