@@ -40,14 +40,16 @@ TEST(LaunchPlanTest, ALaunchFileGetsTheStacksArgsThenTheEpisodesItDeclares) {
   g.goal = {30, 2, 1};
   g.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(-5, -8, 0), Eigen::Vector3d(35, 8, 4));
   g.camera = navstack::CameraIntrinsics::DefaultStream();
+  g.seed = 42;
   const std::string xml = "<launch><arg name=\"enavi_goal_x\"/><arg name=\"enavi_map_size_x\"/>"
-                          "<arg name=\"enavi_cx\"/><arg name=\"max_vel\"/></launch>";
+                          "<arg name=\"enavi_cx\"/><arg name=\"enavi_seed\"/><arg name=\"max_vel\"/></launch>";
   const std::vector<std::string> cmd = StackCommand(stack, xml, EpisodeLaunchArgs(g), "http://127.0.0.1:1234/");
   const std::vector<std::string> expected = {"roslaunch", "--screen", "--skip-log-check", "/ws/ego.launch",
                                              "enavi_goal_x:=99",  // the stack's own value wins
                                              "max_vel:=2.0",
                                              "enavi_cx:=" + api::Fixed(g.camera.cx - 0.5, 4),
-                                             "enavi_map_size_x:=70.0000"};  // 2 x |35|: a map centred on 0
+                                             "enavi_map_size_x:=70.0000",  // 2 x |35|: a map centred on 0
+                                             "enavi_seed:=42"};
   EXPECT_EQ(cmd, expected);
 }
 

@@ -199,6 +199,11 @@ BridgeNode::BridgeNode(const api::RosStack& stack, const std::string& master_uri
   ::ros::param::set("/enavi/bounds_max", vec(geometry.bounds.max()));
   ::ros::param::set("/enavi/board", geometry.board);
   ::ros::param::set("/enavi/board_cores", geometry.cores);
+  // XML-RPC integers are 32-bit: a larger seed goes as its decimal string.
+  if (geometry.seed <= static_cast<std::uint64_t>(std::numeric_limits<int>::max()))
+    ::ros::param::set("/enavi/seed", static_cast<int>(geometry.seed));
+  else
+    ::ros::param::set("/enavi/seed", std::to_string(geometry.seed));
 
   // CameraInfo: ROS puts pixel centres at integer coordinates, our intrinsics at +0.5
   // (CameraIntrinsics::PixelRay), so the principal point moves by half a pixel.

@@ -33,6 +33,7 @@ struct EpisodeGeometry {
   Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();  ///< the camera's optical frame in the body
   std::string board;
   int cores = 1;  ///< the board's cores: what nproc says on it (a process here sees the host's)
+  std::uint64_t seed = 1;  ///< the episode's seed, for a stack that seeds its own randomness
 };
 
 /// What arrived on the command topic since the last look.

@@ -117,6 +117,7 @@ std::map<std::string, std::string> EpisodeLaunchArgs(const EpisodeGeometry& g) {
   }
   a["enavi_start_yaw"] = Number(g.start_yaw);
   a["enavi_cores"] = std::to_string(g.cores);
+  a["enavi_seed"] = std::to_string(g.seed);
   a["enavi_width"] = std::to_string(g.camera.width);
   a["enavi_height"] = std::to_string(g.camera.height);
   a["enavi_fx"] = Number(g.camera.fx);

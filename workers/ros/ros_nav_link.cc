@@ -611,6 +611,7 @@ void RegisterRosLink() {
                        o.geometry.X_BC = r.X_BC;
                        o.geometry.board = r.board->id;
                        o.geometry.cores = r.board->cores;
+                       o.geometry.seed = r.spec->seed;
                        o.initial = r.initial;
                        o.output_dir = r.output_dir;
                        o.bag_file = r.bag_file;
