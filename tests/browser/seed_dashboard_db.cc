@@ -21,6 +21,7 @@
 
 #include "server/store/store.h"
 #include "tests/support/seed_store.h"
+#include "workers/emulation/emulated_nav_link.h"
 
 namespace {
 
@@ -50,6 +51,7 @@ ros_methods:
 }  // namespace
 
 int main(int argc, char** argv) {
+  enavi::emulation::RegisterEmulatedLink();  // the clocks enavi's main registers: ros-1 is emulated
   const bool pending_ros = argc == 3 && std::string(argv[2]) == "--pending-ros";
   if (argc != 2 && !pending_ros) {
     std::cerr << "usage: seed_dashboard_db DB [--pending-ros]\n";
