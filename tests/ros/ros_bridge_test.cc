@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -272,6 +273,9 @@ TEST_F(RosBridgeTest, ALaunchFileFromAPackageGetsTheEpisodesArgsAndABagIsRecorde
 TEST_F(RosBridgeTest, AJobOfARosMethodAndEnaviRunsOnEvalWithTwoWorkers) {
   const std::string stack = TestStack("position", "command_timeout_s: 5\n");
   const fs::path db = dir_.path() / "eval.db";
+  // The suite's host calibration from the environment, as a user's batch would run (eval's
+  // workers start `enavi episode`, which reads ENAVI_CALIBRATION; a fresh machine has none stored).
+  ASSERT_EQ(setenv("ENAVI_CALIBRATION", calibration_.c_str(), 1), 0);
   const CliRun eval = Enavi(dir_, "eval --ros-stack " + stack + " --methods enavi --boards tx2,pi4b --scenarios empty,s1 "
                                   "--workers 2 --timeout 4 --speed-probe off --name rosjob --db " + db.string());
   ASSERT_EQ(eval.code, 0) << eval.out << eval.err;
