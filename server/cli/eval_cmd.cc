@@ -138,8 +138,8 @@ void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
     o.while_serving = [&](const server::EvalReport& report) {
       print(report);
       printed = true;
+      serving_done_job = true;  // before saying so: a Ctrl-C right after the line ends normally
       std::cerr << "job done; the dashboard keeps serving until Ctrl-C\n";
-      serving_done_job = true;
       stop.get_future().wait();
     };
   }
