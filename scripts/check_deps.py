@@ -92,7 +92,10 @@ def check_layers(root):
 
 # --- Targets from the CMakeLists: explicit source lists and link libraries ---
 
-COMMAND = re.compile(r"\b(add_library|target_link_libraries)\s*\(([^)]*)\)", re.S)
+COMMAND = re.compile(r"\b(add_library|target_link_libraries|enavi_add_method)\s*\(([^)]*)\)", re.S)
+# enavi_add_method(<name> FUNCTIONS .. HEADER .. SOURCES .. LIBS ..) (cmake/EnaviHelpers.cmake): the
+# library enavi_<name>, alias enavi::<name>, on the method interface.
+METHOD_KEYWORDS = ("FUNCTIONS", "HEADER", "SOURCES", "LIBS")
 
 
 def cmake_targets(root):
@@ -110,7 +113,20 @@ def cmake_targets(root):
             if not words:
                 continue
             name = words[0]
-            if command == "add_library":
+            if command == "enavi_add_method":
+                args, key = {}, None
+                for w in words[1:]:
+                    if w in METHOD_KEYWORDS:
+                        key = w
+                        args[key] = []
+                    elif key:
+                        args[key].append(w)
+                aliases["enavi::" + name] = "enavi_" + name
+                files = {os.path.normpath(os.path.join(rel_dir, w))
+                         for w in args.get("SOURCES", []) + args.get("HEADER", []) if w.endswith(SOURCE_EXT)}
+                targets["enavi_" + name] = {"dir": rel_dir, "files": files,
+                                            "links": set(args.get("LIBS", [])) | {"enavi::method_api"}}
+            elif command == "add_library":
                 if len(words) >= 3 and words[1] == "ALIAS":
                     aliases[name] = words[2]
                 else:

@@ -3,12 +3,14 @@
 // one MethodInfo of name, scheduler, tunables and factory, registered once by name. Every list a
 // user sees (CLI choices, job validation, tables, bench_episode) reads the registry (registry.h).
 //
-// Adding a method: a folder under navstack/methods/ with a function returning its MethodInfo,
-// and one line in BuiltinMethods() (registry.cc); a test or a tool may also RegisterMethod() at
-// run time.
+// Adding a method: a folder under navstack/methods/ with a function returning its MethodInfo and
+// a CMakeLists.txt calling enavi_add_method() (cmake/EnaviHelpers.cmake), and one add_subdirectory
+// line in navstack/methods/CMakeLists.txt: the registry's list of built-ins is generated from those
+// folders. A test or a tool may also RegisterMethod() at run time.
 
 #include <array>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -45,14 +47,28 @@ struct MethodSetup {
   std::shared_ptr<const rl::PolicyFile> policy;
 };
 
+/// One flight of `enavi calibrate` (workers/board/calibration_flights.h): a scenario and overrides
+/// of the method's tunables, chosen so that its units of work and its tasks' per-job overheads vary
+/// independently enough to fit its cost family's prices.
+struct MethodCalibrationFlight {
+  std::string world;  ///< a scenario, "s1".."s5"
+  std::map<std::string, double> overrides;
+};
+
 struct MethodInfo {
   std::string name;
   std::string summary;  ///< one line for --help and tables
   MethodScheduler scheduler;
   std::vector<MethodTunable> tunables;
   /// The code base its work counts come from, which prices them (reference_costs.yaml has one set
-  /// of prices per family): the same work unit is different code in two code bases.
-  std::string cost_family = "navstack";
+  /// of prices per family): the same work unit is different code in two code bases. Required:
+  /// "navstack" if its jobs run our stack's code (perception, planning), else a family of its own,
+  /// priced once `enavi calibrate --write-reference` has flown it (until then it flies with
+  /// `cost: measured`).
+  std::string cost_family;
+  /// Its flights in `enavi calibrate`'s plan (the methods take turns, flight by flight); empty: one
+  /// flight on each of s1-s5 at its defaults.
+  std::vector<MethodCalibrationFlight> calibration;
   bool uses_policy = false;      ///< reads a frequency-adapter policy (--policy)
   bool records_rollouts = false;  ///< can record a training rollout
   /// What each task's CPU is for this method (results' per-task utilisation), by TaskId.

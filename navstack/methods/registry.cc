@@ -2,9 +2,7 @@
 #include <mutex>
 #include <stdexcept>
 
-#include "navstack/methods/ego_planner/ego_planner_method.h"
 #include "navstack/methods/registry.h"
-#include "navstack/stack/stack_methods.h"
 
 namespace enavi::navstack {
 namespace {
@@ -14,6 +12,10 @@ void Check(const MethodInfo& m, const std::deque<MethodInfo>& existing) {
   for (const MethodInfo& e : existing)
     if (e.name == m.name) throw std::invalid_argument("method '" + m.name + "': registered twice");
   if (!m.make) throw std::invalid_argument("method '" + m.name + "': no factory");
+  if (m.cost_family.empty())
+    throw std::invalid_argument("method '" + m.name +
+                                "': no cost_family (\"navstack\" if its jobs run our stack's code, else a family of "
+                                "its own, priced by `enavi calibrate --write-reference`)");
   for (const MethodTunable& t : m.tunables)
     if (!(t.min <= t.default_value && t.default_value <= t.max))
       throw std::invalid_argument("method '" + m.name + "': tunable " + t.name + " default " +
@@ -21,10 +23,10 @@ void Check(const MethodInfo& m, const std::deque<MethodInfo>& existing) {
                                   std::to_string(t.max) + "]");
 }
 
-// The built-in methods: one line each.
+// The built-in methods: the folders navstack/methods/CMakeLists.txt adds.
 std::deque<MethodInfo> BuiltinMethods() {
   std::deque<MethodInfo> out;
-  for (MethodInfo m : {EgoPlannerMethod(), FixedMethod(), EnaviMethod()}) {
+  for (MethodInfo m : BuiltinMethodList()) {
     Check(m, out);
     out.push_back(std::move(m));
   }

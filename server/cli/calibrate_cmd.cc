@@ -167,10 +167,14 @@ void Run(const CalibrateArgs& args) {
       const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const std::string eta =
           flown > 0 ? ", ETA " + std::to_string(static_cast<int>(elapsed / flown * (total - flown))) + " s" : "";
+      std::string with;
+      for (const auto& [name, value] : f.overrides) {
+        char v[32];
+        std::snprintf(v, sizeof v, "%g", value);
+        with += (with.empty() ? " with " : ", ") + name + " " + v;
+      }
       std::fprintf(stderr, "calibrate: [%zu/%zu%s] flying %s on %s%s for %.0f s\n", ++flown, total, eta.c_str(),
-                   f.method.c_str(), f.world.c_str(),
-                   f.resolution > 0 ? (" at " + std::to_string(f.resolution).substr(0, 4) + " m").c_str() : "",
-                   args.episode_seconds);
+                   f.method.c_str(), f.world.c_str(), with.c_str(), args.episode_seconds);
     };
   }
   const board::CalibrationRun run = board::RunCalibration(options);

@@ -12,11 +12,13 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "navstack/adapt/action_grid.h"
-#include "navstack/adapt/resolution_adapter.h"
 #include "navstack/methods/registry.h"
 #include "navstack/rl/policy_io.h"
 #include "workers/sim/episode.h"
@@ -51,7 +53,10 @@ HostCalibration MakeHostCalibration(const FamilyFits& fit, double speed, const R
   return cal;
 }
 
-// A policy file for E-Navi's flights. Calibration prices work, not decisions: a freshly
+// The scenarios flights rotate through.
+const char* const kScenarios[] = {"s1", "s2", "s3", "s4", "s5"};
+
+// A policy file for the flights of methods that read one (E-Navi's). Calibration prices work, not decisions: a freshly
 // initialised network costs what a trained one does. Removed when the run ends.
 class ScratchPolicy {
  public:
@@ -80,20 +85,20 @@ double LoadAverage() {
 }  // namespace
 
 std::vector<CalibrationFlight> CalibrationPlan() {
-  // Each method flies each level of E-Navi's ladder once, on scenarios rotated so that no level
-  // is tied to one scene; fixed also runs difference detection on some flights (the baseline has
-  // none). E-Navi picks its own resolution (its adapter walks the ladder) and rates. The methods
-  // take turns, so that a host getting busier or quieter during the run (a shared VM drifts by
-  // 10-30 % within a minute) shifts every method's jobs alike instead of one method's.
-  const std::vector<double> ladder = navstack::ResolutionAdapterOptions{}.ladder;
-  const std::vector<std::string> worlds = {"s1", "s2", "s3", "s4", "s5"};
-  const double f_dif[] = {0, 15, 0, 30};
-  std::vector<CalibrationFlight> plan;
-  for (std::size_t i = 0; i < std::max(ladder.size(), worlds.size()); ++i) {
-    if (i < ladder.size()) plan.push_back({"baseline", worlds[i % 5], ladder[i], 0});
-    if (i < ladder.size()) plan.push_back({"fixed", worlds[(i + 2) % 5], ladder[i], f_dif[i % 4]});
-    if (i < worlds.size()) plan.push_back({"enavi", worlds[i], 0, 0});
+  // Each method's flights (its own, or one per scenario at its defaults), the methods taking turns.
+  std::vector<std::pair<std::string, std::vector<navstack::MethodCalibrationFlight>>> flights;
+  std::size_t longest = 0;
+  for (const navstack::MethodInfo& m : navstack::Methods()) {
+    std::vector<navstack::MethodCalibrationFlight> own = m.calibration;
+    if (own.empty())
+      for (const char* world : kScenarios) own.push_back({world, {}});
+    longest = std::max(longest, own.size());
+    flights.emplace_back(m.name, std::move(own));
   }
+  std::vector<CalibrationFlight> plan;
+  for (std::size_t i = 0; i < longest; ++i)
+    for (const auto& [method, own] : flights)
+      if (i < own.size()) plan.push_back({method, own[i].world, own[i].overrides});
   return plan;
 }
 
@@ -120,12 +125,8 @@ std::vector<JobSample> FlyMeasured(const std::vector<CalibrationFlight>& flights
     const navstack::MethodInfo* info = navstack::FindMethod(flight.method);
     if (info == nullptr) throw std::logic_error("calibration plan names an unknown method " + flight.method);
     family = info->cost_family;
-    if (flight.method == "enavi") {
-      spec.policy = policy.path();
-      spec.overrides["strategy.explore"] = 1;  // sampled actions: rates across the policy's grid
-    }
-    if (flight.resolution > 0) spec.overrides["map.resolution"] = flight.resolution;
-    if (flight.method == "fixed") spec.overrides["rates.f_dif"] = flight.f_dif;
+    if (info->uses_policy) spec.policy = policy.path();
+    spec.overrides = flight.overrides;
     if (on_flight) on_flight(flight);
     sim::RunEpisode(spec, episode);
   }
@@ -148,8 +149,11 @@ class AffinityRestore {
 
 std::vector<CalibrationFlight> SpeedProbePlan() {
   // Each method at its own resolution and rates, on a world of its own: the work an emulated
-  // episode does, both cost families.
-  return {{"baseline", "s1", 0, 0}, {"fixed", "s2", 0, 0}, {"enavi", "s3", 0, 0}};
+  // episode does, every cost family.
+  std::vector<CalibrationFlight> plan;
+  for (const navstack::MethodInfo& m : navstack::Methods())
+    plan.push_back({m.name, kScenarios[plan.size() % std::size(kScenarios)], {}});
+  return plan;
 }
 
 SpeedProbe ProbeHostSpeed() {

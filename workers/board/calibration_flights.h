@@ -4,6 +4,7 @@
 // speed against the reference core. The CLI only parses flags and prints.
 
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -12,17 +13,17 @@
 
 namespace enavi::board {
 
-/// One calibration flight: a method on a world, at a map resolution (0: the method's own).
+/// One calibration flight: a method on a world, with overrides of its tunables.
 struct CalibrationFlight {
   std::string method;
   std::string world;
-  double resolution = 0;
-  double f_dif = 0;  ///< difference detection rate (fixed only; 0 = off)
+  std::map<std::string, double> overrides;
 };
 
-/// The flights `enavi calibrate` makes: every method (the baseline, fixed, E-Navi) and every
-/// level of E-Navi's resolution ladder (0.1-0.5 m), over all five scenarios, so that every unit
-/// of work and every task's per-job overhead varies independently enough to fit.
+/// The flights `enavi calibrate` makes: every registered method's own flights
+/// (navstack::MethodInfo::calibration), the methods taking turns flight by flight, so that a host
+/// getting busier or quieter during the run (a shared VM drifts by 10-30 % within a minute)
+/// shifts every method's jobs alike instead of one method's.
 std::vector<CalibrationFlight> CalibrationPlan();
 
 struct CalibrationOptions {
@@ -48,8 +49,8 @@ struct CalibrationRun {
 /// Throws if the fit cannot be made (too few samples).
 CalibrationRun RunCalibration(const CalibrationOptions& options);
 
-/// The speed probe's flights: each method once, at its own resolution and rates (both cost
-/// families), kSpeedProbeSeconds each.
+/// The speed probe's flights: each registered method once, at its own resolution and rates (every
+/// cost family), on the scenarios in turn, kSpeedProbeSeconds each.
 std::vector<CalibrationFlight> SpeedProbePlan();
 inline constexpr double kSpeedProbeSeconds = 2.0;
 

@@ -88,6 +88,20 @@ EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
     throw std::invalid_argument("method: unknown method '" + spec.method + "' (known: " + known + ")");
   }
   const navstack::MethodInfo& method = *config.method;
+  // The cost model prices the method's jobs at its cost family's prices (the emulated clock's
+  // budgets too): a family `enavi calibrate` has not fitted yet flies on measured costs only.
+  if (spec.cost == "model" || spec.clock != "virtual") {
+    const board::ReferenceCosts reference = board::LoadReferenceCosts();
+    if (!reference.families.contains(method.cost_family)) {
+      std::string priced;
+      for (const auto& [family, c] : reference.families) priced += (priced.empty() ? "" : ", ") + family;
+      throw std::invalid_argument("method '" + method.name + "': its cost family '" + method.cost_family +
+                                  "' has no prices in reference costs " + reference.calibration_id + " (priced: " +
+                                  priced + "): fit them with `enavi calibrate --write-reference "
+                                  "workers/board/profiles/reference_costs.yaml` (its plan flies every registered "
+                                  "method) and rebuild, or fly it on the virtual clock with cost: measured");
+    }
+  }
   navstack::MethodSetup setup;
   setup.seed = spec.seed;
   if (method.uses_policy) setup.policy = navstack::rl::LoadPolicyOrShipped(spec.policy);

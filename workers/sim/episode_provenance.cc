@@ -34,6 +34,8 @@ std::map<std::string, std::string> EpisodeProvenance(const api::EpisodeSpec& spe
   // reference ns per unit and per job divided by the board's per-core speed, and the rule that
   // applies them.
   const board::ReferenceCosts reference = board::LoadReferenceCosts();
+  // A family not fitted yet flies on measured costs only (MakeEpisodeConfig): no prices to digest.
+  if (!reference.families.contains(cost_family)) return notes;
   const auto coefficients = board::BoardCoefficients(board, reference, cost_family);
   std::string bytes(reinterpret_cast<const char*>(coefficients.ns_per_unit.data()),
                     sizeof(double) * coefficients.ns_per_unit.size());

@@ -1,5 +1,7 @@
 #include "navstack/methods/ego_planner/ego_planner_method.h"
 
+#include <iterator>
+
 #include "navstack/methods/ego_planner/ego_planner_node.h"
 
 namespace enavi::navstack {
@@ -15,6 +17,12 @@ MethodInfo EgoPlannerMethod() {
   // Its map is dense arrays and its search a bit grid, not our octree and distance field: a voxel
   // update or a state check is other code at another price.
   m.cost_family = "ego_planner";
+  // Calibration: each level of E-Navi's resolution ladder (ResolutionAdapterOptions) once, on the
+  // scenarios in turn.
+  const double ladder[] = {0.5, 0.4, 0.3, 0.2, 0.15, 0.1};
+  const char* const scenarios[] = {"s1", "s2", "s3", "s4", "s5"};
+  for (std::size_t i = 0; i < std::size(ladder); ++i)
+    m.calibration.push_back({scenarios[i % 5], {{"map.resolution", ladder[i]}}});
   m.task_labels = {"occupancy update", "FSM (replans)", "safety check (and its replans)", "unused", "eci", "unused"};
   m.tunables = {
       {"map.resolution", 0.05, 1.0, 0.1, false, "grid_map/resolution, m"},

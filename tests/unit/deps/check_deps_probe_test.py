@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """scripts/check_deps.py fails on a planted upward include in a navstack probe (and on a server
 probe that includes bench/, the top layer, and on a ros probe that includes workers/ or server/)
-and passes on a clean one, through both of its
+and passes on a clean one (a method folder's library, enavi_add_method, included), through both of its
 routes: the source scan and the compiler's dependency output (the probe is run through the
 compiler with -M, as the build does with -MD), the latter also with the probe compiled through a
 generated file that includes it, as in a unity build.
@@ -11,6 +11,7 @@ Usage: check_deps_probe_test.py --checker PY --compiler CXX --source-dir REPO [-
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -62,6 +63,27 @@ def make_link_tree(root, repo, link_bench):
         for name, text in (("CMakeLists.txt", body), ("probe.h", ""), ("probe.cc", "")):
             with open(os.path.join(root, layer, "probe", name), "w") as f:
                 f.write(text)
+
+
+def make_method_tree(root, repo, links):
+    """A tree with a method folder navstack/methods/probe (enavi_add_method, LIBS <links>) whose source
+    includes our stack's header and the method interface's; navstack/ is a copy, so that the
+    checker reads its libraries (it does not follow symlinked folders)."""
+    for layer in LAYERS:
+        if layer != "navstack":
+            os.symlink(os.path.join(repo, layer), os.path.join(root, layer))
+    shutil.copytree(os.path.join(repo, "navstack"), os.path.join(root, "navstack"))
+    methods = os.path.join(root, "navstack", "methods")
+    os.makedirs(os.path.join(methods, "probe"))
+    files = {
+        "CMakeLists.txt": "enavi_add_method(probe\n  FUNCTIONS ProbeMethod\n  HEADER probe.h\n"
+                          f"  SOURCES probe.cc probe.h\n  LIBS {links})\n",
+        "probe.h": '#include "navstack/methods/method.h"\n',
+        "probe.cc": '#include "navstack/methods/probe/probe.h"\n#include "navstack/stack/nav_stack.h"\n',
+    }
+    for name, text in files.items():
+        with open(os.path.join(methods, "probe", name), "w") as f:
+            f.write(text)
 
 
 def run_checker(checker, root, only, depfile=None):
@@ -126,6 +148,20 @@ def main():
                   f"library {'linking' if link_bench else 'not linking'} a bench/ library")
             if not ok:
                 failures.append(f"cmake link probe ({link_bench}): exit {r.returncode}, wanted {expected} "
+                                f"and '{needle}' in:\n{report}")
+    # A method folder's library (enavi_add_method) includes only what it links, as any library does.
+    for links, expected in (("enavi::planning", 1), ("enavi::stack", 0)):
+        with tempfile.TemporaryDirectory() as root:
+            make_method_tree(root, repo, links)
+            r = run_checker(args.checker, root, "sources")
+            report = r.stdout + r.stderr
+            needle = ("enavi_probe includes navstack/stack/nav_stack.h of enavi_stack, which it does not link"
+                      if expected else "clean")
+            ok = r.returncode == expected and needle in report
+            print(f"{'ok  ' if ok else 'FAIL'} cmake    exit {r.returncode} (want {expected}) for a method folder "
+                  f"linking {links} and including the stack's header")
+            if not ok:
+                failures.append(f"method folder probe ({links}): exit {r.returncode}, wanted {expected} "
                                 f"and '{needle}' in:\n{report}")
     for f in failures:
         print(f, file=sys.stderr)

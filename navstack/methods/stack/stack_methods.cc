@@ -1,6 +1,7 @@
-#include "navstack/stack/stack_methods.h"
+#include "navstack/methods/stack/stack_methods.h"
 
 #include <stdexcept>
+#include <vector>
 
 #include "navstack/stack/nav_stack.h"
 
@@ -35,11 +36,20 @@ MethodTunable ScanResetTunable() {
           "after a full scan turn without a plan, forget occupied cells farther than this, m (0: never)"};
 }
 
+// The scenarios calibration flights rotate through, so that no resolution is tied to one scene.
+const char* const kScenarios[] = {"s1", "s2", "s3", "s4", "s5"};
+
 MethodInfo FixedMethod() {
   MethodInfo m;
   m.name = "fixed";
   m.summary = "our stack at fixed 30 Hz perception / 20 Hz planning timer / 0.1 m, no adaptation";
   m.scheduler = {SchedulingPolicy::kFifoNonPreemptive, 1};
+  m.cost_family = "navstack";
+  // Calibration: each level of E-Navi's ladder once, difference detection on some flights.
+  const std::vector<double> ladder = ResolutionAdapterOptions{}.ladder;
+  const double f_dif[] = {0, 15, 0, 30};
+  for (std::size_t i = 0; i < ladder.size(); ++i)
+    m.calibration.push_back({kScenarios[(i + 2) % 5], {{"map.resolution", ladder[i]}, {"rates.f_dif", f_dif[i % 4]}}});
   m.tunables = {
       {"rates.f_per", 1.0, 30.0, 30.0, false, "perception rate, Hz"},
       {"rates.f_plan", 0.0, 50.0, 20.0, false, "planning timer, Hz (0: triggered)"},
@@ -65,8 +75,12 @@ MethodInfo EnaviMethod() {
   m.name = "enavi";
   m.summary = "E-Navi: eci-driven map resolution and task frequencies under C1-C4, PPO policy";
   m.scheduler = {SchedulingPolicy::kGlobalEdf, 0};
+  m.cost_family = "navstack";
   m.uses_policy = true;
   m.records_rollouts = true;
+  // Calibration: once on each scenario with sampled actions, so that its adapter walks the
+  // resolution ladder and the rates across the policy's grid.
+  for (const char* world : kScenarios) m.calibration.push_back({world, {{"strategy.explore", 1}}});
   m.tunables = {
       {"strategy.explore", 0, 1, 0, true, "1 samples the policy's actions (training), 0 greedy"},
       {"strategy.least_load", 0, 1, 0, true,
