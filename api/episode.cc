@@ -197,11 +197,7 @@ nlohmann::json ResultSummaryJson(const EpisodeResult& r) {
       {"velocity_std_mps", r.velocity_std_mps},
       {"accel_peak_mps2", r.accel_peak_mps2},
       {"nav_cpu_util_pct", r.nav_cpu_util_pct},
-      {"task_cpu_util_pct",
-       {{"perception", r.task_cpu_util_pct.perception},
-        {"planning", r.task_cpu_util_pct.planning},
-        {"collision", r.task_cpu_util_pct.collision},
-        {"difference", r.task_cpu_util_pct.difference}}},
+      {"task_cpu_util_pct", r.task_cpu_util_pct},
       {"deadline_miss_ratio", r.deadline_miss_ratio},
       {"jobs_released", r.jobs_released},
       {"deadline_misses", r.deadline_misses},
@@ -261,12 +257,7 @@ void from_json(const nlohmann::json& j, EpisodeResult& r) {
   f.Optional("velocity_std_mps", r.velocity_std_mps);
   f.Optional("accel_peak_mps2", r.accel_peak_mps2);
   f.Optional("nav_cpu_util_pct", r.nav_cpu_util_pct);
-  if (const auto t = f.Child("task_cpu_util_pct")) {
-    t->Optional("perception", r.task_cpu_util_pct.perception);
-    t->Optional("planning", r.task_cpu_util_pct.planning);
-    t->Optional("collision", r.task_cpu_util_pct.collision);
-    t->Optional("difference", r.task_cpu_util_pct.difference);
-  }
+  f.Optional("task_cpu_util_pct", r.task_cpu_util_pct);
   f.Optional("deadline_miss_ratio", r.deadline_miss_ratio);
   f.Optional("jobs_released", r.jobs_released);
   f.Optional("deadline_misses", r.deadline_misses);

@@ -121,11 +121,11 @@ struct EpisodeSpec {
   std::string odometry_noise = "none";  ///< the stack's odometry: one of kOdometryNoisePresets
 };
 
-/// Per-task CPU utilisation, % of one board core (psutil convention).
-struct TaskUtilisation {
-  double perception = 0, planning = 0, collision = 0, difference = 0;
-  double Sum() const { return perception + planning + collision + difference; }
-};
+/// Per-task CPU utilisation, % of one board core (psutil convention), by the method's key for each
+/// of its navigation tasks (navstack::MethodInfo::task_keys; the built-ins' are perception,
+/// planning, collision and difference): `task_cpu_util_pct.<key>` in results, tables, `enavi
+/// compare` and the dashboard.
+using TaskUtilisation = std::map<std::string, double>;
 
 /// eci of the frames of an episode (docs/results.md, "eci range along a flight").
 struct EciSummary {

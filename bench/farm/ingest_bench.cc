@@ -43,8 +43,8 @@ api::EpisodeResult RealisticResult(const api::EpisodeSpec& spec, int samples) {
   r.velocity_mean_mps = 1.2;
   r.velocity_std_mps = 0.4;
   r.accel_peak_mps2 = 3.1;
-  r.task_cpu_util_pct = {42.0, 21.0, 9.0, 4.0};
-  r.nav_cpu_util_pct = r.task_cpu_util_pct.Sum();
+  r.task_cpu_util_pct = {{"perception", 42.0}, {"planning", 21.0}, {"collision", 9.0}, {"difference", 4.0}};
+  r.nav_cpu_util_pct = 42.0 + 21.0 + 9.0 + 4.0;
   r.jobs_released = 2400;
   r.deadline_misses = 12;
   r.deadline_miss_ratio = 0.005;

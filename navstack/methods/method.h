@@ -73,6 +73,10 @@ struct MethodInfo {
   bool records_rollouts = false;  ///< can record a training rollout
   /// What each task's CPU is for this method (results' per-task utilisation), by TaskId.
   std::array<std::string, kTaskCount> task_labels = {"perception", "planning", "collision", "difference", "eci", "adapter"};
+  /// The key of each navigation task's CPU in results (`task_cpu_util_pct.<key>`: tables, `enavi
+  /// compare`, the dashboard), by TaskId: lower-case letters, digits and '_', distinct. A method
+  /// whose tasks are other work than our stack's names them for what they are.
+  std::array<std::string, kTaskCount> task_keys = {"perception", "planning", "collision", "difference", "eci", "adapter"};
   /// Sets the method's part of the options (rates, strategy) before the tunables apply.
   std::function<void(const MethodSetup&, NavStackOptions*)> configure;
   /// Builds the method on `executor`; the vehicle hovers at `initial` until its first plan.

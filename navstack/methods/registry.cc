@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <deque>
 #include <mutex>
 #include <stdexcept>
@@ -16,6 +17,21 @@ void Check(const MethodInfo& m, const std::deque<MethodInfo>& existing) {
     throw std::invalid_argument("method '" + m.name +
                                 "': no cost_family (\"navstack\" if its jobs run our stack's code, else a family of "
                                 "its own, priced by `enavi calibrate --write-reference`)");
+  // Task keys name result fields (task_cpu_util_pct.<key>): a metric name's part, one per task.
+  for (int i = 0; i < kTaskCount; ++i) {
+    if (!IsNavigationTask(static_cast<TaskId>(i))) continue;
+    const std::string& key = m.task_keys[i];
+    const bool word = !key.empty() && std::all_of(key.begin(), key.end(), [](char c) {
+      return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+    });
+    if (!word)
+      throw std::invalid_argument("method '" + m.name + "': task key '" + key + "' of task " +
+                                  std::string(TaskName(static_cast<TaskId>(i))) +
+                                  " is not a name of lower-case letters, digits and '_'");
+    for (int j = 0; j < i; ++j)
+      if (IsNavigationTask(static_cast<TaskId>(j)) && m.task_keys[j] == key)
+        throw std::invalid_argument("method '" + m.name + "': task key '" + key + "' names two tasks");
+  }
   for (const MethodTunable& t : m.tunables)
     if (!(t.min <= t.default_value && t.default_value <= t.max))
       throw std::invalid_argument("method '" + m.name + "': tunable " + t.name + " default " +

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "api/result_metrics.h"
 #include "navstack/methods/registry.h"
 #include "tests/integration/loop_test_util.h"
 #include "workers/board/calibration_flights.h"
@@ -85,10 +86,21 @@ void ExpectGoalWithoutCollision(const api::EpisodeResult& r, const worlds::World
   EXPECT_EQ(r.end_reason, "goal_reached") << Describe(r);
   EXPECT_FALSE(r.collided) << Describe(r);
   EXPECT_GT(r.replans, 0) << Describe(r);
-  // Per-task CPU: reported, and the navigation total is their sum.
+  // Per-task CPU: reported under the method's key for each navigation task, the navigation total
+  // their sum.
   EXPECT_GT(r.nav_cpu_util_pct, 0.0) << Describe(r);
-  EXPECT_NEAR(r.nav_cpu_util_pct, r.task_cpu_util_pct.Sum(), 1e-9);
-  EXPECT_GT(r.task_cpu_util_pct.perception, 0.0) << Describe(r);
+  const navstack::MethodInfo& method = *navstack::FindMethod(r.spec.method);
+  double sum = 0;
+  for (const navstack::TaskId id : {navstack::TaskId::kPerception, navstack::TaskId::kPlanning,
+                                    navstack::TaskId::kCollision, navstack::TaskId::kDifference}) {
+    const std::string& key = method.task_keys[static_cast<int>(id)];
+    ASSERT_TRUE(r.task_cpu_util_pct.contains(key)) << key;
+    sum += r.task_cpu_util_pct.at(key);
+  }
+  EXPECT_EQ(r.task_cpu_util_pct.size(), 4u);
+  EXPECT_NEAR(r.nav_cpu_util_pct, sum, 1e-9);
+  EXPECT_GT(r.task_cpu_util_pct.at(method.task_keys[static_cast<int>(navstack::TaskId::kPerception)]), 0.0)
+      << Describe(r);
   // The vehicle never left the flight bounds.
   ASSERT_GT(r.series.size(), 10u);
   Eigen::AlignedBox3d bounds = world.bounds;
@@ -172,7 +184,13 @@ TEST(MethodRegistryTest, AMethodFromItsOwnFolderFliesThroughTheEpisodePath) {
   EXPECT_TRUE(r.success) << Describe(r);
   EXPECT_EQ(r.replans, 1) << Describe(r);
   EXPECT_EQ(r.replans_by_trigger.at("start"), 1);
-  EXPECT_GT(r.task_cpu_util_pct.planning, 0.0) << Describe(r);
+  // Its planning task's CPU under its own key, in the results and the metrics tables, `enavi
+  // compare` and the dashboard read.
+  EXPECT_GT(r.task_cpu_util_pct.at("one_plan"), 0.0) << Describe(r);
+  EXPECT_FALSE(r.task_cpu_util_pct.contains("planning"));
+  const auto metrics = api::ResultMetrics(nlohmann::json(r));
+  EXPECT_EQ(metrics.at("task_cpu_util_pct.one_plan"), r.task_cpu_util_pct.at("one_plan"));
+  EXPECT_EQ(metrics.count("task_cpu_util_pct.planning"), 0u);
 
   spec.overrides = {{"ego.emergency_stop", 0}};
   EXPECT_THROW(sim::RunEpisode(spec), std::invalid_argument) << "another method's tunable is refused";
@@ -202,6 +220,13 @@ TEST(MethodRegistryTest, AMethodStatesItsCostFamily) {
     ADD_FAILURE() << "a method without a cost family registered";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("method 'no_family': no cost_family"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(navstack::FindMethod("no_family"), nullptr);
+  // Its task keys name result fields: words, one per task.
+  m.cost_family = "navstack";
+  for (const char* key : {"", "one plan", "Planning", "task_cpu.x", "collision"}) {
+    m.task_keys[static_cast<int>(navstack::TaskId::kPlanning)] = key;
+    EXPECT_THROW(navstack::RegisterMethod(m), std::invalid_argument) << "task key '" << key << "'";
   }
   EXPECT_EQ(navstack::FindMethod("no_family"), nullptr);
   for (const navstack::MethodInfo& builtin : navstack::Methods()) EXPECT_FALSE(builtin.cost_family.empty()) << builtin.name;

@@ -34,8 +34,10 @@ api::EpisodeResult SyntheticResult(const api::EpisodeSpec& spec, int series_len)
   r.velocity_mean_mps = r.path_length_m / r.flight_time_s;
   r.velocity_std_mps = enavi ? 0.3 : 0.5;
   r.accel_peak_mps2 = 4.0;
-  r.task_cpu_util_pct = {40.0 * f * (enavi ? 0.5 : 1.0), 20.0 * f, 10.0 * f, 5.0 * f};
-  r.nav_cpu_util_pct = r.task_cpu_util_pct.Sum();
+  r.task_cpu_util_pct = {
+      {"perception", 40.0 * f * (enavi ? 0.5 : 1.0)}, {"planning", 20.0 * f}, {"collision", 10.0 * f}, {"difference", 5.0 * f}};
+  r.nav_cpu_util_pct = r.task_cpu_util_pct["perception"] + r.task_cpu_util_pct["planning"] +
+                       r.task_cpu_util_pct["collision"] + r.task_cpu_util_pct["difference"];
   r.jobs_released = 1000;
   r.deadline_misses = enavi ? 5 : 50;
   if (const auto misses = spec.overrides.find("fake.deadline_misses"); misses != spec.overrides.end())

@@ -124,10 +124,14 @@ void CpuAccounting::Write(const EpisodeTotals& totals, api::EpisodeResult* r) co
   const double T = totals.T;
   r->plan_failures = acc.plan_failures;
   auto util = [&](TaskId id) { return T > 0 ? 100.0 * acc[id].busy_s / T : 0.0; };
-  r->task_cpu_util_pct = {util(TaskId::kPerception), util(TaskId::kPlanning), util(TaskId::kCollision),
-                          util(TaskId::kDifference)};
-  r->nav_cpu_util_pct = acc.process_cpu_board_s.empty() ? r->task_cpu_util_pct.Sum()
-                                                        : (T > 0 ? 100.0 * NavBusySeconds(acc) / T : 0.0);
+  // Each navigation task's share under the method's key for it, their sum in task order.
+  double tasks_sum = 0;
+  for (const TaskId id : {TaskId::kPerception, TaskId::kPlanning, TaskId::kCollision, TaskId::kDifference}) {
+    const std::string key = method_ ? method_->task_keys[static_cast<int>(id)] : std::string(navstack::TaskName(id));
+    r->task_cpu_util_pct[key] = util(id);
+    tasks_sum += util(id);
+  }
+  r->nav_cpu_util_pct = acc.process_cpu_board_s.empty() ? tasks_sum : (T > 0 ? 100.0 * NavBusySeconds(acc) / T : 0.0);
   for (const auto& [name, board_s] : acc.process_cpu_board_s)
     r->notes["process." + name] = api::Fixed(T > 0 ? 100.0 * board_s / T : 0.0, 2) + " % of a board core";
   for (int i = 0; i < navstack::kTaskCount; ++i) {

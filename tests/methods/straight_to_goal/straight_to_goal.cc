@@ -68,6 +68,9 @@ MethodInfo StraightToGoalMethod() {
   m.summary = "one plan on an empty map (test)";
   m.scheduler = {SchedulingPolicy::kGlobalEdf, 0};
   m.cost_family = "navstack";
+  // Its one task is no stack's planning: results name its CPU for what it is.
+  m.task_keys[static_cast<int>(TaskId::kPlanning)] = "one_plan";
+  m.task_labels[static_cast<int>(TaskId::kPlanning)] = "the one plan";
   m.tunables = {{"straight.unused", 0, 1, 0, true, "a tunable of its own"}};
   m.make = [](const NavStackOptions& o, TaskExecutor* e, const VehicleState& s) {
     return std::unique_ptr<Navigator>(std::make_unique<StraightToGoal>(o, e, s));

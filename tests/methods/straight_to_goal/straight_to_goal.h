@@ -7,7 +7,8 @@
 namespace enavi::navstack {
 
 /// `straight_to_goal`: one planning job at 1 Hz whose first run plans the whole way on a free
-/// grid; cost family "navstack" (the job runs our planner); one tunable of its own, unused.
+/// grid; cost family "navstack" (the job runs our planner), its CPU in results as
+/// task_cpu_util_pct.one_plan; one tunable of its own, unused.
 MethodInfo StraightToGoalMethod();
 
 }  // namespace enavi::navstack

@@ -26,7 +26,7 @@ EpisodeResult SampleResult() {
   r.flight_time_s = 31.5;
   r.path_length_m = 50.25;
   r.nav_cpu_util_pct = 88.0;
-  r.task_cpu_util_pct = {40, 30, 10, 8};
+  r.task_cpu_util_pct = {{"perception", 40}, {"planning", 30}, {"collision", 10}, {"difference", 8}};
   r.notes["clock"] = "virtual";
   r.events = {{1.0, "replan", "trigger"}, {2.5, "deadline_miss", "perception"}};
   for (int i = 0; i < 5; ++i) {
