@@ -8,6 +8,7 @@
 #include <variant>
 
 #include "worlds/detmath.h"
+#include "worlds/movers.h"
 #include "worlds/number_text.h"
 #include "worlds/primitives.h"
 #include "worlds/validate.h"
@@ -250,8 +251,12 @@ void BuildS1(Rng& rng, const Params& p, World* w) {
   }
 }
 
-// s2: park with dense, irregular trees, bushes and a pavilion.
-void BuildS2(Rng& rng, const Params& p, World* w) {
+// Where footpaths cross a park: called after the pavilion is placed, before the trees; adds the
+// paths' strips to the layout (so trees keep clear of them) and returns their centre lines' x.
+using LayPaths = std::function<std::vector<double>(Rng&, const Area&, Layout*)>;
+
+// s2: park with dense, irregular trees, bushes and a pavilion (and, for park-people, footpaths).
+void BuildPark(Rng& rng, const Params& p, World* w, const LayPaths& lay_paths, std::vector<double>* paths) {
   const double L = p.at("length"), half = 0.5 * L;
   const Area area{-half - 6.0, half + 6.0, -14.0, 14.0};
   SetBounds(w, area.x0, area.y0, 0.0, area.x1, area.y1, 7.0);
@@ -280,6 +285,8 @@ void BuildS2(Rng& rng, const Params& p, World* w) {
     b.AddBox(px, py, pillar_h + 0.25, 0.6 * size, 0.6 * size, 0.5, yaw);
     layout.Add(RotatedRect(px, py, roof, roof, yaw));
   }
+
+  if (lay_paths) *paths = lay_paths(rng, area, &layout);
 
   // Trees until the park is saturated, at least 1.2 m between crown footprints.
   const TreeStyle style{0.12, 0.3, 0.5, 2.8, 1.0, 2.4, 1.0, 2.0, 0.4};
@@ -311,6 +318,95 @@ void BuildS2(Rng& rng, const Params& p, World* w) {
     layout.Add(f);
     b.AddEllipsoid(f.cx, f.cy, 0.6 * rz, rx, ry, rz);
     ++placed;
+  }
+}
+
+void BuildS2(Rng& rng, const Params& p, World* w) { BuildPark(rng, p, w, nullptr, nullptr); }
+
+// ---------------------------------------------------------------------------------------------
+// Movers (worlds/movers.h) for the scenarios with moving obstacles.
+
+// Pedestrians' free walking speed is 1.2-1.5 m/s (Fruin, "Pedestrian Planning and Design", 1971;
+// the Highway Capacity Manual designs with 1.2 m/s); drawn a little wider for strollers and joggers.
+constexpr double kWalkSpeedMin = 1.0, kWalkSpeedMax = 1.6;  // m/s
+// Through traffic on a residential street, below 30 km/h.
+constexpr double kCarSpeedMin = 4.0, kCarSpeedMax = 8.0;  // m/s
+// To time a mover to meet the flight at a crossing: the planners' cruise (0.9 v_max, v_max 2 m/s)
+// after about 2 s of take-off.
+constexpr double kDroneCruise = 1.8, kTakeOff = 2.0;
+
+// A mover going back and forth between a and b (on the ground), starting at a after `delay`.
+Mover BackAndForth(std::string name, std::vector<Object> shape, double ax, double ay, double bx, double by, double speed,
+                   double delay) {
+  Mover m;
+  m.name = std::move(name);
+  m.shape = std::move(shape);
+  m.speed = speed;
+  m.mode = MoverMode::kBackAndForth;
+  m.start_delay = delay;
+  MoverWaypoint a, b;
+  a.position = Eigen::Vector3d(ax, ay, 0.0);
+  b.position = Eigen::Vector3d(bx, by, 0.0);
+  m.waypoints = {a, b};
+  return m;
+}
+
+// The same, timed to pass the point c (on the segment a-b) at time `at`: it waits at a, or, when
+// a is too far to get to c in time, starts from nearer c without waiting.
+Mover MeetAt(std::string name, std::vector<Object> shape, double ax, double ay, double bx, double by, double speed,
+             double cx, double cy, double at) {
+  const double to_c = std::sqrt((cx - ax) * (cx - ax) + (cy - ay) * (cy - ay));
+  const double reach = speed * at;
+  if (to_c <= reach) return BackAndForth(std::move(name), std::move(shape), ax, ay, bx, by, speed, at - to_c / speed);
+  const double f = reach / to_c;  // the start moves along c-a to reach c at `at`
+  return BackAndForth(std::move(name), std::move(shape), cx + f * (ax - cx), cy + f * (ay - cy), bx, by, speed, 0.0);
+}
+
+// A person: a 0.5 m wide, 1.75 m tall cylinder standing on the mover's origin.
+std::vector<Object> PersonShape() {
+  Cylinder body;
+  body.radius = 0.25;
+  body.height = 1.75;
+  return {body};
+}
+
+// park-people: s2's park with two footpaths across it, on which people walk back and forth; on
+// each path one is timed to cross the start-goal line about when the flight gets there.
+void BuildParkPeople(Rng& rng, const Params& p, World* w) {
+  constexpr double kPathHalfWidth = 0.9;
+  const double L = p.at("length"), half = 0.5 * L;
+  const LayPaths lay = [&](Rng& r, const Area& area, Layout* layout) {
+    std::vector<double> xs;
+    for (const double at : {0.3, 0.7}) {
+      for (int attempt = 0; attempt < 30; ++attempt) {
+        const double x = -half + L * at + r.Uniform(-0.12 * L, 0.12 * L);
+        const Footprint strip = Rect(x, 0.5 * (area.y0 + area.y1), kPathHalfWidth, 0.5 * (area.y1 - area.y0));
+        if (!layout->Fits(strip, 0.3)) continue;
+        layout->Add(strip);
+        xs.push_back(x);
+        break;
+      }
+    }
+    return xs;
+  };
+  std::vector<double> paths;
+  BuildPark(rng, p, w, lay, &paths);
+  const double y0 = w->bounds.min().y() + 0.5, y1 = w->bounds.max().y() - 0.5;
+  const Route route{w->start.x(), w->start.y(), w->goal.x(), w->goal.y()};
+  int n = 0;
+  for (const double x : paths) {
+    const double cross_y = route.YAt(x);
+    const double at = kTakeOff + (x - w->start.x()) / kDroneCruise;
+    // One walker timed to the flight, from a random end; one more with a random delay.
+    const double speed = rng.Uniform(kWalkSpeedMin, kWalkSpeedMax);
+    const bool from_low = rng.Chance(0.5);
+    w->movers.push_back(MeetAt("person-" + std::to_string(n++), PersonShape(), x, from_low ? y0 : y1, x,
+                               from_low ? y1 : y0, speed, x, cross_y, at));
+    const double speed2 = rng.Uniform(kWalkSpeedMin, kWalkSpeedMax);
+    const double side = rng.Chance(0.5) ? -0.45 : 0.45;
+    const double delay = rng.Uniform(0.0, 10.0);
+    w->movers.push_back(BackAndForth("person-" + std::to_string(n++), PersonShape(), x + side, from_low ? y1 : y0,
+                                     x + side, from_low ? y0 : y1, speed2, delay));
   }
 }
 
@@ -488,6 +584,36 @@ void BuildS4(Rng& rng, const Params& p, World* w) {
         for (const double sy : {-kerb, kerb}) lamp(street * P + sx, cross * P + sy);
       }
     }
+  }
+}
+
+// street-traffic: s4's city grid with vans driving up and down the two middle streets, which
+// cross the flight's routes (and the straight start-goal line at the centre); each timed to reach
+// the crossing about when the flight does. They drive the centre line, clear of the parked cars.
+void BuildStreetTraffic(Rng& rng, const Params& p, World* w) {
+  BuildS4(rng, p, w);
+  const double L = p.at("length");
+  const double P = L / (2.0 * std::sqrt(2.0));
+  const double end = w->bounds.max().x() - 3.0;
+  auto van = [&rng] {
+    Box body;
+    body.size = Eigen::Vector3d(rng.Uniform(4.2, 5.2), 1.7, rng.Uniform(1.8, 2.4));
+    body.center = Eigen::Vector3d(0.0, 0.0, 0.5 * body.size.z());
+    return std::vector<Object>{body};
+  };
+  // Up the street x = 0: it crosses the flight's street y = -P about P from the start.
+  {
+    const double speed = rng.Uniform(kCarSpeedMin, kCarSpeedMax);
+    const bool north = rng.Chance(0.5);
+    w->movers.push_back(
+        MeetAt("van-0", van(), 0.0, north ? -end : end, 0.0, north ? end : -end, speed, 0.0, -P, kTakeOff + P / kDroneCruise));
+  }
+  // Along the street y = 0: it crosses the goal's street x = P about 3 P from the start.
+  {
+    const double speed = rng.Uniform(kCarSpeedMin, kCarSpeedMax);
+    const bool east = rng.Chance(0.5);
+    w->movers.push_back(MeetAt("van-1", van(), east ? -end : end, 0.0, east ? end : -end, 0.0, speed, P, 0.0,
+                               kTakeOff + 3.0 * P / kDroneCruise));
   }
 }
 
@@ -737,6 +863,7 @@ struct Entry {
   GeneratorInfo info;
   void (*build)(Rng&, const Params&, World*);
   bool line_blocked;  // the straight start-goal line must hit something
+  bool mover_crosses_line = false;  // some mover's track must cross the straight start-goal line
 };
 
 GeneratorParam Length(double def, double lo, double hi) {
@@ -764,6 +891,16 @@ const std::vector<Entry>& Entries() {
        BuildForest,
        false},
       {{"empty", "no obstacles, ground only", 0.0, {Length(30.0, 2.0, 1000.0)}}, BuildEmpty, false},
+      {{"park-people", "s2's park with footpaths across it and people walking them (movers)", 0.0,
+        {Length(50.0, 20.0, 200.0)}},
+       BuildParkPeople,
+       true,
+       true},
+      {{"street-traffic", "s4's city grid with vans driving the middle streets (movers)", 0.0,
+        {Length(42.0, 30.0, 150.0)}},
+       BuildStreetTraffic,
+       true,
+       true},
   };
   return entries;
 }
@@ -781,7 +918,7 @@ void QuantizeWorld(World* w) {
   w->ground.z = detmath::Quantize(w->ground.z);
   q3(w->start);
   q3(w->goal);
-  for (auto& o : w->objects) {
+  auto q_object = [&q3](Object& o) {
     if (auto* b = std::get_if<Box>(&o)) {
       q3(b->center);
       q3(b->size);
@@ -794,7 +931,37 @@ void QuantizeWorld(World* w) {
       q3(e->center);
       q3(e->radii);
     }
+  };
+  for (auto& o : w->objects) q_object(o);
+  for (auto& m : w->movers) {
+    for (auto& o : m.shape) q_object(o);
+    for (auto& p : m.waypoints) {
+      q3(p.position);
+      p.t = detmath::Quantize(p.t);
+      p.yaw = detmath::Quantize(p.yaw);
+    }
+    m.speed = detmath::Quantize(m.speed);
+    m.start_delay = detmath::Quantize(m.start_delay);
   }
+}
+
+// Does some mover's track cross the straight start-goal line (seen from above)?
+bool MoverCrossesLine(const World& w) {
+  const double ax = w.start.x(), ay = w.start.y(), bx = w.goal.x(), by = w.goal.y();
+  auto side = [](double x0, double y0, double x1, double y1, double px, double py) {
+    return (x1 - x0) * (py - y0) - (y1 - y0) * (px - x0);
+  };
+  for (const Mover& m : w.movers) {
+    const std::vector<Eigen::Vector3d> track = MoverTrack(m);
+    for (std::size_t i = 0; i + 1 < track.size(); ++i) {
+      const double cx = track[i].x(), cy = track[i].y(), dx = track[i + 1].x(), dy = track[i + 1].y();
+      if (side(ax, ay, bx, by, cx, cy) * side(ax, ay, bx, by, dx, dy) <= 0.0 &&
+          side(cx, cy, dx, dy, ax, ay) * side(cx, cy, dx, dy, bx, by) <= 0.0) {
+        return true;
+      }
+    }
+  }
+  return false;
 }
 
 std::string AllowedNames(const GeneratorInfo& info) {
@@ -866,6 +1033,10 @@ World Generate(const std::string& scenario, std::uint64_t seed, const std::map<s
     w.metadata.generator_version = kGeneratorVersion;
     for (const auto& [k, v] : values) w.metadata.params[k] = FormatFixed(v);
 
+    if (entry->mover_crosses_line && !MoverCrossesLine(w)) {
+      last_failure = "no mover crosses the straight start-goal line";
+      continue;
+    }
     if (entry->line_blocked) {
       const ObstacleField field(w, /*include_ground=*/false);
       if (field.SegmentClearance(w.start, w.goal) >= kDroneRadius) {

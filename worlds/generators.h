@@ -1,6 +1,9 @@
 #pragma once
 // Seeded scenario generators: s1-s5 after the paper's five scenarios, plus `canyon` (street
-// canyons, a world the policy was not trained on), `forest` and `empty`. The same (scenario,
+// canyons, a world the policy was not trained on), `forest` and `empty`, and two with moving
+// obstacles (worlds/movers.h): `park-people` (people walking footpaths across s2's park) and
+// `street-traffic` (vans driving s4's middle streets), a mover of each crossing the straight
+// start-goal line about when the flight gets there. The same (scenario,
 // seed, params) gives a byte-identical world file on every machine: std::mt19937_64 raw draws
 // mapped to doubles by our own code, only + - * / sqrt and detmath in anything that reaches the
 // file, every value rounded to the file precision.
@@ -19,7 +22,7 @@
 
 namespace enavi::worlds {
 
-/// Bumped whenever a generator's output for a given seed changes.
+/// Bumped whenever a generator's output for a given seed changes (adding a generator does not).
 inline constexpr int kGeneratorVersion = 2;
 
 /// A tunable generator parameter with its allowed range (inclusive).

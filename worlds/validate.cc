@@ -8,6 +8,7 @@
 #include <variant>
 
 #include "worlds/detmath.h"
+#include "worlds/movers.h"
 #include "worlds/number_text.h"
 #include "worlds/obj_import.h"
 #include "worlds/primitives.h"
@@ -145,7 +146,7 @@ double AabbDistance(const Eigen::AlignedBox3d& box, const V3& p) {
 
 std::string Metres(double v) { return FormatFixed(v, 2, false) + " m"; }
 
-std::string Vec(const Eigen::Vector3d& v) {
+std::string PointText(const Eigen::Vector3d& v) {
   std::string out = "[";
   out.append(FormatFixed(v.x(), 2, false)).append(", ").append(FormatFixed(v.y(), 2, false)).append(", ");
   return out.append(FormatFixed(v.z(), 2, false)).append("]");
@@ -394,7 +395,7 @@ ValidationResult ValidateWorld(const World& world, const ValidationOptions& opti
   const Eigen::Vector3d lo = world.bounds.min(), hi = world.bounds.max();
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || !(hi[a] > lo[a])) {
-      return fail("bounds", "min must be below max on every axis (got min " + Vec(lo) + ", max " + Vec(hi) + ")");
+      return fail("bounds", "min must be below max on every axis (got min " + PointText(lo) + ", max " + PointText(hi) + ")");
     }
     if (hi[a] - lo[a] > kMaxExtent) {
       return fail("bounds", "extent " + Metres(hi[a] - lo[a]) + " along " + "xyz"[a] + " exceeds the 2000 m limit");
@@ -408,7 +409,7 @@ ValidationResult ValidateWorld(const World& world, const ValidationOptions& opti
     if (!p.allFinite()) return fail(name, "not a finite point");
     for (int a = 0; a < 3; ++a) {
       if (p[a] < lo[a] || p[a] > hi[a]) {
-        return fail(name, Vec(p) + " is outside the bounds (min " + Vec(lo) + ", max " + Vec(hi) + ")");
+        return fail(name, PointText(p) + " is outside the bounds (min " + PointText(lo) + ", max " + PointText(hi) + ")");
       }
     }
     int nearest = -2;
@@ -417,9 +418,23 @@ ValidationResult ValidateWorld(const World& world, const ValidationOptions& opti
       const std::string what = nearest == -1 ? std::string("the ground (z = ") + FormatFixed(world.ground.z, 2, false) + ")"
                                              : "objects[" + std::to_string(nearest) + "] (" +
                                                    ObjectKind(world.objects[nearest]) + ")";
-      if (d <= 0.0) return fail(name, Vec(p) + " is inside " + (nearest == -1 ? "(below) " : "") + what);
-      return fail(name, Vec(p) + " is " + Metres(d) + " from " + what + "; needs at least " +
+      if (d <= 0.0) return fail(name, PointText(p) + " is inside " + (nearest == -1 ? "(below) " : "") + what);
+      return fail(name, PointText(p) + " is " + Metres(d) + " from " + what + "; needs at least " +
                             Metres(options.clearance) + " clearance");
+    }
+  }
+
+  // Movers: the vehicle must not start inside one (the box around its shape where it stands at
+  // t = 0, grown by the clearance). Where they go later is the flight's business.
+  for (std::size_t i = 0; i < world.movers.size(); ++i) {
+    const Mover& mover = world.movers[i];
+    const MoverPose pose = MoverTrajectory(mover).Pose(0.0);
+    Eigen::AlignedBox3d box;
+    const TriangleMesh mesh = MoverMesh(mover);
+    for (const auto& v : mesh.vertices) box.extend(pose.ToWorld(v.cast<double>()));
+    if (!box.isEmpty() && box.exteriorDistance(world.start) < options.clearance) {
+      return fail("movers[" + std::to_string(i) + "]", "'" + mover.name + "' stands within " + Metres(options.clearance) +
+                                                           " of start " + PointText(world.start) + " at t = 0");
     }
   }
 

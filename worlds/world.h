@@ -105,13 +105,42 @@ struct WorldMetadata {
   std::string import_note;  ///< what an importer left out (SDF lights, plugins, ...); not in world files
 };
 
-/// A static world: built once, shared read-only by every episode flown in it.
+/// What a mover does after its last waypoint.
+enum class MoverMode {
+  kLoop,          ///< on to the first waypoint and round again
+  kBackAndForth,  ///< back along its waypoints, and forth again
+  kOnce,          ///< stays at the last waypoint
+};
+
+/// A point of a mover's path: where its frame's origin passes.
+struct MoverWaypoint {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  double t = 0.0;    ///< s after the mover starts (timed movers; speed movers: derived, not stored)
+  double yaw = 0.0;  ///< rad about z (timed movers; speed movers face their direction of travel)
+};
+
+/// A moving obstacle (a person, a vehicle): a rigid shape whose frame follows waypoints, either
+/// at a constant speed (its x axis along the direction of travel) or at given times with given
+/// headings (Gazebo actors' scripted trajectories). Before `start_delay` it stands at the first
+/// waypoint. Its pose at any time is worlds::MoverTrajectory's (worlds/movers.h).
+struct Mover {
+  std::string name;
+  std::vector<Object> shape;  ///< in the mover's frame (x forward, z up; origin on the path)
+  std::vector<MoverWaypoint> waypoints;  ///< at least two
+  double speed = 0.0;         ///< m/s along the path; 0: timed by waypoints[i].t and .yaw
+  MoverMode mode = MoverMode::kLoop;
+  double start_delay = 0.0;   ///< s
+};
+
+/// A world: built once, shared read-only by every episode flown in it. Its objects are static;
+/// its movers move on the episode's sim clock.
 struct World {
   Eigen::AlignedBox3d bounds;  ///< flight volume; nothing outside it is simulated
   Ground ground;
   Eigen::Vector3d start = Eigen::Vector3d::Zero();
   Eigen::Vector3d goal = Eigen::Vector3d::Zero();
   std::vector<Object> objects;
+  std::vector<Mover> movers;
   WorldMetadata metadata;
 };
 

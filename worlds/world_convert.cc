@@ -49,23 +49,30 @@ void ConvertWorld(const World& world, const std::filesystem::path& source_dir, c
   const std::filesystem::path out_dir = out.parent_path().empty() ? std::filesystem::path(".") : out.parent_path();
   const std::string sidecar = out.stem().string() + "_meshes";
   World converted = world;
-  for (std::size_t i = 0; i < converted.objects.size(); ++i) {
-    auto* mesh = std::get_if<MeshObject>(&converted.objects[i]);
-    if (mesh == nullptr) continue;
+  // A mesh referenced by a path relative to the output, or baked into an OBJ named `stem`.
+  auto convert = [&](Object& object, const std::string& stem) {
+    auto* mesh = std::get_if<MeshObject>(&object);
+    if (mesh == nullptr) return;
     if (!mesh->path.empty()) {
       const auto rel = RelativeInside(source_dir / mesh->path, out_dir);
       if (!rel.empty()) {
         mesh->path = rel.generic_string();
-        continue;
+        return;
       }
     }
     // No file under the output's directory: the placed geometry itself, as an OBJ beside it.
-    const std::string rel = sidecar + "/object" + std::to_string(i) + ".obj";
+    const std::string rel = sidecar + "/" + stem + ".obj";
     WriteObj(ObjectMesh(*mesh), out_dir / rel);
     MeshObject baked;
     baked.path = rel;
     baked.up = UpAxis::kZ;
     *mesh = baked;
+  };
+  for (std::size_t i = 0; i < converted.objects.size(); ++i) convert(converted.objects[i], "object" + std::to_string(i));
+  // Movers' shapes are in their own frames, and so are their OBJs.
+  for (std::size_t i = 0; i < converted.movers.size(); ++i) {
+    auto& shape = converted.movers[i].shape;
+    for (std::size_t j = 0; j < shape.size(); ++j) convert(shape[j], "mover" + std::to_string(i) + "_shape" + std::to_string(j));
   }
   SaveWorldFile(converted, out);
 }

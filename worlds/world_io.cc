@@ -17,6 +17,7 @@
 
 #include "api/yaml_read.h"
 #include "worlds/detmath.h"
+#include "worlds/movers.h"
 #include "worlds/number_text.h"
 #include "worlds/obj_import.h"
 #include "worlds/placement.h"
@@ -29,6 +30,10 @@ constexpr double kMaxYaw = 6.2832;     // 2 pi, rounded up to the file precision
 constexpr double kMaxRadius = 1000.0;  // m
 constexpr double kMaxScale = 1000.0;
 constexpr std::size_t kMaxStringLength = 256;
+constexpr std::size_t kMaxMovers = 1000;
+constexpr std::size_t kMaxWaypoints = 10'000;
+constexpr double kMaxMoverSpeed = 50.0;  // m/s: a car in town is below 14, a person below 3
+constexpr double kMaxMoverTime = 86'400.0;  // s, waypoint times and start delays
 
 // ---------------------------------------------------------------------------------------------
 // Reading
@@ -225,9 +230,68 @@ Object ReadObject(ParseContext* ctx, const YAML::Node& node, const std::string& 
   return mesh;
 }
 
+// A mover: its shape (objects in its own frame), its waypoints at a speed or at given times.
+Mover ReadMover(ParseContext* ctx, const YAML::Node& node, const std::string& field, const World& world,
+                std::size_t index) {
+  const MapView m(ctx->reader, node, field, {"name", "shape", "waypoints", "speed", "mode", "start_delay"});
+  Mover mover;
+  mover.name = m.Has("name") ? ReadString(*ctx, m.Get("name"), m.Field("name")) : "mover-" + std::to_string(index);
+  if (mover.name.empty()) Fail(*ctx, m.Get("name"), m.Field("name"), "empty name");
+  const YAML::Node& shape = m.Get("shape");
+  if (!shape.IsSequence() || shape.size() == 0) {
+    Fail(*ctx, shape, m.Field("shape"), "expected a non-empty sequence of objects in the mover's frame");
+  }
+  for (std::size_t i = 0; i < shape.size(); ++i) {
+    mover.shape.push_back(ReadObject(ctx, shape[i], m.Field("shape") + "[" + std::to_string(i) + "]"));
+  }
+  if (m.Has("speed")) mover.speed = ReadRange(*ctx, m.Get("speed"), m.Field("speed"), 0.0, kMaxMoverSpeed, true);
+  if (m.Has("mode")) {
+    const std::string mode = ReadString(*ctx, m.Get("mode"), m.Field("mode"));
+    if (!ParseMoverMode(mode, &mover.mode)) {
+      Fail(*ctx, m.Get("mode"), m.Field("mode"), "unknown mode '" + Shown(mode) + "' (known: loop, back_and_forth, once)");
+    }
+  }
+  if (m.Has("start_delay")) {
+    mover.start_delay = ReadRange(*ctx, m.Get("start_delay"), m.Field("start_delay"), 0.0, kMaxMoverTime, false);
+  }
+  const YAML::Node& points = m.Get("waypoints");
+  const std::string wfield = m.Field("waypoints");
+  if (!points.IsSequence() || points.size() < 2) {
+    Fail(*ctx, points, wfield, "expected a sequence of at least two waypoints");
+  }
+  if (points.size() > kMaxWaypoints) Fail(*ctx, points, wfield, "more than " + std::to_string(kMaxWaypoints) + " waypoints");
+  double length = 0.0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::string f = wfield + "[" + std::to_string(i) + "]";
+    MoverWaypoint w;
+    if (mover.speed > 0.0) {
+      // At a speed: plain points; the heading follows the path.
+      if (!points[i].IsSequence()) Fail(*ctx, points[i], f, "expected [x, y, z] (a mover with a speed has untimed waypoints)");
+      w.position = ReadPoint(*ctx, points[i], f);
+    } else {
+      const MapView wm(ctx->reader, points[i], f, {"t", "position", "yaw"});
+      w.t = ReadRange(*ctx, wm.Get("t"), wm.Field("t"), 0.0, kMaxMoverTime, false);
+      w.position = ReadPoint(*ctx, wm.Get("position"), wm.Field("position"));
+      if (wm.Has("yaw")) w.yaw = ReadRange(*ctx, wm.Get("yaw"), wm.Field("yaw"), -kMaxYaw, kMaxYaw, false);
+      if (i > 0 && !(w.t > mover.waypoints.back().t)) {
+        Fail(*ctx, wm.Get("t"), wm.Field("t"), "must be later than the waypoint before (" + FormatFixed(mover.waypoints.back().t) +
+                                                   " s); without a speed, waypoints are timed");
+      }
+    }
+    if (!world.bounds.contains(w.position)) {
+      Fail(*ctx, points[i], f, "outside the bounds (a mover's path stays in the flight volume)");
+    }
+    if (i > 0) length += (w.position - mover.waypoints.back().position).norm();
+    mover.waypoints.push_back(w);
+  }
+  if (mover.speed > 0.0 && !(length > 0.0)) Fail(*ctx, points, wfield, "the path has no length (every waypoint is the same point)");
+  return mover;
+}
+
 World ParseDocument(ParseContext* ctx, const YAML::Node& root, const WorldFileOptions& options) {
   World world;
-  const MapView top(ctx->reader, root, "", {"format", "name", "metadata", "bounds", "ground", "start", "goal", "objects"});
+  const MapView top(ctx->reader, root, "",
+                    {"format", "name", "metadata", "bounds", "ground", "start", "goal", "objects", "movers"});
 
   const std::string format = ReadString(*ctx, top.Get("format"), "format");
   if (format != kWorldFormat) {
@@ -331,6 +395,23 @@ World ParseDocument(ParseContext* ctx, const YAML::Node& root, const WorldFileOp
       ctx->lines[field] = LineOf(objects[i]);
     }
   }
+
+  if (top.Has("movers")) {
+    const YAML::Node& movers = top.Get("movers");
+    if (!movers.IsSequence()) {
+      Fail(*ctx, movers, "movers", std::string("expected a sequence (got ") + YamlReader::Describe(movers) + ")");
+    }
+    if (movers.size() > kMaxMovers) Fail(*ctx, movers, "movers", "more than " + std::to_string(kMaxMovers) + " movers");
+    std::set<std::string> names;
+    for (std::size_t i = 0; i < movers.size(); ++i) {
+      const std::string field = "movers[" + std::to_string(i) + "]";
+      world.movers.push_back(ReadMover(ctx, movers[i], field, world, i));
+      if (!names.insert(world.movers.back().name).second) {
+        Fail(*ctx, movers[i], field + ".name", "duplicate name '" + Shown(world.movers.back().name) + "'");
+      }
+      ctx->lines[field] = LineOf(movers[i]);
+    }
+  }
   return world;
 }
 
@@ -408,28 +489,25 @@ std::string WorldToYaml(const World& world) {
   out += world.ground.enabled ? "ground: {z: " + Num(world.ground.z) + "}\n" : "ground: none\n";
   out += "start: " + Vec(world.start) + "\n";
   out += "goal: " + Vec(world.goal) + "\n";
-  if (world.objects.empty()) {
-    out += "objects: []\n";
-    return out;
-  }
-  out += "objects:\n";
+  out += world.objects.empty() ? "objects: []\n" : "objects:\n";
   struct Writer {
     std::string* out;
+    std::string indent = "  ";
     void operator()(const Box& b) const {
-      *out += "  - box: {center: " + Vec(b.center) + ", size: " + Vec(b.size) + ", yaw: " + Num(b.yaw) + "}\n";
+      *out += indent + "- box: {center: " + Vec(b.center) + ", size: " + Vec(b.size) + ", yaw: " + Num(b.yaw) + "}\n";
     }
     void operator()(const Cylinder& c) const {
-      *out += "  - cylinder: {base: " + Vec(c.base) + ", radius: " + Num(c.radius) + ", height: " + Num(c.height) + "}\n";
+      *out += indent + "- cylinder: {base: " + Vec(c.base) + ", radius: " + Num(c.radius) + ", height: " + Num(c.height) + "}\n";
     }
     void operator()(const Ellipsoid& e) const {
-      *out += "  - ellipsoid: {center: " + Vec(e.center) + ", radii: " + Vec(e.radii) + "}\n";
+      *out += indent + "- ellipsoid: {center: " + Vec(e.center) + ", radii: " + Vec(e.radii) + "}\n";
     }
     void operator()(const MeshObject& m) const {
       if (m.path.empty()) {
         throw std::invalid_argument("a mesh with no file of its own (imported from SDF) cannot be written to a "
                                     "world file; `enavi world convert` writes it as an OBJ first");
       }
-      *out += "  - mesh: {file: " + YamlQuoted(m.path) + ", position: " + Vec(m.position) + ", yaw: " + Num(m.yaw) +
+      *out += indent + "- mesh: {file: " + YamlQuoted(m.path) + ", position: " + Vec(m.position) + ", yaw: " + Num(m.yaw) +
               ", scale: " + Num(m.scale);
       if (!m.units.empty()) *out += ", units: " + YamlQuoted(m.units);
       if (m.up) *out += std::string(", up: ") + YamlQuoted(UpAxisName(*m.up));
@@ -438,6 +516,21 @@ std::string WorldToYaml(const World& world) {
     }
   };
   for (const auto& o : world.objects) std::visit(Writer{&out}, o);
+  if (world.movers.empty()) return out;
+  out += "movers:\n";
+  for (const Mover& m : world.movers) {
+    out += "  - name: " + YamlQuoted(m.name) + "\n";
+    out += std::string("    mode: ") + YamlQuoted(MoverModeName(m.mode)) + "\n";
+    if (m.speed > 0.0) out += "    speed: " + Num(m.speed) + "\n";
+    out += "    start_delay: " + Num(m.start_delay) + "\n";
+    out += "    shape:\n";
+    for (const auto& o : m.shape) std::visit(Writer{&out, "      "}, o);
+    out += "    waypoints:\n";
+    for (const MoverWaypoint& w : m.waypoints) {
+      out += m.speed > 0.0 ? "      - " + Vec(w.position) + "\n"
+                           : "      - {t: " + Num(w.t) + ", position: " + Vec(w.position) + ", yaw: " + Num(w.yaw) + "}\n";
+    }
+  }
   return out;
 }
 

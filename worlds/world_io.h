@@ -15,6 +15,17 @@
 //     - ellipsoid: {center: [x, y, z], radii: [rx, ry, rz]}
 //     - mesh: {file: "chair.obj", position: [x, y, z], yaw: 0.0, scale: 1.0}
 //     - mesh: {file: "block.glb", position: [0, 0, 0], units: "mm", up: "z", recenter: true}
+//   movers:                     # optional: moving obstacles (worlds/movers.h)
+//     - name: "walker-0"
+//       mode: "back_and_forth"  # or loop (default), once
+//       speed: 1.4              # m/s along the waypoints, heading along the path
+//       start_delay: 2.0        # s standing at the first waypoint
+//       shape:                  # objects as above, in the mover's frame (x forward, z up)
+//         - cylinder: {base: [0, 0, 0], radius: 0.3, height: 1.8}
+//       waypoints: [[x, y, z], [x, y, z]]
+//     - name: "actor"           # without a speed: timed waypoints (Gazebo actors)
+//       shape: [...]
+//       waypoints: [{t: 0, position: [x, y, z], yaw: 0}, {t: 4, position: [x, y, z], yaw: 1.57}]
 //
 // A mesh's `units` (m, cm, mm, in, ft) and `up` (y, z) default to what the file declares (DAE,
 // glTF, FBX), else metres and z; `recenter` puts its anchor (horizontal centre of the bounds,
@@ -23,7 +34,8 @@
 // Mesh paths are relative to the world file and must stay inside its directory tree.
 // Limits: file <= 256 MiB, bounds <= 2 km per axis, <= kMaxObjects objects, <= 5 M triangles,
 // every coordinate within +-100 km, sizes and radii in (0, 2000] m, scale in (0, 1000],
-// |yaw| <= 2 pi.
+// |yaw| <= 2 pi; <= 1000 movers of <= 10000 waypoints, inside the bounds, speed in (0, 50] m/s,
+// times and delays in [0, 86400] s, increasing along a mover's timed waypoints, names unique.
 
 #include <cstddef>
 #include <filesystem>

@@ -122,8 +122,14 @@ std::vector<std::string> RegisteredIds() {
   return ids;
 }
 
-INSTANTIATE_TEST_SUITE_P(AllScenarios, GeneratorContractTest, ::testing::ValuesIn(RegisteredIds()),
-                         [](const auto& info) { return info.param; });
+// A scenario id as a test name (letters, digits and '_' only).
+std::string TestName(const ::testing::TestParamInfo<std::string>& info) {
+  std::string name = info.param;
+  for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return name;
+}
+
+INSTANTIATE_TEST_SUITE_P(AllScenarios, GeneratorContractTest, ::testing::ValuesIn(RegisteredIds()), TestName);
 
 class PaperScenarioTest : public ::testing::TestWithParam<std::string> {};
 
@@ -247,7 +253,7 @@ TEST(GeneratorsTest, ParametersAreCheckedByNameAndRange) {
             "forest: params.density: not a number (got 'lots'; allowed range [0.0, 10.0])");
   EXPECT_EQ(error("s1", {{"density", "2"}}), "s1: params.density: unknown parameter (allowed: length)");
   EXPECT_EQ(error("s3", {{"length", "100"}}), "s3: params.length: must be in [8.0, 60.0] (got 100)");
-  EXPECT_EQ(error("s7", {}).rfind("scenario: unknown scenario 's7' (known: s1, s2, s3, s4, s5, canyon, forest, empty)", 0),
+  EXPECT_EQ(error("s7", {}).rfind("scenario: unknown scenario 's7' (known: s1, s2, s3, s4, s5, canyon, forest, empty, park-people, street-traffic)", 0),
             0u);
 }
 
