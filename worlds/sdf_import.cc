@@ -11,6 +11,7 @@
 #include <system_error>
 #include <utility>
 
+#include <sdf/Actor.hh>
 #include <sdf/Box.hh>
 #include <sdf/Collision.hh>
 #include <sdf/Console.hh>
@@ -29,6 +30,7 @@
 #include <sdf/World.hh>
 
 #include "worlds/mesh_import.h"
+#include "worlds/movers.h"
 #include "worlds/number_text.h"
 #include "worlds/obj_import.h"
 #include "worlds/placement.h"
@@ -39,6 +41,9 @@ namespace {
 
 constexpr double kPadding = 2.0;   // m around the geometry, as for a mesh world
 constexpr double kUpright = 1e-9;  // |sin| of a tilt still taken as upright
+// Gazebo plays an actor's trajectories one after the other, jumping to the next one's first
+// pose; a mover's waypoint times must increase, so the jump takes this long.
+constexpr double kTrajectoryJump = 1e-3;  // s
 
 // The two models nearly every Gazebo world includes, written as Gazebo's own model database
 // defines them (ground_plane: a static 100 m x 100 m plane, normal +z; sun: a directional
@@ -102,7 +107,6 @@ class SdfReader {
 
   void ReadWorld(const sdf::World& world) {
     if (world.LightCount() > 0) ignored_.push_back(std::to_string(world.LightCount()) + " light(s)");
-    if (world.ActorCount() > 0) ignored_.push_back(std::to_string(world.ActorCount()) + " actor(s)");
     if (world.Element() && world.Element()->HasElement("physics")) ignored_.push_back("physics settings");
     CountPlugins(world.Element());
     for (uint64_t i = 0; i < world.ModelCount(); ++i) {
@@ -111,7 +115,10 @@ class SdfReader {
       Check(model.SemanticPose().Resolve(pose), "model '" + model.Name() + "'");
       ReadModel(model, ToEigen(pose), model.Name(), model.Static());
     }
+    for (uint64_t i = 0; i < world.ActorCount(); ++i) ReadActor(*world.ActorByIndex(i));
   }
+
+  std::vector<Mover>& movers() { return movers_; }
 
   std::vector<Object>& objects() { return objects_; }
   const Ground& ground() const { return ground_; }
@@ -119,6 +126,8 @@ class SdfReader {
     std::vector<std::string> all = ignored_;
     if (plugins_ > 0) all.push_back(std::to_string(plugins_) + " plugin(s)");
     if (!dynamic_.empty()) all.push_back("non-static model(s) " + Join(dynamic_));
+    if (!animations_.empty()) all.push_back("skeleton animation of actor(s) " + Join(animations_) + " (their skin moves rigidly)");
+    if (!waiting_.empty()) all.push_back("actor(s) " + Join(waiting_) + " without <auto_start> (they stand still)");
     return all.empty() ? "" : "SDF: ignored " + Join(all, "; ");
   }
 
@@ -168,6 +177,84 @@ class SdfReader {
       Check(nested.SemanticPose().Resolve(pose, "__model__"), "model '" + scope + "::" + nested.Name() + "'");
       ReadModel(nested, X_WM * ToEigen(pose), scope + "::" + nested.Name(), is_static);
     }
+  }
+
+  // An actor (Gazebo's scripted, animated model): its links' geometry, else its skin mesh, in
+  // its own frame; with a scripted trajectory it is a timed mover, else it stands at its pose.
+  // Waypoint poses are world poses, as Gazebo places the actor along them (yaw kept; an actor
+  // is upright). Trajectories play one after the other; <loop> repeats them, <delay_start> waits.
+  void ReadActor(const sdf::Actor& actor) {
+    const std::string where = "actor '" + actor.Name() + "'";
+    std::vector<Object> shape;
+    std::swap(shape, objects_);  // ReadGeometry adds to objects_: collect the actor's own
+    for (uint64_t i = 0; i < actor.LinkCount(); ++i) {
+      const sdf::Link& link = *actor.LinkByIndex(i);
+      const Eigen::Isometry3d X_AL = ToEigen(link.RawPose());
+      const std::string at = where + " link '" + link.Name() + "'";
+      if (link.CollisionCount() > 0) {
+        for (uint64_t c = 0; c < link.CollisionCount(); ++c) {
+          const sdf::Collision& col = *link.CollisionByIndex(c);
+          ReadGeometry(*col.Geom(), X_AL * ToEigen(col.RawPose()), at + " collision '" + col.Name() + "'");
+        }
+      } else {
+        for (uint64_t v = 0; v < link.VisualCount(); ++v) {
+          const sdf::Visual& vis = *link.VisualByIndex(v);
+          ReadGeometry(*vis.Geom(), X_AL * ToEigen(vis.RawPose()), at + " visual '" + vis.Name() + "'");
+        }
+      }
+    }
+    // sdformat reads an absent <skin> as the file name "__default__".
+    const bool has_skin = !actor.SkinFilename().empty() && actor.SkinFilename() != "__default__";
+    if (objects_.empty() && has_skin) {
+      const std::filesystem::path path = ResolveMeshUri(actor.SkinFilename(), actor.FilePath(), where + " skin");
+      const MeshObject placed = PlaceMesh(LoadMeshFile(path), {}, "", path.string());
+      ImportedMesh skin;
+      skin.triangles = placed.mesh.triangles;
+      for (const auto& v : placed.mesh.vertices) skin.vertices.push_back(actor.SkinScale() * (placed.offset + v.cast<double>()));
+      AddPosed(std::move(skin));
+    }
+    std::swap(shape, objects_);
+    if (shape.empty()) throw WorldError(file_, 0, where, "has neither links with geometry nor a <skin>: nothing to see or hit");
+    if (actor.AnimationCount() > 0) animations_.push_back("'" + actor.Name() + "'");
+
+    Mover mover;
+    mover.name = actor.Name();
+    double offset = 0.0;
+    for (uint64_t i = 0; i < actor.TrajectoryCount(); ++i) {
+      const sdf::Trajectory& trajectory = *actor.TrajectoryByIndex(i);
+      for (uint64_t k = 0; k < trajectory.WaypointCount(); ++k) {
+        const sdf::Waypoint& w = *trajectory.WaypointByIndex(k);
+        MoverWaypoint point;
+        const Eigen::Isometry3d X = ToEigen(w.Pose());
+        point.position = X.translation();
+        point.yaw = std::atan2(X.linear()(1, 0), X.linear()(0, 0));
+        point.t = offset + w.Time();
+        if (!mover.waypoints.empty() && !(point.t > mover.waypoints.back().t)) {
+          if (k > 0) {
+            throw WorldError(file_, 0, where + " trajectory " + std::to_string(trajectory.Id()),
+                             "waypoint times must increase (" + FormatFixed(w.Time()) + " s follows an equal or later one)");
+          }
+          point.t = mover.waypoints.back().t + kTrajectoryJump;
+        }
+        mover.waypoints.push_back(point);
+      }
+      if (!mover.waypoints.empty()) offset = mover.waypoints.back().t;
+    }
+    const Eigen::Isometry3d X_WA = ToEigen(actor.RawPose());
+    if (mover.waypoints.size() < 2) {
+      // No trajectory to follow: it stands where it is posed (with the one waypoint's pose, if any).
+      const Eigen::Isometry3d X = mover.waypoints.empty() ? X_WA : ToEigen(actor.TrajectoryByIndex(0)->WaypointByIndex(0)->Pose());
+      for (const Object& o : shape) AddPosedMesh(ObjectMesh(o), X, Eigen::Vector3d::Ones());
+      return;
+    }
+    mover.shape = std::move(shape);
+    mover.mode = actor.ScriptLoop() ? MoverMode::kLoop : MoverMode::kOnce;
+    mover.start_delay = actor.ScriptDelayStart();
+    if (!actor.ScriptAutoStart()) {
+      mover.start_delay = 86'400.0;  // started by a plugin in Gazebo; here, never
+      waiting_.push_back("'" + actor.Name() + "'");
+    }
+    movers_.push_back(std::move(mover));
   }
 
   static bool TurnedOnlyAboutZ(const Eigen::Isometry3d& X) {
@@ -320,7 +407,8 @@ class SdfReader {
   std::vector<std::filesystem::path> model_dirs_;
   std::vector<Object> objects_;
   Ground ground_{false, 0.0};
-  std::vector<std::string> ignored_, dynamic_;
+  std::vector<Mover> movers_;
+  std::vector<std::string> ignored_, dynamic_, animations_, waiting_;
   int plugins_ = 0;
 };
 
@@ -377,9 +465,20 @@ World LoadSdfWorld(const std::filesystem::path& path, const Eigen::Vector3d& sta
 
   World world;
   world.objects = std::move(reader.objects());
+  world.movers = std::move(reader.movers());
   world.ground = reader.ground();
   Eigen::AlignedBox3d geometry;
   for (const auto& o : world.objects) geometry.extend(ObjectBounds(o));
+  // Movers: their shapes wherever their waypoints take them (turned any way about z).
+  for (const Mover& m : world.movers) {
+    Eigen::AlignedBox3d shape;
+    for (const auto& o : m.shape) shape.extend(ObjectBounds(o));
+    const double r = std::max(shape.min().head<2>().norm(), shape.max().head<2>().norm());
+    for (const MoverWaypoint& w : m.waypoints) {
+      geometry.extend(w.position + Eigen::Vector3d(-r, -r, shape.min().z()));
+      geometry.extend(w.position + Eigen::Vector3d(r, r, shape.max().z()));
+    }
+  }
   if (geometry.isEmpty()) geometry.extend(start);
   world.bounds = PaddedBounds(geometry, start, goal, kPadding, name);
   if (world.ground.enabled && world.bounds.min().z() < world.ground.z) {

@@ -20,9 +20,13 @@ namespace enavi::worlds {
 ///   frame. The first horizontal plane is the ground; other planes become finite quads;
 /// - <include> of model://NAME resolved against `model_path`, then GAZEBO_MODEL_PATH; the
 ///   standard `sun` and `ground_plane` models are known without either;
-/// - lights, actors, plugins, physics settings and non-static models are left out, listed in
-///   metadata.import_note.
-/// Bounds: the geometry (but the ground) with start and goal, padded by 2 m, floor at the ground.
+/// - actors: their links' geometry (else their <skin> mesh, rigid in its bind pose) as a timed
+///   mover following their <script> trajectories (world poses, yaw only; <loop>, <delay_start>;
+///   without <auto_start> they stand still), or standing at their pose without a trajectory;
+/// - lights, skeleton animations, plugins, physics settings and non-static models are left out,
+///   listed in metadata.import_note.
+/// Bounds: the geometry (but the ground; movers along their waypoints) with start and goal, padded
+/// by 2 m, floor at the ground.
 /// Throws WorldError naming the file: SDF errors with their line, a model:// not found, an
 /// unsupported geometry (heightmap, capsule, polyline).
 World LoadSdfWorld(const std::filesystem::path& path, const Eigen::Vector3d& start, const Eigen::Vector3d& goal,

@@ -13,6 +13,7 @@
 #include "tests/unit/worlds/test_util.h"
 #include "tests/unit/worlds/import_fixtures.h"
 #include "worlds/mesh.h"
+#include "worlds/movers.h"
 #include "worlds/primitives.h"
 #include "worlds/resolve.h"
 #include "worlds/sdf_import.h"
@@ -273,6 +274,44 @@ TEST(SdfImportTest, BadWorldsAreRefusedNamingTheFile) {
     const std::string m = ErrorOf([&] { LoadSdfWorld(path, testing::kFixtureStart, testing::kFixtureGoal, {}); });
     EXPECT_EQ(m.rfind(path.string() + ":", 0), 0u) << name << ": " << m;
   }
+}
+
+// examples/worlds/actor_crossing.sdf: a box-bodied actor walks x = 1 from y = -4 to 4 in 4 s,
+// turns, and back by t = 8 s, looping after a 0.5 s delay; a static wall stands aside.
+TEST(SdfImportTest, AnActorsScriptedTrajectoryIsATimedMover) {
+  const auto file = std::filesystem::path(ENAVI_SOURCE_DIR) / "examples/worlds/actor_crossing.sdf";
+  const World w = LoadSdfWorld(file, {-6, 0, 1.5}, {6, 0, 1.5}, {});
+  ASSERT_EQ(w.objects.size(), 1u) << "the wall";
+  ASSERT_EQ(w.movers.size(), 1u);
+  const Mover& m = w.movers[0];
+  EXPECT_EQ(m.name, "walker");
+  EXPECT_EQ(m.speed, 0.0) << "timed";
+  EXPECT_EQ(m.mode, MoverMode::kLoop);
+  EXPECT_DOUBLE_EQ(m.start_delay, 0.5);
+  ASSERT_EQ(m.waypoints.size(), 4u);
+  EXPECT_DOUBLE_EQ(m.waypoints[3].t, 8.0);
+  ASSERT_EQ(m.shape.size(), 1u);
+  const auto* torso = std::get_if<Box>(&m.shape[0]);
+  ASSERT_NE(torso, nullptr) << "an upright box stays a box, in the actor's frame";
+  EXPECT_NEAR(torso->center.z(), 0.9, 1e-12);
+  const MoverTrajectory trajectory(m);
+  EXPECT_NEAR(trajectory.Pose(0.5 + 2.0).position.y(), 0.0, 1e-9) << "crosses the line at t = 2.5 s";
+  EXPECT_NEAR(trajectory.Pose(0.5 + 6.25).position.y(), 0.0, 1e-9) << "and back at 6.75 s";
+  EXPECT_NEAR(trajectory.Pose(0.5 + 8.0 + 2.0).position.y(), 0.0, 1e-9) << "looping";
+  EXPECT_TRUE(w.bounds.contains(Eigen::Vector3d(1, 4.3, 1.8))) << "the bounds hold where it walks";
+  EXPECT_EQ(w.metadata.import_note.find("actor"), std::string::npos) << w.metadata.import_note;
+  // It survives a world file: written (timed waypoints) and read back the same.
+  const std::string text = WorldToYaml(w);
+  EXPECT_EQ(WorldToYaml(ParseWorld(text, "actor.yaml", ".")), text);
+}
+
+TEST(SdfImportTest, AnActorWithoutGeometryIsRefused) {
+  TempDir dir;
+  const auto file = dir.Write("ghost.sdf", R"(<?xml version="1.0"?><sdf version="1.6"><world name="w">
+<actor name="ghost"><script><trajectory id="0" type="t"><waypoint><time>0</time><pose>0 0 0 0 0 0</pose></waypoint>
+<waypoint><time>1</time><pose>1 0 0 0 0 0</pose></waypoint></trajectory></script></actor></world></sdf>)");
+  const std::string e = ErrorOf([&] { LoadSdfWorld(file, testing::kFixtureStart, testing::kFixtureGoal, {}); });
+  EXPECT_EQ(e, file.string() + ": actor 'ghost': has neither links with geometry nor a <skin>: nothing to see or hit");
 }
 
 TEST(WorldConvertTest, AnImportedWorldIsWrittenOnceAndReadBackTheSame) {
