@@ -13,6 +13,7 @@
 
 #include "workers/sim/camera_rays.h"
 #include "workers/sim/embree_impl.h"
+#include "workers/sim/moving_scene.h"
 
 namespace enavi::sim {
 namespace {
@@ -34,7 +35,10 @@ class FlushDenormalsScope {
 };
 
 struct RenderSetup {
-  const EmbreeScene::Impl& world;
+  RTCScene scene;
+  /// Triangle planes by top-level geometry: [0] the world's (hit directly or through its
+  /// instance), [k] mover k - 1's at this frame (MovingScene).
+  const std::vector<const std::vector<Eigen::Vector4d>*>& planes;
   const PixelRays& rays;
   CameraRayFrame frame;
   int width, height;
@@ -47,10 +51,10 @@ struct RenderSetup {
 // approximate reciprocal, whose last bits depend on the CPU's vendor (embree_scene.h); the
 // distance is recomputed here in double from the plane of the triangle Embree found, so only
 // which triangle a ray hits comes from Embree.
-float PixelDepth(const RenderSetup& s, bool hit, unsigned prim, float dir_x, float dir_y,
+float PixelDepth(const RenderSetup& s, unsigned geom, unsigned inst, unsigned prim, float dir_x, float dir_y,
                  float dir_z, float t_embree) {
-  if (!hit) return navstack::DepthImage::kNoReturn;
-  const Eigen::Vector4d& plane = s.world.planes[prim];
+  if (geom == RTC_INVALID_GEOMETRY_ID) return navstack::DepthImage::kNoReturn;
+  const Eigen::Vector4d& plane = (*s.planes[inst != RTC_INVALID_GEOMETRY_ID ? inst : geom])[prim];
   const double along = plane.x() * dir_x + plane.y() * dir_y + plane.z() * dir_z;
   const double t = (plane.w() - plane.head<3>().dot(s.origin)) / along;
   // A ray Embree hit is not parallel to the triangle; keep its distance if it somehow was.
@@ -90,10 +94,9 @@ void RenderSingle(const RenderSetup& s) {
       FillRay(s, u, v, &rh.ray);
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(s.world.scene, &context, &rh);
-      s.depth[v * s.width + u] =
-          PixelDepth(s, rh.hit.geomID != RTC_INVALID_GEOMETRY_ID, rh.hit.primID, rh.ray.dir_x,
-                     rh.ray.dir_y, rh.ray.dir_z, rh.ray.tfar);
+      rtcIntersect1(s.scene, &context, &rh);
+      s.depth[v * s.width + u] = PixelDepth(s, rh.hit.geomID, rh.hit.instID[0], rh.hit.primID, rh.ray.dir_x,
+                                            rh.ray.dir_y, rh.ray.dir_z, rh.ray.tfar);
     }
   }
 }
@@ -142,13 +145,13 @@ void RenderPackets(const RenderSetup& s, IntersectN intersect) {
           rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
         }
       }
-      intersect(valid, s.world.scene, &context, &rh);
+      intersect(valid, s.scene, &context, &rh);
       for (int dv = 0; dv < TH && v0 + dv < s.height; ++dv) {
         float* row = s.depth + static_cast<std::size_t>(v0 + dv) * s.width + u0;
         for (int du = 0; du < TW && u0 + du < s.width; ++du) {
           const int j = dv * TW + du;
-          row[du] = PixelDepth(s, rh.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID, rh.hit.primID[j],
-                               rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j], rh.ray.tfar[j]);
+          row[du] = PixelDepth(s, rh.hit.geomID[j], rh.hit.instID[0][j], rh.hit.primID[j], rh.ray.dir_x[j],
+                               rh.ray.dir_y[j], rh.ray.dir_z[j], rh.ray.tfar[j]);
         }
       }
     }
@@ -171,14 +174,14 @@ void RenderStream(const RenderSetup& s) {
           rh[m].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         }
       }
-      rtcIntersect1M(s.world.scene, &context, rh.data(), static_cast<unsigned>(m), sizeof(RTCRayHit));
+      rtcIntersect1M(s.scene, &context, rh.data(), static_cast<unsigned>(m), sizeof(RTCRayHit));
       m = 0;
       for (int dv = 0; dv < th; ++dv) {
         for (int du = 0; du < tw; ++du, ++m) {
           const RTCRay& ray = rh[m].ray;
           s.depth[(v0 + dv) * s.width + u0 + du] =
-              PixelDepth(s, rh[m].hit.geomID != RTC_INVALID_GEOMETRY_ID, rh[m].hit.primID,
-                         ray.dir_x, ray.dir_y, ray.dir_z, ray.tfar);
+              PixelDepth(s, rh[m].hit.geomID, rh[m].hit.instID[0], rh[m].hit.primID, ray.dir_x, ray.dir_y,
+                         ray.dir_z, ray.tfar);
         }
       }
     }
@@ -188,6 +191,49 @@ void RenderStream(const RenderSetup& s) {
 // Uniform double in (0, 1] from the top 53 bits of a raw 64-bit draw.
 double UnitOpenClosed(std::uint64_t bits) {
   return static_cast<double>((bits >> 11) + 1) * 0x1.0p-53;
+}
+
+// One frame of `camera` traced in `scene`, whose triangles' planes are `planes` (RenderSetup).
+void Trace(const DepthCamera& camera, RTCScene scene, RTCDevice device,
+           const std::vector<const std::vector<Eigen::Vector4d>*>& planes, const Eigen::Isometry3d& X_WC,
+           DepthImage* out, std::uint64_t noise_seed) {
+  if (out == nullptr) throw std::invalid_argument("DepthCamera::Render: out is null");
+  if (!X_WC.matrix().allFinite()) {
+    throw std::invalid_argument("DepthCamera::Render: X_WC is not finite");
+  }
+  const CameraIntrinsics& k = camera.intrinsics();
+  out->width = k.width;
+  out->height = k.height;
+  out->data.assign(static_cast<std::size_t>(k.width) * k.height, DepthImage::kNoReturn);
+
+  // Ray directions per column/row are rebuilt per call (cheap next to tracing) so that the
+  // camera holds no buffers and can render from several threads.
+  const PixelRays rays(k);
+  const CameraRayFrame frame(X_WC);
+  const RenderSetup setup{scene,
+                          planes,
+                          rays,
+                          frame,
+                          k.width,
+                          k.height,
+                          static_cast<float>(k.min_range),
+                          static_cast<float>(k.max_range),
+                          out->data.data(),
+                          frame.origin.cast<double>()};
+  {
+    FlushDenormalsScope flush;
+    switch (camera.mode()) {
+      case EmbreeRayMode::kSingle: RenderSingle(setup); break;
+      case EmbreeRayMode::kPacket4: RenderPackets<2, 2, RTCRayHit4>(setup, &rtcIntersect4); break;
+      case EmbreeRayMode::kPacket8: RenderPackets<4, 2, RTCRayHit8>(setup, &rtcIntersect8); break;
+      case EmbreeRayMode::kPacket16:
+        RenderPackets<4, 4, RTCRayHit16>(setup, &rtcIntersect16);
+        break;
+      case EmbreeRayMode::kStream: RenderStream(setup); break;
+    }
+  }
+  ThrowIfEmbreeError(device, "rtcIntersect");
+  ApplyDepthNoise(camera.noise(), k, noise_seed, out);
 }
 
 }  // namespace
@@ -232,42 +278,13 @@ DepthCamera::DepthCamera(const CameraIntrinsics& intrinsics, const DepthNoise& n
 
 void DepthCamera::Render(const EmbreeScene& scene, const Eigen::Isometry3d& X_WC,
                          DepthImage* out, std::uint64_t noise_seed) const {
-  if (out == nullptr) throw std::invalid_argument("DepthCamera::Render: out is null");
-  if (!X_WC.matrix().allFinite()) {
-    throw std::invalid_argument("DepthCamera::Render: X_WC is not finite");
-  }
-  const CameraIntrinsics& k = intrinsics_;
-  out->width = k.width;
-  out->height = k.height;
-  out->data.assign(static_cast<std::size_t>(k.width) * k.height, DepthImage::kNoReturn);
+  const std::vector<const std::vector<Eigen::Vector4d>*> planes = {&scene.impl().planes};
+  Trace(*this, scene.impl().scene, scene.impl().device, planes, X_WC, out, noise_seed);
+}
 
-  // Ray directions per column/row are rebuilt per call (cheap next to tracing) so that the
-  // camera holds no buffers and can render from several threads.
-  const PixelRays rays(k);
-  const CameraRayFrame frame(X_WC);
-  const RenderSetup setup{scene.impl(),
-                          rays,
-                          frame,
-                          k.width,
-                          k.height,
-                          static_cast<float>(k.min_range),
-                          static_cast<float>(k.max_range),
-                          out->data.data(),
-                          frame.origin.cast<double>()};
-  {
-    FlushDenormalsScope flush;
-    switch (mode_) {
-      case EmbreeRayMode::kSingle: RenderSingle(setup); break;
-      case EmbreeRayMode::kPacket4: RenderPackets<2, 2, RTCRayHit4>(setup, &rtcIntersect4); break;
-      case EmbreeRayMode::kPacket8: RenderPackets<4, 2, RTCRayHit8>(setup, &rtcIntersect8); break;
-      case EmbreeRayMode::kPacket16:
-        RenderPackets<4, 4, RTCRayHit16>(setup, &rtcIntersect16);
-        break;
-      case EmbreeRayMode::kStream: RenderStream(setup); break;
-    }
-  }
-  ThrowIfEmbreeError(scene.impl().device, "rtcIntersect");
-  ApplyDepthNoise(noise_, k, noise_seed, out);
+void DepthCamera::Render(const MovingScene& scene, const Eigen::Isometry3d& X_WC, DepthImage* out,
+                         std::uint64_t noise_seed) const {
+  Trace(*this, scene.impl().scene, scene.impl().device, scene.impl().planes, X_WC, out, noise_seed);
 }
 
 void ApplyDepthNoise(const DepthNoise& noise, const CameraIntrinsics& intrinsics,

@@ -11,6 +11,8 @@
 
 namespace enavi::sim {
 
+class MovingScene;
+
 /// Depth noise model: zero-mean Gaussian on z-depth with sigma = k * d^2 (stereo-like: error
 /// grows with the square of depth). k = 0 disables noise (the default).
 struct DepthNoise {
@@ -44,6 +46,9 @@ class DepthCamera {
   /// Renders `scene` seen from camera pose X_WC into `out` (resized to the intrinsics). With
   /// noise enabled, the same noise_seed gives the same image bit for bit.
   void Render(const EmbreeScene& scene, const Eigen::Isometry3d& X_WC, navstack::DepthImage* out,
+              std::uint64_t noise_seed = 0) const;
+  /// Renders a world with movers, at the poses of MovingScene's last SetPoses.
+  void Render(const MovingScene& scene, const Eigen::Isometry3d& X_WC, navstack::DepthImage* out,
               std::uint64_t noise_seed = 0) const;
 
   const navstack::CameraIntrinsics& intrinsics() const { return intrinsics_; }

@@ -1,11 +1,13 @@
 #pragma once
 // Private to enavi_sim: the Embree handles behind EmbreeDevice and EmbreeScene.
 
+#include <memory>
 #include <vector>
 
 #include <embree3/rtcore.h>
 
 #include "workers/sim/embree_scene.h"
+#include "workers/sim/moving_scene.h"
 
 namespace enavi::sim {
 
@@ -21,6 +23,17 @@ struct EmbreeScene::Impl {
   std::vector<Eigen::Vector4d> planes;
   std::size_t triangle_count = 0;
   Eigen::AlignedBox3f bounds;
+  ~Impl();
+};
+
+struct MovingScene::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;  ///< top level: geometry 0 the world's instance, k the mover k - 1
+  std::shared_ptr<const EmbreeScene> world;  ///< kept alive: its scene is instanced here
+  std::vector<worlds::TriangleMesh> local;   ///< movers' triangles in their own frames
+  std::vector<RTCGeometry> geometries;       ///< movers' Embree triangle geometries
+  std::vector<std::vector<Eigen::Vector4d>> mover_planes;  ///< at the last poses, as EmbreeScene's
+  std::vector<const std::vector<Eigen::Vector4d>*> planes;  ///< by top-level geometry id
   ~Impl();
 };
 

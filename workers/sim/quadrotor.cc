@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <btBulletDynamicsCommon.h>
 
@@ -79,6 +80,8 @@ struct QuadrotorSim::Impl {
   std::unique_ptr<btCylinderShapeZ> vehicle_shape;
   std::unique_ptr<btRigidBody> body;
   std::unique_ptr<btCollisionObject> static_object;
+  std::vector<std::shared_ptr<const StaticCollisionWorld>> kinematic_shapes;
+  std::vector<std::unique_ptr<btCollisionObject>> kinematic_objects;
 
   std::int64_t steps = 0;
   std::array<double, 4> omega{};
@@ -94,6 +97,7 @@ struct QuadrotorSim::Impl {
     // Bullet objects must leave the world before they are destroyed.
     if (world && body) world->removeRigidBody(body.get());
     if (world && static_object) world->removeCollisionObject(static_object.get());
+    for (auto& o : kinematic_objects) world->removeCollisionObject(o.get());
   }
 
   double dt() const { return options.dt; }
@@ -149,6 +153,7 @@ struct QuadrotorSim::Impl {
       const btPersistentManifold* m = d->getManifoldByIndexInternal(i);
       const bool vehicle_is_a = m->getBody0() == body.get();
       if (!vehicle_is_a && m->getBody1() != body.get()) continue;
+      const btCollisionObject* other = vehicle_is_a ? m->getBody1() : m->getBody0();
       for (int j = 0; j < m->getNumContacts(); ++j) {
         const btManifoldPoint& pt = m->getContactPoint(j);
         const double distance = pt.getDistance();
@@ -160,6 +165,7 @@ struct QuadrotorSim::Impl {
         // Bullet's normal lies on body B and points from B to A.
         e.point_W = ToEigen(vehicle_is_a ? pt.getPositionWorldOnB() : pt.getPositionWorldOnA());
         e.normal_W = (vehicle_is_a ? 1.0 : -1.0) * ToEigen(pt.m_normalWorldOnB);
+        e.body = other->getUserIndex();  // -1 for the static world
         best = e;
       }
     }
@@ -209,6 +215,7 @@ QuadrotorSim::QuadrotorSim(std::shared_ptr<const StaticCollisionWorld> world,
     s.static_object = std::make_unique<btCollisionObject>();
     s.static_object->setCollisionShape(shape);
     s.static_object->setCollisionFlags(btCollisionObject::CF_STATIC_OBJECT);
+    s.static_object->setUserIndex(-1);
     s.world->addCollisionObject(s.static_object.get(), btBroadphaseProxy::StaticFilter,
                                 btBroadphaseProxy::AllFilter ^ btBroadphaseProxy::StaticFilter);
   }
@@ -246,6 +253,38 @@ QuadrotorSim::QuadrotorSim(std::shared_ptr<const StaticCollisionWorld> world,
 QuadrotorSim::~QuadrotorSim() = default;
 QuadrotorSim::QuadrotorSim(QuadrotorSim&&) noexcept = default;
 QuadrotorSim& QuadrotorSim::operator=(QuadrotorSim&&) noexcept = default;
+
+int QuadrotorSim::AddKinematicBody(std::shared_ptr<const StaticCollisionWorld> shape, const Eigen::Isometry3d& X_WM) {
+  Impl& s = *impl_;
+  if (!shape || !shape->impl().mutable_shape()) throw std::invalid_argument("QuadrotorSim::AddKinematicBody: no shape");
+  const int index = static_cast<int>(s.kinematic_objects.size());
+  auto object = std::make_unique<btCollisionObject>();
+  object->setCollisionShape(shape->impl().mutable_shape());
+  object->setCollisionFlags(btCollisionObject::CF_KINEMATIC_OBJECT);
+  object->setActivationState(DISABLE_DEACTIVATION);
+  object->setUserIndex(index);
+  s.kinematic_shapes.push_back(std::move(shape));
+  // Movers touch only the vehicle, not the static world or each other.
+  s.world->addCollisionObject(object.get(), btBroadphaseProxy::KinematicFilter,
+                              btBroadphaseProxy::AllFilter ^ (btBroadphaseProxy::StaticFilter | btBroadphaseProxy::KinematicFilter));
+  s.kinematic_objects.push_back(std::move(object));
+  SetKinematicPose(index, X_WM);
+  return index;
+}
+
+void QuadrotorSim::SetKinematicPose(int index, const Eigen::Isometry3d& X_WM) {
+  Impl& s = *impl_;
+  if (index < 0 || index >= static_cast<int>(s.kinematic_objects.size())) {
+    throw std::invalid_argument("QuadrotorSim::SetKinematicPose: no kinematic body " + std::to_string(index));
+  }
+  btTransform X;
+  const Eigen::Matrix3d R = X_WM.linear();
+  X.setBasis(btMatrix3x3(static_cast<btScalar>(R(0, 0)), static_cast<btScalar>(R(0, 1)), static_cast<btScalar>(R(0, 2)),
+                         static_cast<btScalar>(R(1, 0)), static_cast<btScalar>(R(1, 1)), static_cast<btScalar>(R(1, 2)),
+                         static_cast<btScalar>(R(2, 0)), static_cast<btScalar>(R(2, 1)), static_cast<btScalar>(R(2, 2))));
+  X.setOrigin(ToBt(X_WM.translation()));
+  s.kinematic_objects[index]->setWorldTransform(X);
+}
 
 void QuadrotorSim::SetCommand(const navstack::RotorCommand& command) {
   for (int i = 0; i < 4; ++i) {

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "navstack/common/state.h"
 #include "navstack/control/vehicle.h"
@@ -44,6 +45,7 @@ struct ContactEvent {
   Eigen::Vector3d point_W = Eigen::Vector3d::Zero();    ///< on the world's surface
   Eigen::Vector3d normal_W = Eigen::Vector3d::UnitZ();  ///< surface normal, world -> vehicle
   double distance = 0.0;  ///< m, signed separation (< 0: penetration)
+  int body = -1;          ///< what was touched: -1 the static world, i >= 0 kinematic body i (a mover)
 };
 
 /// Rotor speed at which the four rotors together carry the vehicle's weight.
@@ -51,7 +53,8 @@ double HoverRotorSpeed(const navstack::VehicleParams& vehicle);
 
 /// Quadrotor flight dynamics (MuJoCo-style split: the static world is the shared model, this is
 /// one episode's mutable data). A btRigidBody with the vehicle's mass and diagonal inertia in
-/// its own btDiscreteDynamicsWorld, which also holds the shared static triangle mesh.
+/// its own btDiscreteDynamicsWorld, which also holds the shared static triangle mesh and the
+/// movers as kinematic collision objects.
 ///
 /// Per Step(): each rotor's speed follows its command through a first-order lag (time constant
 /// up/down) and is clamped to [0, omega_max]; rotor i pushes thrust_coeff * omega_i^2 along
@@ -78,6 +81,12 @@ class QuadrotorSim {
   QuadrotorSim& operator=(QuadrotorSim&&) noexcept;
   QuadrotorSim(const QuadrotorSim&) = delete;
   QuadrotorSim& operator=(const QuadrotorSim&) = delete;
+
+  /// Adds a kinematic obstacle (a mover: moved by SetKinematicPose, never pushed) of this shape,
+  /// posed at X_WM; returns its index, which ContactEvent::body names when it is touched.
+  int AddKinematicBody(std::shared_ptr<const StaticCollisionWorld> shape, const Eigen::Isometry3d& X_WM);
+  /// Moves kinematic body `index` to X_WM: call before Step() with its pose at time().
+  void SetKinematicPose(int index, const Eigen::Isometry3d& X_WM);
 
   /// Commanded rotor speeds (rad/s), held until the next call; clamped to [0, omega_max].
   /// @throws std::invalid_argument if a command is not finite.
