@@ -220,6 +220,9 @@ nlohmann::json ResultSummaryJson(const EpisodeResult& r) {
       {"notes", r.notes},
   };
   j["collision_point"] = r.collision_point ? nlohmann::json(*r.collision_point) : nlohmann::json();
+  j["collided_with"] = r.collided_with;
+  // A number for compare and the dashboard, which read numbers and booleans only.
+  j["collided_mover"] = r.collided_with.rfind("mover:", 0) == 0;
   return j;
 }
 
@@ -250,6 +253,7 @@ void from_json(const nlohmann::json& j, EpisodeResult& r) {
   f.Optional("timed_out", r.timed_out);
   f.Required("end_reason", r.end_reason);
   f.Optional("collision_point", r.collision_point);
+  f.Optional("collided_with", r.collided_with);
   f.Optional("flight_time_s", r.flight_time_s);
   f.Optional("path_length_m", r.path_length_m);
   f.Optional("straight_line_m", r.straight_line_m);

@@ -165,6 +165,9 @@ struct EpisodeResult {
   bool timed_out = false;
   std::string end_reason;  ///< goal_reached, collision, timeout, failsafe, error: ...
   std::optional<Vec3> collision_point;
+  /// What a collision touched: "static" (the world's objects or ground) or "mover:NAME" (one of
+  /// the world's movers); empty without a collision.
+  std::string collided_with;
   double flight_time_s = 0;
   double path_length_m = 0;
   double straight_line_m = 0;

@@ -870,6 +870,9 @@ GeneratorParam Length(double def, double lo, double hi) {
   return {"length", lo, hi, def, "start-goal distance, m"};
 }
 
+// The worlds with movers can leave them out: the same static world, for comparisons.
+GeneratorParam Movers() { return {"movers", 0.0, 1.0, 1.0, "1: with its movers; 0: the same world without them"}; }
+
 const std::vector<Entry>& Entries() {
   static const std::vector<Entry> entries = {
       {{"s1", "city with buildings of varying height", 44.0, {Length(44.0, 20.0, 200.0)}}, BuildS1, true},
@@ -892,12 +895,12 @@ const std::vector<Entry>& Entries() {
        false},
       {{"empty", "no obstacles, ground only", 0.0, {Length(30.0, 2.0, 1000.0)}}, BuildEmpty, false},
       {{"park-people", "s2's park with footpaths across it and people walking them (movers)", 0.0,
-        {Length(50.0, 20.0, 200.0)}},
+        {Length(50.0, 20.0, 200.0), Movers()}},
        BuildParkPeople,
        true,
        true},
       {{"street-traffic", "s4's city grid with vans driving the middle streets (movers)", 0.0,
-        {Length(42.0, 30.0, 150.0)}},
+        {Length(42.0, 30.0, 150.0), Movers()}},
        BuildStreetTraffic,
        true,
        true},
@@ -1045,7 +1048,11 @@ World Generate(const std::string& scenario, std::uint64_t seed, const std::map<s
       }
     }
     const ValidationResult v = ValidateWorld(w);
-    if (v.ok) return w;
+    if (v.ok) {
+      // Without its movers: dropped only now, so the static world is the one drawn with them.
+      if (const auto it = values.find("movers"); it != values.end() && it->second == 0.0) w.movers.clear();
+      return w;
+    }
     last_failure = v.field + ": " + v.reason;
   }
   throw WorldError(scenario, 0, "seed",

@@ -116,6 +116,7 @@ void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
       // A table flown with overrides says so: the method names alone would not.
       if (!f.overrides.empty()) std::cout << "with --set " << JoinNames(f.overrides, " --set ") << "\n";
       std::cout << server::PaperTable(report.results) << "\n" << server::EciRangeTable(report.results);
+      if (server::HasMovingWorlds(report.results)) std::cout << "\n" << server::RobustnessTable(report.results);
       if (f.preset == "paper") std::cout << server::PaperComparison(report.results);
     }
     std::cout.flush();

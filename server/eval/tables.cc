@@ -468,6 +468,50 @@ std::string EciRangeTable(const nlohmann::json& results) {
          Render(rows, 2);
 }
 
+bool HasMovingWorlds(const nlohmann::json& results) {
+  return std::any_of(results.begin(), results.end(), [](const nlohmann::json& r) {
+    return r.value("notes", nlohmann::json::object()).contains("movers");
+  });
+}
+
+std::string RobustnessTable(const nlohmann::json& results) {
+  struct Cell {
+    Mean success, flight, tracking, cpu, difference;
+    double static_hits = 0, mover_hits = 0;
+  };
+  std::vector<std::pair<std::string, std::string>> order;  // (scenario, method), first seen
+  std::map<std::pair<std::string, std::string>, Cell> cells;
+  for (const auto& r : results) {
+    const std::string scenario =
+        r.value("scenario", "") == "custom" ? r.value("world", "") : r.value("scenario", "");
+    const std::pair<std::string, std::string> key{scenario, r.value("method", "")};
+    if (cells.find(key) == cells.end()) order.push_back(key);
+    Cell& c = cells[key];
+    const bool ok = r.value("success", false);
+    c.success.Add(ok ? 1.0 : 0.0);
+    if (ok) c.flight.Add(r.value("flight_time_s", 0.0));
+    c.tracking.Add(r.value("setpoint_lag_p95_m", 0.0));
+    c.cpu.Add(r.value("nav_cpu_util_pct", 0.0));
+    c.difference.Add(r.value("replans_by_trigger", nlohmann::json::object()).value("difference", 0.0));
+    if (r.value("collided", false)) {
+      // Results stored before collided_with existed could only hit the static world.
+      (r.value("collided_mover", false) ? c.mover_hits : c.static_hits) += 1.0;
+    }
+  }
+  if (cells.empty()) return "no results\n";
+  std::vector<std::vector<std::string>> rows = {{"scenario", "method", "flights", "success", "hit static", "hit mover",
+                                                 "time s", "tracking p95 m", "cpu %", "diff replans"}};
+  for (const auto& key : order) {
+    const Cell& c = cells.at(key);
+    rows.push_back({key.first, key.second, std::to_string(c.success.n), Fixed(100.0 * c.success.value(), 0) + "%",
+                    Fixed(c.static_hits, 0), Fixed(c.mover_hits, 0), c.flight.Text(1), c.tracking.Text(3),
+                    c.cpu.Text(1), c.difference.Text(1)});
+  }
+  return "flights in moving worlds (over boards and seeds; time: successful flights; diff replans: replans asked "
+         "for by a change of eci, per flight)\n" +
+         Render(rows, 2);
+}
+
 std::string ProgressLine(const api::JobProgress& p, bool bar) {
   std::ostringstream os;
   if (bar) {

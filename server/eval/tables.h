@@ -37,6 +37,15 @@ std::string PaperComparison(const nlohmann::json& results);
 /// Results without the flight fields (stored before they existed) are counted as "no range".
 std::string EciRangeTable(const nlohmann::json& results);
 
+/// Flights in worlds that move (issue 45: movers): per scenario and method, over every board and
+/// seed, the flights, success rate, collisions with the static world and with movers
+/// (result collided_with), mean flight time of the successful flights, mean tracking error
+/// (setpoint_lag_p95_m: p95 of |reference - vehicle position|), mean nav CPU % and mean replans
+/// asked for by E-Navi's change detection per flight (replans_by_trigger.difference).
+std::string RobustnessTable(const nlohmann::json& results);
+/// Whether the results hold a flight that RobustnessTable is for (a world with movers).
+bool HasMovingWorlds(const nlohmann::json& results);
+
 /// `enavi trend`: one row per job and method (oldest job first), a column per board with the
 /// metric's mean and its 95 % interval ("24.86 ± 3.16"; no interval with one seed), from a trend
 /// with intervals (ResultQueries::Trend, AddTrendIntervals). `method` empty: every method.

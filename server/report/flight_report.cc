@@ -48,9 +48,13 @@ std::string Caption(const api::EpisodeResult& result) {
 void DrawFlight(const api::EpisodeResult& result, TopDownView* top) {
   std::vector<Eigen::Vector2d> xy;
   for (const auto& p : result.series.position) xy.emplace_back(p[0], p[1]);
+  // Movers where they were when the flight ended (at a collision: what it hit and where).
+  top->DrawMoversAt(result.sim_time_s, "movers at the end");
   if (xy.size() >= 2) top->DrawPath(xy, result.series.eci, 0.0, 1.0, "eci");
   if (result.collision_point)
-    top->DrawMarker({(*result.collision_point)[0], (*result.collision_point)[1]}, Rgb{0.85, 0.1, 0.1}, "collision");
+    top->DrawMarker({(*result.collision_point)[0], (*result.collision_point)[1]}, Rgb{0.85, 0.1, 0.1},
+                    result.collided_with.rfind("mover:", 0) == 0 ? "collision with " + result.collided_with.substr(6)
+                                                                 : "collision");
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include "server/report/colormap.h"
 #include "server/report/ticks.h"
+#include "worlds/movers.h"
 #include "worlds/primitives.h"
 
 namespace enavi::report {
@@ -17,6 +18,7 @@ namespace {
 
 constexpr Rgb kGroundTint{0.93, 0.95, 0.89};
 constexpr Rgb kFrame{0.2, 0.2, 0.2};
+constexpr Rgb kMover{0.55, 0.22, 0.78};  // movers' tracks and shapes: purple, apart from paths and obstacles
 constexpr double kColorBarWidth = 18.0;
 constexpr double kColorBarHeight = 190.0;
 
@@ -68,6 +70,7 @@ TopDownView::TopDownView(const worlds::World& world, const TopDownOptions& optio
   canvas_.Text(options_.margin, 0.6 * options_.margin, options_.title, 16.0, colors::kBlack, TextAlign::kLeft, true);
   if (world.ground.enabled) canvas_.FillRect(map_x0_, map_y0_, map_w_, map_h_, kGroundTint);
   DrawObstacles(world);
+  DrawMoverTracks(world);
   canvas_.StrokeRect(map_x0_, map_y0_, map_w_, map_h_, kFrame, 1.0);
   DrawScaleBar();
   DrawStartGoal();
@@ -245,6 +248,49 @@ void TopDownView::DrawMarkerPx(const Eigen::Vector2d& px, Rgb color, const std::
   const double tx = px.x() + radius + 5.0, ty = px.y() + 4.0;
   canvas_.FillRect(tx - 2.0, ty - 12.0, w + 4.0, 16.0, colors::kWhite, 0.8);
   canvas_.Text(tx, ty, label, 12.0, Darker(color, 0.1), TextAlign::kLeft, true);
+}
+
+void TopDownView::DrawMoverTracks(const worlds::World& world) {
+  if (world.movers.empty()) return;
+  movers_ = world.movers;
+  canvas_.PushClip(map_x0_, map_y0_, map_w_, map_h_);
+  for (const worlds::Mover& m : world.movers) {
+    const std::vector<Eigen::Vector3d> track = worlds::MoverTrack(m);
+    for (std::size_t i = 0; i + 1 < track.size(); ++i) {
+      const Eigen::Vector2d a = ToPixel(track[i].head<2>()), b = ToPixel(track[i + 1].head<2>());
+      canvas_.DashedLine(a.x(), a.y(), b.x(), b.y(), kMover, 2.0, 7.0);
+    }
+    const Eigen::Vector2d first = ToPixel(track.front().head<2>());
+    canvas_.StrokeCircle(first.x(), first.y(), 4.0, kMover, 1.5);
+    canvas_.Text(first.x() + 6.0, first.y() - 5.0, m.name, 11.0, Darker(kMover, 0.15));
+  }
+  canvas_.PopClip();
+  const double x = options_.width - options_.legend_width + 10.0;
+  canvas_.DashedLine(x, legend_y_, x + 24.0, legend_y_, kMover, 2.0, 7.0);
+  canvas_.Text(x + 30.0, legend_y_ + 4.0, "mover tracks", 12.0, colors::kBlack);
+  legend_y_ += 24.0;
+}
+
+void TopDownView::DrawMoversAt(double t, const std::string& label) {
+  canvas_.PushClip(map_x0_, map_y0_, map_w_, map_h_);
+  for (const worlds::Mover& m : movers_) {
+    // The shape's footprint: its bounds in its own frame, turned and placed where it is at t.
+    const worlds::MoverPose pose = worlds::MoverTrajectory(m).Pose(t);
+    const Eigen::AlignedBox3f box = worlds::MoverMesh(m).Bounds();
+    std::vector<Eigen::Vector2d> outline;
+    for (const auto& [cx, cy] : {std::pair{0, 0}, {1, 0}, {1, 1}, {0, 1}}) {
+      const Eigen::Vector3d corner(cx ? box.max().x() : box.min().x(), cy ? box.max().y() : box.min().y(), 0.0);
+      outline.push_back(ToPixel(pose.ToWorld(corner).head<2>()));
+    }
+    canvas_.FillPolygon(outline, kMover, 0.75);
+    canvas_.Polyline(outline, Darker(kMover, 0.2), 1.2, true);
+  }
+  canvas_.PopClip();
+  if (movers_.empty() || label.empty()) return;
+  const double x = options_.width - options_.legend_width + 10.0;
+  canvas_.FillRect(x + 6.0, legend_y_ - 6.0, 12.0, 12.0, kMover, 0.75);
+  canvas_.Text(x + 30.0, legend_y_ + 4.0, label, 12.0, colors::kBlack);
+  legend_y_ += 24.0;
 }
 
 void TopDownView::DrawStartGoal() {

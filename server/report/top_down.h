@@ -23,7 +23,8 @@ struct TopDownOptions {
 /// Renders the world on construction (the World need not outlive the view); overlays are drawn on top, start and goal stay on top of
 /// everything.
 ///
-/// Drawing rules: obstacles are filled with a grey ramp by top height (light = low, dark = tall;
+/// Drawing rules: movers' tracks are dashed purple lines from a circle at their first waypoint;
+/// obstacles are filled with a grey ramp by top height (light = low, dark = tall;
 /// legend on the right) and drawn in order of increasing top height, so tall objects stay
 /// visible. "Overhead" objects, whose bottom is above the start/goal altitude and which cover
 /// more than a quarter of the map (a hall's ceiling), are drawn as a dashed outline only, so
@@ -50,6 +51,9 @@ class TopDownView {
   void DrawPath(const std::vector<Eigen::Vector2d>& xy_W, Rgb color, double line_width = 2.0);
   /// A labelled point marker (e.g. a collision).
   void DrawMarker(const Eigen::Vector2d& p_W, Rgb color, const std::string& label);
+  /// The world's movers where they are at sim time t (their shapes' footprints, purple; their
+  /// tracks are part of the map), with `label` in the legend.
+  void DrawMoversAt(double t, const std::string& label);
 
   Canvas& canvas() { return canvas_; }
   const Canvas& canvas() const { return canvas_; }
@@ -57,12 +61,14 @@ class TopDownView {
 
  private:
   void DrawObstacles(const worlds::World& world);
+  void DrawMoverTracks(const worlds::World& world);
   void DrawStartGoal();
   void DrawScaleBar();
   void DrawColorBar(const std::string& label, double lo, double hi, bool grey);
   void DrawMarkerPx(const Eigen::Vector2d& px, Rgb color, const std::string& label, double radius);
 
   Eigen::Vector3d start_, goal_;
+  std::vector<worlds::Mover> movers_;
   TopDownOptions options_;
   Canvas canvas_;
   double scale_ = 1.0;      // px per metre

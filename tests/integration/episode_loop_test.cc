@@ -180,6 +180,7 @@ TEST(CollisionTest, ShortSightAtHighSpeedHitsTheWallAndTheResultSaysWhere) {
   EXPECT_FALSE(r.success) << Describe(r);
   EXPECT_FALSE(r.timed_out) << Describe(r);
   EXPECT_EQ(r.end_reason, "collision") << Describe(r);
+  EXPECT_EQ(r.collided_with, "static") << "the world's wall, not a mover";
   EXPECT_EQ(r.scenario, "custom");
   ASSERT_TRUE(r.collision_point.has_value()) << Describe(r);
   const api::Vec3& p = *r.collision_point;

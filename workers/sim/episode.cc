@@ -7,6 +7,7 @@
 #include "navstack/common/cpu_time.h"
 #include "workers/sim/embree_scene.h"
 #include "workers/sim/episode_monitors.h"
+#include "workers/sim/episode_movers.h"
 #include "workers/sim/episode_provenance.h"
 #include "workers/sim/static_world.h"
 #include "worlds/mesh.h"
@@ -42,6 +43,7 @@ std::map<std::string, std::string> ModelNotes(const EpisodeModel& m) {
                                          : "FIFO, no preemption") +
                          " on " + std::to_string(m.threads) + " thread(s)";
   notes["triangles"] = std::to_string(m.world->triangles);
+  if (m.world->movers) notes["movers"] = std::to_string(m.world->world.movers.size());
   if (!m.world->world.metadata.import_note.empty()) notes["world_import"] = m.world->world.metadata.import_note;
   notes["depth_stream"] = std::to_string(m.config.nav.camera.width) + "x" + std::to_string(m.config.nav.camera.height);
   notes.merge(EpisodeProvenance(spec, m.board, m.config.method ? m.config.method->cost_family : "",
@@ -103,6 +105,7 @@ std::shared_ptr<const PreparedWorld> PrepareWorld(worlds::World world) {
   const worlds::TriangleMesh mesh = worlds::BuildWorldMesh(world);
   prepared->scene = std::make_shared<const EmbreeScene>(mesh);
   prepared->collision = std::make_shared<const StaticCollisionWorld>(mesh);
+  prepared->movers = PrepareMovers(world);
   prepared->triangles = mesh.triangle_count();
   prepared->world = std::move(world);
   return prepared;
@@ -171,6 +174,8 @@ Episode::Episode(const api::EpisodeSpec& spec, const PreparedWorld& world, const
   if (model_.spec.wind.Active()) wind_.emplace(model_.spec.wind, model_.options.physics_dt, model_.spec.seed ^ kWindStream);
   if (model_.spec.odometry_noise != "none")
     odometry_.emplace(OdometryNoisePreset(model_.spec.odometry_noise), model_.spec.seed ^ kOdometryStream);
+  // Movers: kinematic bodies for the physics, a moving scene for the camera (none: the static path).
+  if (world.movers) movers_.emplace(world.movers, world.scene, &quad_);
   link_ = MakeEpisodeLink(model_, quad_.State(), WithSpeedProbe(spec, options.emulation));
   monitors_ = EpisodeMonitors(model_);
   end_conditions_ = EndConditions();
@@ -190,7 +195,9 @@ void Episode::Sense(double t) {
   frame->t = t;
   frame->X_WC = CameraPoseInWorld(BodyPose(vehicle_), model_.vehicle);
   frame->v_W = vehicle_.v_WB;
-  model_.camera.Render(*model_.world->scene, frame->X_WC, &frame->image, model_.spec.seed * 1000003ULL + frame->index);
+  const std::uint64_t noise_seed = model_.spec.seed * 1000003ULL + frame->index;
+  if (movers_) model_.camera.Render(movers_->SceneAt(t), frame->X_WC, &frame->image, noise_seed);
+  else model_.camera.Render(*model_.world->scene, frame->X_WC, &frame->image, noise_seed);
   navstack::WorkCounts eci_work;
   const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * vehicle_.v_WB;
   const double eci_cpu0 = navstack::ThreadCpuSeconds();
@@ -253,6 +260,7 @@ StepStatus Episode::Step() {
   }
   // The air at the vehicle for this step (the stack is never told; the drag feels it).
   if (wind_) quad_.SetAirVelocity(wind_->Step(vehicle_.p_WB.z(), vehicle_.v_WB));
+  if (movers_) movers_->PoseBodies(t, &quad_);
   quad_.Step();
   ++k_;
   return StepStatus::kRunning;
@@ -286,7 +294,8 @@ api::EpisodeResult Episode::Finish() {
   if (end_->contact) {
     const Eigen::Vector3d& p = end_->contact->point_W;
     result.collision_point = api::Vec3{p.x(), p.y(), p.z()};
-    result.events.push_back({end_->contact->t, "collision", ""});
+    result.collided_with = movers_ ? movers_->Touched(end_->contact->body) : "static";
+    result.events.push_back({end_->contact->t, "collision", result.collided_with});
   }
   for (const auto& [k, v] : acc.notes) result.notes[k] = v;
   return result;

@@ -24,6 +24,7 @@
 #include "workers/sim/depth_camera.h"
 #include "workers/sim/episode_config.h"
 #include "workers/sim/episode_monitor.h"
+#include "workers/sim/episode_movers.h"
 #include "workers/sim/link_registry.h"
 #include "workers/sim/nav_link.h"
 #include "workers/sim/odometry_noise.h"
@@ -43,6 +44,7 @@ struct PreparedWorld {
   worlds::World world;
   std::shared_ptr<const EmbreeScene> scene;
   std::shared_ptr<const StaticCollisionWorld> collision;
+  std::shared_ptr<const PreparedMovers> movers;  ///< null without movers (workers/sim/episode_movers.h)
   std::size_t triangles = 0;
 };
 std::shared_ptr<const PreparedWorld> PrepareWorld(worlds::World world);
@@ -174,6 +176,7 @@ class Episode {
   navstack::VehicleState estimate_;  ///< what the stack and the controller are told (odometry_)
   std::optional<WindField> wind_;    ///< the spec's air; none in still air
   std::optional<OdometryNoise> odometry_;  ///< the spec's odometry noise; none: the truth
+  std::optional<EpisodeMovers> movers_;    ///< the world's movers; none in a static world
   Eigen::Vector3d p_ref_;      ///< the reference position the controller tracks
   double next_frame_t_ = 0;
   std::int64_t frame_index_ = 0;

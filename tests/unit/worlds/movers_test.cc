@@ -219,12 +219,23 @@ TEST(MoverGeneratorTest, EachMoverScenarioHasAMoverCrossingTheStraightLine) {
   }
 }
 
+TEST(MoverGeneratorTest, MoversZeroIsTheSameWorldWithoutThem) {
+  for (const char* id : {"park-people", "street-traffic"}) {
+    World with = Generate(id, 3);
+    const World without = Generate(id, 3, {{"movers", "0"}});
+    EXPECT_TRUE(without.movers.empty()) << id;
+    with.movers.clear();
+    with.metadata.params = without.metadata.params;
+    EXPECT_EQ(WorldToYaml(with), WorldToYaml(without)) << id;
+  }
+}
+
 TEST(MoverGeneratorTest, StreetTrafficIsS4WithVans) {
   World traffic = Generate("street-traffic", 2);
   const World s4 = Generate("s4", 2);
   EXPECT_EQ(traffic.objects.size(), s4.objects.size());
   traffic.movers.clear();
-  traffic.metadata = s4.metadata;
+  traffic.metadata = s4.metadata;  // names the scenario, and its `movers` parameter
   EXPECT_EQ(WorldToYaml(traffic), WorldToYaml(s4)) << "the static city is s4's, the vans are drawn after it";
 }
 

@@ -1,0 +1,80 @@
+// Episodes in worlds with movers (issue 45 part 2): a Gazebo actor flown moving, collisions with
+// a mover told apart from the static world's, and the same spec giving the same bytes.
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "api/episode.h"
+#include "tests/integration/loop_test_util.h"
+#include "workers/sim/episode.h"
+#include "worlds/movers.h"
+#include "worlds/resolve.h"
+
+namespace enavi::integration {
+namespace {
+
+//   top view (y up):   S (-6,0) ------------------------------ G (6,0)
+//                                <<<< runner, from x = 6 to x = -8 along y = 0 at 4 m/s
+// A hand-written Gazebo world whose actor runs the start-goal line head-on at the vehicle: it
+// starts beyond the goal, so a vehicle that met it where it stood at t = 0 would be at the goal.
+constexpr const char* kRunnerWorld = R"(<?xml version="1.0"?>
+<sdf version="1.6"><world name="runner">
+  <include><uri>model://ground_plane</uri></include>
+  <actor name="runner">
+    <link name="body"><pose>0 0 1 0 0 0</pose>
+      <collision name="c"><geometry><box><size>0.6 1.6 2</size></box></geometry></collision>
+    </link>
+    <script><loop>false</loop><delay_start>1</delay_start>
+      <trajectory id="0" type="run">
+        <waypoint><time>0</time><pose>7 0 0 0 0 3.1416</pose></waypoint>
+        <waypoint><time>3.75</time><pose>-8 0 0 0 0 3.1416</pose></waypoint>
+      </trajectory>
+    </script>
+  </actor>
+</world></sdf>
+)";
+
+api::EpisodeSpec RunnerSpec(const TempDir& dir) {
+  api::EpisodeSpec spec = Spec(dir.Write("runner.sdf", kRunnerWorld).string(), 1);
+  spec.start = api::Vec3{-6, 0, 1.5};
+  spec.goal = api::Vec3{6, 0, 1.5};
+  spec.timeout_s = 20;
+  return spec;
+}
+
+TEST(MoversEpisodeTest, AnSdfActorMovesInTheFlightAndWhatWasHitIsNamed) {
+  const TempDir dir;
+  const api::EpisodeSpec spec = RunnerSpec(dir);
+  const api::EpisodeResult r = sim::RunEpisode(spec);
+  EXPECT_EQ(r.notes.at("movers"), "1");
+  // Nothing static stands between start and goal: a collision can only be the runner, met
+  // between the two, far from x = 7 where it stood when the flight began.
+  ASSERT_TRUE(r.collided) << Describe(r);
+  EXPECT_EQ(r.collided_with, "mover:runner") << Describe(r);
+  ASSERT_TRUE(r.collision_point.has_value());
+  EXPECT_LT((*r.collision_point)[0], 4.0) << Describe(r);
+  EXPECT_GT((*r.collision_point)[0], -6.5) << Describe(r);
+  const nlohmann::json summary = api::ResultSummaryJson(r);
+  EXPECT_EQ(summary["collided_with"], "mover:runner");
+  EXPECT_EQ(summary["collided_mover"], true);
+}
+
+// A static collision says "static": CollisionTest in episode_loop_test.cc.
+
+TEST(MoversEpisodeTest, SameSpecTwiceGivesIdenticalJsonWithMovers) {
+  // park-people: people on footpaths, one timed to cross the line when the flight gets there.
+  api::EpisodeSpec spec = Spec("park-people", 2, {{"length", "24"}});
+  spec.method = "fixed";
+  spec.timeout_s = 5;
+  const auto world = sim::PrepareWorld(worlds::ResolveWorld(sim::WorldRequestOf(spec)));
+  ASSERT_FALSE(world->world.movers.empty());
+  // One run reuses a prepared world (no state carried over), the other regenerates it.
+  const api::EpisodeResult first = sim::RunEpisode(spec, *world);
+  const api::EpisodeResult second = sim::RunEpisode(spec);
+  ASSERT_GT(first.series.size(), 40u) << Describe(first);
+  EXPECT_EQ(nlohmann::json(first).dump(), nlohmann::json(second).dump());
+}
+
+}  // namespace
+}  // namespace enavi::integration
