@@ -66,6 +66,41 @@ TEST(TopDownViewTest, ObstaclesAreShadedByTopHeightAndTallOnesStayOnTop) {
   ExpectColor(at(0, -7), Rgb{0.93, 0.95, 0.89}, 0.02, "open ground");
 }
 
+// The scene with a walker going back and forth from (0, -8) to (0, 8) at 1 m/s: its track is a
+// dashed purple line, and DrawMoversAt puts its footprint where it is at that time.
+TEST(TopDownViewTest, MoversTracksAreDrawnAndTheirShapesWhereTheyAreAtATime) {
+  worlds::World w = Scene();
+  worlds::Mover walker;
+  walker.name = "walker";
+  walker.shape.emplace_back(MakeBox({0, 0, 0.9}, {1.0, 1.0, 1.8}));
+  walker.waypoints.resize(2);
+  walker.waypoints[0].position = {0, -8, 0};
+  walker.waypoints[1].position = {0, 8, 0};
+  walker.speed = 1.0;
+  walker.mode = worlds::MoverMode::kBackAndForth;
+  w.movers.push_back(walker);
+  const Rgb purple{0.55, 0.22, 0.78};
+  TopDownView view(w);
+  // Dashes: along the track, some pixels are the track's colour and some are the ground's.
+  int track = 0, ground = 0;
+  for (double y = -6; y <= 6; y += 0.05) {
+    const Eigen::Vector2i p = Px(view, 0.0, y);
+    const Rgb c = view.canvas().Pixel(p.x(), p.y());
+    track += std::abs(c.r - purple.r) + std::abs(c.g - purple.g) + std::abs(c.b - purple.b) < 0.1 ? 1 : 0;
+    ground += std::abs(c.g - 0.95) < 0.02 ? 1 : 0;
+  }
+  EXPECT_GT(track, 20) << "the track";
+  EXPECT_GT(ground, 20) << "dashed, not solid";
+  // At t = 12 s it is at y = 4 on its way: its footprint, filled, covers the track there.
+  view.DrawMoversAt(12.0, "movers at 12 s");
+  for (const double y : {3.7, 4.0, 4.3}) {
+    const Eigen::Vector2i p = Px(view, 0.2, y);
+    ExpectColor(view.canvas().Pixel(p.x(), p.y()), Rgb{0.66, 0.42, 0.84}, 0.05, "the walker's footprint at 12 s");
+  }
+  const Eigen::Vector2i off = Px(view, 0.2, -4.0);
+  ExpectColor(view.canvas().Pixel(off.x(), off.y()), Rgb{0.93, 0.95, 0.89}, 0.02, "not where it was at 4 s");
+}
+
 TEST(TopDownViewTest, StartIsGreenAndGoalIsRed) {
   const TopDownView view(Scene());
   const Eigen::Vector2i s = Px(view, -16, 0), g = Px(view, 16, 0);

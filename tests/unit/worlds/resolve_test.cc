@@ -70,7 +70,8 @@ TEST(ResolveTest, UnknownWorldIsNamed) {
   WorldRequest r;
   r.world = "moon";
   EXPECT_EQ(ErrorOf(r),
-            "world: 'moon' is neither a scenario (s1, s2, s3, s4, s5, canyon, forest, empty) nor a world "
+            "world: 'moon' is neither a scenario (s1, s2, s3, s4, s5, canyon, forest, empty, park-people, "
+            "street-traffic) nor a world "
             "file (.yaml, .obj, .gltf, .glb, .dae, .stl, .ply, .fbx, .sdf, .world)");
 }
 
