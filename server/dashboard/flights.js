@@ -15,7 +15,17 @@ const PANELS = [
                                                     {name: 'f_col', of: s => s.f_col, step: true},
                                                     {name: 'f_dif', of: s => s.f_dif, step: true}]},
   {title: 'map resolution', unit: 'm', columns: [{name: 'res', of: s => s.res, step: true}]},
+  // Only flights in wind or with noisy odometry have these columns (docs/air.md).
+  {title: 'wind speed at the vehicle', unit: 'm/s', optional: 'wind_speed',
+   columns: [{name: 'wind', of: s => s.wind_speed || []}]},
+  {title: 'odometry error', unit: 'm', optional: 'odometry_error',
+   columns: [{name: '|estimate - truth|', of: s => s.odometry_error || []}]},
 ];
+
+// The panels a set of flights has data for: the optional ones when any flight has the column.
+function panelsOf(seriesList) {
+  return PANELS.filter(p => !p.optional || seriesList.some(s => (s[p.optional] || []).length > 0));
+}
 
 const ZOOM_HINT = 'drag across a chart to zoom in time (the flight\'s other charts follow), double-click to zoom out; ' +
                   'hover for the values';
@@ -52,7 +62,7 @@ async function episodePage(id) {
                  ['path m', fmt(r.path_length_m)], ['nav CPU %', fmt(r.nav_cpu_util_pct)],
                  ['velocity std m/s', fmt(r.velocity_std_mps)], ['deadline misses', r.deadline_misses]];
   const notes = Object.entries(r.notes || {}).filter(([k]) => k.startsWith('provenance.'));
-  const charts = PANELS.map(p => Plots.timeSeries({
+  const charts = panelsOf([s]).map(p => Plots.timeSeries({
     title: p.title, unit: p.unit, events, group: 'episode',
     series: p.columns.map(c => ({name: c.name, x: s.t, y: c.of(s), step: c.step}))}));
   const evRows = events.slice(0, 300).map(e => el('tr', {}, el('td', {class: 'num'}, fmt(e.t)), el('td', {}, e.kind),
@@ -90,7 +100,7 @@ function overlayCharts(ids, results, group) {
   const names = flightNames(ids, results);
   const charts = [Plots.paths({title: 'paths from above',
                                paths: results.map((r, i) => ({name: names[i], dash: FLIGHT_DASH[i], ...pathOf(r)}))})];
-  for (const p of PANELS) {
+  for (const p of panelsOf(results.map(r => r.series))) {
     for (const c of p.columns) {
       charts.push(Plots.timeSeries({
         title: p.columns.length > 1 ? `${p.title}: ${c.name}` : p.title, unit: p.unit, group,

@@ -109,7 +109,7 @@ class CompareCliTest(unittest.TestCase):
         self.assertIn(bad + ":3: metrics.flight_time_s.rel: must be >= 0.0 (got -1)", r.stderr)
         r = self.compare(self.db, self.base)
         self.assertEqual(r.returncode, 2)
-        self.assertIn("holds 7 jobs; name one as", r.stderr)  # seed_dashboard_db's seven
+        self.assertIn("holds 8 jobs; name one as", r.stderr)  # seed_dashboard_db's eight
         r = self.compare(self.db + ":jnope", self.base)
         self.assertEqual(r.returncode, 2)
         self.assertIn("has no job 'jnope'", r.stderr)

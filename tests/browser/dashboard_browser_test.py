@@ -416,6 +416,17 @@ class DashboardBrowserTest(PageChecks, unittest.TestCase):
         for c in self.charts():
             self.assertEqual(c["xRange"], full, c["title"])
 
+    def test_a_flight_in_wind_with_noisy_odometry_charts_both_and_a_still_one_neither(self):
+        self.open("#/episode/%s-00000" % self.ids["windy"])
+        charts = self.assert_charts_drew(7)
+        titles = [c["title"] for c in charts]
+        self.assertEqual(titles[5:], ["wind speed at the vehicle (m/s)", "odometry error (m)"])
+        for c in charts[5:]:
+            series = [d for d in c["datasets"] if d["role"] == "series"]
+            self.assertEqual([d["n"] for d in series], [50], c)
+        self.open("#/episode/%s-00000" % self.ids["oneseed_base"])
+        self.assertEqual(len(self.assert_charts_drew(5)), 5)
+
     def test_overlay_of_the_other_method_chosen_on_the_episode_page(self):
         base = self.ids["base"]
         self.open("#/episode/%s-00000" % base)

@@ -11,8 +11,10 @@
 //   crashes-1  suite=crashes  tx2 x s1 x baseline x 7 seeds: seed 7 collides with 400 deadline
 //                             misses (the others 50), so mean ± std of success passes 1 and of
 //                             collided and deadline misses 0
-// Prints {"base", "candidate", "hostile", "oneseed_base", "oneseed_candidate", "ros", "crashes"}
-// job ids as JSON.
+//   windy-1    suite=windy    tx2 x s1 x enavi, one seed, in 4 m/s wind with moderate turbulence
+//                             and typical odometry noise: the wind_speed and odometry_error columns
+// Prints {"base", "candidate", "hostile", "oneseed_base", "oneseed_candidate", "ros", "crashes",
+// "windy"} job ids as JSON.
 // seed_dashboard_db DB --pending-ros: only ros-1, submitted and never flown (no worker offers ros).
 #include <iostream>
 #include <string>
@@ -91,13 +93,18 @@ int main(int argc, char** argv) {
       store, "name: crashes-1\nlabels: {suite: crashes}\nboards: [tx2]\nscenarios: [s1]\nmethods: [baseline]\n"
              "seeds: 7\nepisode_overrides:\n  - match: {seed: 7}\n    overrides: {fake.deadline_misses: 400}\n",
       t0 + 6 * 86400000);
+  const std::string windy = enavi::testing::SeedJob(
+      store, "name: windy-1\nlabels: {suite: windy}\nboards: [tx2]\nscenarios: [s1]\nmethods: [enavi]\nseeds: 1\n"
+             "wind: {speed_mps: 4, turbulence: moderate}\nodometry_noise: typical\n",
+      t0 + 7 * 86400000);
   std::cout << nlohmann::json{{"base", base},
                               {"candidate", candidate},
                               {"hostile", hostile},
                               {"oneseed_base", oneseed_base},
                               {"oneseed_candidate", oneseed_candidate},
                               {"ros", ros},
-                              {"crashes", crashes}}
+                              {"crashes", crashes},
+                              {"windy", windy}}
                    .dump()
             << "\n";
   return 0;

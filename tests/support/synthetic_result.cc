@@ -65,6 +65,9 @@ api::EpisodeResult SyntheticResult(const api::EpisodeSpec& spec, int series_len)
     r.series.f_dif.push_back(10);
     r.series.res.push_back(enavi ? 0.2 : 0.1);
     r.series.utilisation.push_back(r.nav_cpu_util_pct);
+    // The air and the odometry's columns only where the spec has them, as a flight records them.
+    if (spec.wind.Active()) r.series.wind_speed.push_back(spec.wind.speed_mps + 1.5 * std::sin(t));
+    if (spec.odometry_noise != "none") r.series.odometry_error.push_back(0.01 * t);
   }
   return r;
 }
