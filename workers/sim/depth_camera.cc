@@ -36,8 +36,7 @@ class FlushDenormalsScope {
 
 struct RenderSetup {
   RTCScene scene;
-  /// Triangle planes by top-level geometry: [0] the world's (hit directly or through its
-  /// instance), [k] mover k - 1's at this frame (MovingScene).
+  /// Triangle planes by geometry: [0] the world's, or mover i's at this frame (MovingScene).
   const std::vector<const std::vector<Eigen::Vector4d>*>& planes;
   const PixelRays& rays;
   CameraRayFrame frame;
@@ -51,15 +50,19 @@ struct RenderSetup {
 // approximate reciprocal, whose last bits depend on the CPU's vendor (embree_scene.h); the
 // distance is recomputed here in double from the plane of the triangle Embree found, so only
 // which triangle a ray hits comes from Embree.
-float PixelDepth(const RenderSetup& s, unsigned geom, unsigned inst, unsigned prim, float dir_x, float dir_y,
-                 float dir_z, float t_embree) {
-  if (geom == RTC_INVALID_GEOMETRY_ID) return navstack::DepthImage::kNoReturn;
-  const Eigen::Vector4d& plane = (*s.planes[inst != RTC_INVALID_GEOMETRY_ID ? inst : geom])[prim];
+float HitDistance(const RenderSetup& s, unsigned geom, unsigned prim, float dir_x, float dir_y, float dir_z,
+                  float t_embree) {
+  const Eigen::Vector4d& plane = (*s.planes[geom])[prim];
   const double along = plane.x() * dir_x + plane.y() * dir_y + plane.z() * dir_z;
   const double t = (plane.w() - plane.head<3>().dot(s.origin)) / along;
   // A ray Embree hit is not parallel to the triangle; keep its distance if it somehow was.
-  const float depth = std::isfinite(t) ? static_cast<float>(t) : t_embree;
-  return DepthOrNoReturn(true, depth, s.min_range, s.max_range);
+  return std::isfinite(t) ? static_cast<float>(t) : t_embree;
+}
+
+float PixelDepth(const RenderSetup& s, unsigned geom, unsigned prim, float dir_x, float dir_y, float dir_z,
+                 float t_embree) {
+  if (geom == RTC_INVALID_GEOMETRY_ID) return navstack::DepthImage::kNoReturn;
+  return DepthOrNoReturn(true, HitDistance(s, geom, prim, dir_x, dir_y, dir_z, t_embree), s.min_range, s.max_range);
 }
 
 RTCIntersectContext CoherentContext() {
@@ -93,10 +96,9 @@ void RenderSingle(const RenderSetup& s) {
     for (int u = 0; u < s.width; ++u) {
       FillRay(s, u, v, &rh.ray);
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(s.scene, &context, &rh);
-      s.depth[v * s.width + u] = PixelDepth(s, rh.hit.geomID, rh.hit.instID[0], rh.hit.primID, rh.ray.dir_x,
-                                            rh.ray.dir_y, rh.ray.dir_z, rh.ray.tfar);
+      s.depth[v * s.width + u] =
+          PixelDepth(s, rh.hit.geomID, rh.hit.primID, rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z, rh.ray.tfar);
     }
   }
 }
@@ -142,7 +144,6 @@ void RenderPackets(const RenderSetup& s, IntersectN intersect) {
           rh.ray.dir_z[j] = (ex.z() * x + ey.z() * y) + ez.z();
           rh.ray.tfar[j] = s.max_range;
           rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
-          rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
         }
       }
       intersect(valid, s.scene, &context, &rh);
@@ -150,8 +151,8 @@ void RenderPackets(const RenderSetup& s, IntersectN intersect) {
         float* row = s.depth + static_cast<std::size_t>(v0 + dv) * s.width + u0;
         for (int du = 0; du < TW && u0 + du < s.width; ++du) {
           const int j = dv * TW + du;
-          row[du] = PixelDepth(s, rh.hit.geomID[j], rh.hit.instID[0][j], rh.hit.primID[j], rh.ray.dir_x[j],
-                               rh.ray.dir_y[j], rh.ray.dir_z[j], rh.ray.tfar[j]);
+          row[du] = PixelDepth(s, rh.hit.geomID[j], rh.hit.primID[j], rh.ray.dir_x[j], rh.ray.dir_y[j],
+                               rh.ray.dir_z[j], rh.ray.tfar[j]);
         }
       }
     }
@@ -171,7 +172,6 @@ void RenderStream(const RenderSetup& s) {
         for (int du = 0; du < tw; ++du, ++m) {
           FillRay(s, u0 + du, v0 + dv, &rh[m].ray);
           rh[m].hit.geomID = RTC_INVALID_GEOMETRY_ID;
-          rh[m].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         }
       }
       rtcIntersect1M(s.scene, &context, rh.data(), static_cast<unsigned>(m), sizeof(RTCRayHit));
@@ -180,8 +180,7 @@ void RenderStream(const RenderSetup& s) {
         for (int du = 0; du < tw; ++du, ++m) {
           const RTCRay& ray = rh[m].ray;
           s.depth[(v0 + dv) * s.width + u0 + du] =
-              PixelDepth(s, rh[m].hit.geomID, rh[m].hit.instID[0], rh[m].hit.primID, ray.dir_x, ray.dir_y,
-                         ray.dir_z, ray.tfar);
+              PixelDepth(s, rh[m].hit.geomID, rh[m].hit.primID, ray.dir_x, ray.dir_y, ray.dir_z, ray.tfar);
         }
       }
     }
@@ -193,10 +192,11 @@ double UnitOpenClosed(std::uint64_t bits) {
   return static_cast<double>((bits >> 11) + 1) * 0x1.0p-53;
 }
 
-// One frame of `camera` traced in `scene`, whose triangles' planes are `planes` (RenderSetup).
+// One frame of `camera` traced in `scene`, whose triangles' planes are `planes` (RenderSetup),
+// before the sensor's noise.
 void Trace(const DepthCamera& camera, RTCScene scene, RTCDevice device,
            const std::vector<const std::vector<Eigen::Vector4d>*>& planes, const Eigen::Isometry3d& X_WC,
-           DepthImage* out, std::uint64_t noise_seed) {
+           DepthImage* out) {
   if (out == nullptr) throw std::invalid_argument("DepthCamera::Render: out is null");
   if (!X_WC.matrix().allFinite()) {
     throw std::invalid_argument("DepthCamera::Render: X_WC is not finite");
@@ -233,7 +233,107 @@ void Trace(const DepthCamera& camera, RTCScene scene, RTCDevice device,
     }
   }
   ThrowIfEmbreeError(device, "rtcIntersect");
-  ApplyDepthNoise(camera.noise(), k, noise_seed, out);
+}
+
+// The pixels whose rays can meet the box: the image of its part in front of the camera (its
+// corners there and where its edges cross the plane just in front of the camera, projected,
+// with a pixel of margin). Empty when it is out of view or beyond max_range (where a mover gives
+// no return, as the sky does).
+struct PixelRect {
+  int u0 = 0, u1 = -1, v0 = 0, v1 = -1;
+};
+PixelRect ImageOf(const Eigen::AlignedBox3d& box_W, const Eigen::Isometry3d& X_CW, const CameraIntrinsics& k) {
+  constexpr double kNear = 1e-3;  // m: the plane the box is clipped at
+  Eigen::Vector3d c[8];
+  double z_min = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 8; ++i) {
+    c[i] = X_CW * box_W.corner(static_cast<Eigen::AlignedBox3d::CornerType>(i));
+    z_min = std::min(z_min, c[i].z());
+  }
+  if (z_min > k.max_range) return {};
+  double u_min = std::numeric_limits<double>::infinity(), u_max = -u_min, v_min = u_min, v_max = -u_min;
+  const auto add = [&](const Eigen::Vector3d& p) {
+    const double u = k.fx * p.x() / p.z() + k.cx - 0.5, v = k.fy * p.y() / p.z() + k.cy - 0.5;
+    u_min = std::min(u_min, u);
+    u_max = std::max(u_max, u);
+    v_min = std::min(v_min, v);
+    v_max = std::max(v_max, v);
+  };
+  for (int i = 0; i < 8; ++i) {
+    if (c[i].z() >= kNear) add(c[i]);
+    for (int bit = 1; bit < 8; bit <<= 1) {  // the box's edges: corners one bit apart
+      const int j = i | bit;
+      if (j == i || (c[i].z() >= kNear) == (c[j].z() >= kNear)) continue;
+      const double s = (kNear - c[i].z()) / (c[j].z() - c[i].z());
+      add(c[i] + s * (c[j] - c[i]));
+    }
+  }
+  if (!(u_min <= u_max)) return {};  // all behind the camera
+  PixelRect r;
+  r.u0 = static_cast<int>(std::max(0.0, std::floor(u_min) - 1));
+  r.u1 = static_cast<int>(std::min(k.width - 1.0, std::ceil(u_max) + 1));
+  r.v0 = static_cast<int>(std::max(0.0, std::floor(v_min) - 1));
+  r.v1 = static_cast<int>(std::min(k.height - 1.0, std::ceil(v_max) + 1));
+  return r;
+}
+
+// The movers over the static world's frame in `out`: the rays of the pixels that can meet a
+// mover (each mover's image rectangle) traced against the movers alone; a mover nearer than what
+// the world put on the pixel takes it (nearer than min_range it hides what is behind it, as any
+// surface does). Where the world left no return, its ray is traced again to know whether it was
+// open sky or a surface too near.
+void OverlayMovers(const DepthCamera& camera, const MovingScene::Impl& m, const Eigen::Isometry3d& X_WC,
+                   DepthImage* out) {
+  const CameraIntrinsics& k = camera.intrinsics();
+  const Eigen::Isometry3d X_CW = X_WC.inverse();
+  std::vector<PixelRect> rects;
+  for (const Eigen::AlignedBox3d& box : m.bounds_W) {
+    const PixelRect r = ImageOf(box, X_CW, k);
+    if (r.u0 <= r.u1 && r.v0 <= r.v1) rects.push_back(r);
+  }
+  if (rects.empty()) return;
+  const PixelRays rays(k);
+  const CameraRayFrame frame(X_WC);
+  const std::vector<const std::vector<Eigen::Vector4d>*> world_planes = {&m.world->impl().planes};
+  const auto setup = [&](RTCScene scene, const std::vector<const std::vector<Eigen::Vector4d>*>& planes) {
+    return RenderSetup{scene,   planes, rays, frame, k.width, k.height, static_cast<float>(k.min_range),
+                       static_cast<float>(k.max_range), out->data.data(), frame.origin.cast<double>()};
+  };
+  const RenderSetup movers = setup(m.movers, m.planes), world = setup(m.world->impl().scene, world_planes);
+  std::vector<bool> traced(rects.size() > 1 ? static_cast<std::size_t>(k.width) * k.height : 0);
+  FlushDenormalsScope flush;
+  RTCIntersectContext context = CoherentContext();
+  RTCRayHit rh;
+  for (const PixelRect& r : rects) {
+    for (int v = r.v0; v <= r.v1; ++v) {
+      for (int u = r.u0; u <= r.u1; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * k.width + u;
+        if (!traced.empty()) {
+          if (traced[i]) continue;  // in an earlier mover's rectangle too
+          traced[i] = true;
+        }
+        FillRay(movers, u, v, &rh.ray);
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(m.movers, &context, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        const float t = HitDistance(movers, rh.hit.geomID, rh.hit.primID, rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z,
+                                    rh.ray.tfar);
+        float& pixel = out->data[i];
+        float behind = pixel;  // what the world put there
+        if (pixel == DepthImage::kNoReturn) {
+          FillRay(world, u, v, &rh.ray);
+          rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+          rtcIntersect1(world.scene, &context, &rh);
+          behind = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID
+                       ? std::numeric_limits<float>::infinity()
+                       : HitDistance(world, rh.hit.geomID, rh.hit.primID, rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z,
+                                     rh.ray.tfar);
+        }
+        if (t < behind) pixel = DepthOrNoReturn(true, t, movers.min_range, movers.max_range);
+      }
+    }
+  }
+  ThrowIfEmbreeError(m.device, "rtcIntersect1");
 }
 
 }  // namespace
@@ -279,12 +379,18 @@ DepthCamera::DepthCamera(const CameraIntrinsics& intrinsics, const DepthNoise& n
 void DepthCamera::Render(const EmbreeScene& scene, const Eigen::Isometry3d& X_WC,
                          DepthImage* out, std::uint64_t noise_seed) const {
   const std::vector<const std::vector<Eigen::Vector4d>*> planes = {&scene.impl().planes};
-  Trace(*this, scene.impl().scene, scene.impl().device, planes, X_WC, out, noise_seed);
+  Trace(*this, scene.impl().scene, scene.impl().device, planes, X_WC, out);
+  ApplyDepthNoise(noise_, intrinsics_, noise_seed, out);
 }
 
 void DepthCamera::Render(const MovingScene& scene, const Eigen::Isometry3d& X_WC, DepthImage* out,
                          std::uint64_t noise_seed) const {
-  Trace(*this, scene.impl().scene, scene.impl().device, scene.impl().planes, X_WC, out, noise_seed);
+  // The static world exactly as without movers, then the movers where they can be seen.
+  const MovingScene::Impl& m = scene.impl();
+  const std::vector<const std::vector<Eigen::Vector4d>*> planes = {&m.world->impl().planes};
+  Trace(*this, m.world->impl().scene, m.world->impl().device, planes, X_WC, out);
+  OverlayMovers(*this, m, X_WC, out);
+  ApplyDepthNoise(noise_, intrinsics_, noise_seed, out);
 }
 
 void ApplyDepthNoise(const DepthNoise& noise, const CameraIntrinsics& intrinsics,

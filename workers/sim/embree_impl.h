@@ -28,12 +28,13 @@ struct EmbreeScene::Impl {
 
 struct MovingScene::Impl {
   RTCDevice device = nullptr;
-  RTCScene scene = nullptr;  ///< top level: geometry 0 the world's instance, k the mover k - 1
-  std::shared_ptr<const EmbreeScene> world;  ///< kept alive: its scene is instanced here
+  RTCScene movers = nullptr;  ///< the movers alone: geometry i is mover i
+  std::shared_ptr<const EmbreeScene> world;  ///< the static world, rendered as without movers
   std::vector<worlds::TriangleMesh> local;   ///< movers' triangles in their own frames
   std::vector<RTCGeometry> geometries;       ///< movers' Embree triangle geometries
   std::vector<std::vector<Eigen::Vector4d>> mover_planes;  ///< at the last poses, as EmbreeScene's
-  std::vector<const std::vector<Eigen::Vector4d>*> planes;  ///< by top-level geometry id
+  std::vector<const std::vector<Eigen::Vector4d>*> planes;  ///< mover_planes by geometry id
+  std::vector<Eigen::AlignedBox3d> bounds_W;  ///< each mover's vertices at the last poses
   ~Impl();
 };
 

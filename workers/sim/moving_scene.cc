@@ -10,7 +10,7 @@ namespace enavi::sim {
 
 MovingScene::Impl::~Impl() {
   for (RTCGeometry g : geometries) rtcReleaseGeometry(g);
-  if (scene) rtcReleaseScene(scene);
+  if (movers) rtcReleaseScene(movers);
 }
 
 MovingScene::MovingScene(std::shared_ptr<const EmbreeScene> world, const std::vector<worlds::TriangleMesh>& mover_meshes,
@@ -21,24 +21,13 @@ MovingScene::MovingScene(std::shared_ptr<const EmbreeScene> world, const std::ve
   RTCDevice device = embree_device.impl().device;
   s.device = device;
   s.world = std::move(world);
-  s.scene = rtcNewScene(device);
+  s.movers = rtcNewScene(device);
   ThrowIfEmbreeError(device, "rtcNewScene");
   // Rebuilt every frame: fast builds; robust as the world's scene (no seams seen through).
-  rtcSetSceneFlags(s.scene, RTC_SCENE_FLAG_DYNAMIC | RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(s.scene, RTC_BUILD_QUALITY_LOW);
+  rtcSetSceneFlags(s.movers, RTC_SCENE_FLAG_DYNAMIC | RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(s.movers, RTC_BUILD_QUALITY_LOW);
 
-  // Geometry 0: the world's committed scene, instanced as it is.
-  RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
-  ThrowIfEmbreeError(device, "rtcNewGeometry");
-  rtcSetGeometryInstancedScene(instance, s.world->impl().scene);
-  const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
-  rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
-  rtcCommitGeometry(instance);
-  rtcAttachGeometryByID(s.scene, instance, 0);
-  rtcReleaseGeometry(instance);
-  ThrowIfEmbreeError(device, "rtcAttachGeometryByID");
-
-  // Geometry k: mover k - 1's triangles, in Embree's own buffers (rewritten per frame).
+  // Geometry i: mover i's triangles, in Embree's own buffers (rewritten per frame).
   s.local = mover_meshes;
   s.mover_planes.resize(mover_meshes.size());
   for (std::size_t i = 0; i < mover_meshes.size(); ++i) {
@@ -61,10 +50,9 @@ MovingScene::MovingScene(std::shared_ptr<const EmbreeScene> world, const std::ve
       for (int k = 0; k < 3; ++k) indices[3 * t + k] = static_cast<unsigned>(mesh.triangles[t][k]);
     }
     s.geometries.push_back(g);
-    rtcAttachGeometryByID(s.scene, g, static_cast<unsigned>(i + 1));
+    rtcAttachGeometryByID(s.movers, g, static_cast<unsigned>(i));
     ThrowIfEmbreeError(device, "rtcAttachGeometryByID");
   }
-  s.planes.push_back(&s.world->impl().planes);
   for (const auto& p : s.mover_planes) s.planes.push_back(&p);
   SetPoses(std::vector<Eigen::Isometry3d>(mover_meshes.size(), Eigen::Isometry3d::Identity()));
 }
@@ -79,6 +67,7 @@ void MovingScene::SetPoses(const std::vector<Eigen::Isometry3d>& X_WM) {
     throw std::invalid_argument("MovingScene::SetPoses: " + std::to_string(X_WM.size()) + " poses for " +
                                 std::to_string(s.geometries.size()) + " movers");
   }
+  s.bounds_W.assign(X_WM.size(), Eigen::AlignedBox3d());
   for (std::size_t i = 0; i < X_WM.size(); ++i) {
     const worlds::TriangleMesh& mesh = s.local[i];
     auto* vertices = static_cast<float*>(rtcGetGeometryBufferData(s.geometries[i], RTC_BUFFER_TYPE_VERTEX, 0));
@@ -87,6 +76,7 @@ void MovingScene::SetPoses(const std::vector<Eigen::Isometry3d>& X_WM) {
     for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
       const Eigen::Vector3d p = X_WM[i] * mesh.vertices[v].cast<double>();
       for (int k = 0; k < 3; ++k) vertices[3 * v + k] = static_cast<float>(p[k]);
+      s.bounds_W[i].extend(p);
     }
     auto& planes = s.mover_planes[i];
     planes.clear();
@@ -102,7 +92,7 @@ void MovingScene::SetPoses(const std::vector<Eigen::Isometry3d>& X_WM) {
     rtcUpdateGeometryBuffer(s.geometries[i], RTC_BUFFER_TYPE_VERTEX, 0);
     rtcCommitGeometry(s.geometries[i]);
   }
-  rtcCommitScene(s.scene);
+  rtcCommitScene(s.movers);
   ThrowIfEmbreeError(s.device, "rtcCommitScene");
 }
 

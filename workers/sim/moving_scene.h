@@ -12,11 +12,13 @@
 
 namespace enavi::sim {
 
-/// One episode's Embree scene of a world with movers: the world's static scene as an instance
-/// (shared and untouched, so its BVH is built once per world) and each mover's triangles, moved
-/// to the mover's pose by SetPoses and committed (a small BVH rebuilt per frame). A world
-/// without movers renders its EmbreeScene directly and never pays for this. Mutable: one
-/// episode, one thread; SetPoses, then DepthCamera::Render.
+/// One episode's Embree scenes of a world with movers: the world's static scene (shared and
+/// untouched, so its BVH is built once per world) and a scene of the movers alone, their
+/// triangles moved to the movers' poses by SetPoses and committed (a small BVH rebuilt per
+/// frame). DepthCamera renders the static scene as it would without movers, then traces again
+/// only the pixels whose rays can meet a mover (the image of the movers' bounding box): a frame
+/// with no mover in view costs what the static world's does. Mutable: one episode, one thread;
+/// SetPoses, then DepthCamera::Render.
 class MovingScene {
  public:
   struct Impl;

@@ -68,6 +68,32 @@ TEST(MovingSceneTest, TheCameraSeesAMoverWhereItWasLastPosed) {
   EXPECT_NEAR(image.at(320, 240), 4.0 - std::sqrt(0.5), 0.01) << "(the pixel is half a pixel off the edge)";
 }
 
+// The movers are traced over the static world's frame: against open sky, behind a wall and
+// nearer than the camera's minimum range, each pixel is what a surface there would give.
+TEST(MovingSceneTest, AMoverIsSeenAgainstTheSkyHiddenBehindAWallAndBlindsTheCameraUpClose) {
+  worlds::TriangleMesh wall;  // a wall left of the view's centre only: open sky at the centre
+  testing::AddAlignedBox(&wall, {6, 1, -5}, {7, 20, 5});
+  const auto world = std::make_shared<const EmbreeScene>(wall);
+  MovingScene scene(world, {Cube()});
+  const DepthCamera camera(CameraIntrinsics::Default());
+  const CameraIntrinsics k = CameraIntrinsics::Default();
+  DepthImage image;
+
+  scene.SetPoses({At(4, 0, 1)});
+  camera.Render(scene, Camera(), &image);
+  EXPECT_NEAR(image.at(320, 240), 3.5, 1e-4) << "the cube against open sky";
+
+  scene.SetPoses({At(10, 3, 1)});  // behind the wall, in the wall's part of the view
+  camera.Render(scene, Camera(), &image);
+  DepthImage alone;
+  camera.Render(*world, Camera(), &alone);
+  EXPECT_EQ(image.data, alone.data) << "a mover behind the wall changes no pixel";
+
+  scene.SetPoses({At(0.5 + 0.5 * k.min_range, 0, 1)});  // near face at min_range / 2
+  camera.Render(scene, Camera(), &image);
+  EXPECT_EQ(image.at(320, 240), DepthImage::kNoReturn) << "too near to measure, and it hides the sky";
+}
+
 TEST(MovingSceneTest, EveryRayModeSeesTheSameImage) {
   worlds::TriangleMesh park = testing::MakeClutteredPark(3, 120);
   const auto world = std::make_shared<const EmbreeScene>(park);
