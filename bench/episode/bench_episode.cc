@@ -1,7 +1,7 @@
 // bench_episode: whole-episode throughput and where an episode's host CPU goes.
 //
 //   bench_episode [--world ID]... [--board ID]... [--method ID] [--param k=v]... [--set k=v]...
-//                 [--seed N] [--no-replay]
+//                 [--seed N] [--no-replay] [--turbulence LEVEL] [--odometry-noise PRESET]
 //   (default: --world s1 --world s2 --board host --board tx2 --method baseline --seed 1)
 //
 // --param sets world parameters, --set the episode's tunables (as `enavi fly --set`, e.g.
@@ -21,7 +21,11 @@
 //     separately, so the CPU outside the navstack can be attributed;
 //   - for a world with movers, the price of the movers: the same world without them flown too,
 //     and the replay of the mover flight's path once with the movers (moved per physics step
-//     and per frame) and once without, as ratios (movers_vs_static; issue 45 asks for <= 1.2).
+//     and per frame) and once without, as ratios (movers_vs_static; issue 45 asks for <= 1.2);
+//   - with --turbulence or --odometry-noise, the price of the air and the odometry: the wind
+//     field and the odometry noise stepped alone as often as the episode stepped them (host CPU
+//     per physics step, against the episode's), and the same episode flown in still air with
+//     perfect odometry (air_vs_still).
 // Host CPU is the calling thread's CPU time (clock_gettime(CLOCK_THREAD_CPUTIME_ID)): immune to
 // other processes' load; wall-clock rates are not, so run on a quiet machine.
 #include <sys/resource.h>
@@ -35,6 +39,7 @@
 #include <cstring>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -48,7 +53,9 @@
 #include "workers/sim/episode.h"
 #include "workers/sim/episode_config.h"
 #include "workers/sim/episode_movers.h"
+#include "workers/sim/odometry_noise.h"
 #include "workers/sim/quadrotor.h"
+#include "workers/sim/wind.h"
 #include "worlds/resolve.h"
 
 namespace enavi {
@@ -159,10 +166,57 @@ Replay ReplayWithoutNavstack(const api::EpisodeSpec& spec, const sim::PreparedWo
   return r;
 }
 
+// What wind and odometry noise cost: each model stepped alone as often as the episode stepped it
+// (the wind every physics step at the flight's altitude and speed, the odometry's error at every
+// frame and applied every step), and the same episode in still air with perfect odometry.
+nlohmann::json PriceOfTheAir(const api::EpisodeSpec& spec, const sim::PreparedWorld& world,
+                             const api::EpisodeResult& result, double episode_cpu_s) {
+  const sim::EpisodeOptions defaults;
+  const long steps = std::lround(result.sim_time_s / defaults.physics_dt);
+  const Eigen::Vector3d v_W(1.8, 0.0, 0.0);  // cruise
+  double wind_s = 0, odometry_s = 0;
+  if (spec.wind.Active()) {
+    sim::WindField air(spec.wind, defaults.physics_dt, spec.seed);
+    Eigen::Vector3d sink = Eigen::Vector3d::Zero();
+    const double c0 = ThreadCpuSeconds();
+    for (long k = 0; k < steps; ++k) sink += air.Step(1.5, v_W);
+    wind_s = ThreadCpuSeconds() - c0;
+    if (!sink.allFinite()) throw std::runtime_error("wind: not finite");
+  }
+  if (spec.odometry_noise != "none") {
+    sim::OdometryNoise noise(sim::OdometryNoisePreset(spec.odometry_noise), spec.seed);
+    navstack::VehicleState truth;
+    double sink = 0;
+    const long frame_every = std::lround(1.0 / 30.0 / defaults.physics_dt);
+    const double c0 = ThreadCpuSeconds();
+    for (long k = 0; k < steps; ++k) {
+      if (k % frame_every == 0) noise.Update(k * defaults.physics_dt);
+      sink += noise.Apply(truth).p_WB.x();
+    }
+    odometry_s = ThreadCpuSeconds() - c0;
+    if (!std::isfinite(sink)) throw std::runtime_error("odometry: not finite");
+  }
+  api::EpisodeSpec still = spec;
+  still.wind = {};
+  still.odometry_noise = "none";
+  const double c0 = ThreadCpuSeconds();
+  const api::EpisodeResult calm = sim::RunEpisode(still, world);
+  const double calm_cpu = ThreadCpuSeconds() - c0;
+  const double per_step = episode_cpu_s / std::max(1L, steps);
+  return {{"turbulence", spec.wind.turbulence},
+          {"odometry_noise", spec.odometry_noise},
+          {"wind_us_per_step", 1e6 * wind_s / std::max(1L, steps)},
+          {"odometry_us_per_step", 1e6 * odometry_s / std::max(1L, steps)},
+          {"share_of_episode_cpu", (wind_s + odometry_s) / std::max(1L, steps) / per_step},
+          {"still_episode", {{"end_reason", calm.end_reason}, {"sim_s", calm.sim_time_s}, {"cpu_s", calm_cpu}}},
+          // Host CPU per sim second, in this air over still air (different flights: noisy).
+          {"episode_cpu_per_sim_s_ratio", (episode_cpu_s / result.sim_time_s) / (calm_cpu / calm.sim_time_s)}};
+}
+
 nlohmann::json Bench(const std::string& world_id, const std::map<std::string, std::string>& params,
                      const std::map<std::string, double>& overrides, const std::string& board,
                      const std::string& method, std::uint64_t seed, const sim::PreparedWorld& world, bool replay,
-                     const sim::PreparedWorld* static_twin) {
+                     const sim::PreparedWorld* static_twin, const api::WindSpec& wind, const std::string& odometry) {
   api::EpisodeSpec spec;
   spec.world = world_id;
   spec.world_params = params;
@@ -170,6 +224,8 @@ nlohmann::json Bench(const std::string& world_id, const std::map<std::string, st
   spec.seed = seed;
   spec.board = board;
   spec.method = method;
+  spec.wind = wind;
+  spec.odometry_noise = odometry;
 
   std::array<TaskCpu, navstack::kTaskCount> tasks{};
   sim::EpisodeOptions options;
@@ -264,6 +320,7 @@ nlohmann::json Bench(const std::string& world_id, const std::map<std::string, st
         {"replay_physics_us_per_step", {{"movers", 1e6 * with.physics_s / std::max(1.0, with.steps)},
                                         {"static", 1e6 * without.physics_s / std::max(1.0, without.steps)}}}};
   }
+  if (spec.wind.Active() || spec.odometry_noise != "none") j["air_vs_still"] = PriceOfTheAir(spec, world, result, cpu);
   return j;
 }
 
@@ -278,6 +335,8 @@ int main(int argc, char** argv) {
   std::string method = "baseline";
   std::uint64_t seed = 1;
   bool replay = true;
+  api::WindSpec wind;
+  std::string odometry = "none";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
@@ -315,10 +374,22 @@ int main(int argc, char** argv) {
       overrides[kv.substr(0, eq)] = v;
     } else if (a == "--no-replay") {
       replay = false;
+    } else if (a == "--turbulence" && has_value) {
+      wind.turbulence = argv[++i];
+      if (const std::string e = api::WindSpecError(wind); !e.empty()) {
+        std::fprintf(stderr, "--turbulence: %s\n", e.c_str());
+        return 2;
+      }
+    } else if (a == "--odometry-noise" && has_value) {
+      odometry = argv[++i];
+      if (const std::string e = api::OdometryNoiseError(odometry); !e.empty()) {
+        std::fprintf(stderr, "--odometry-noise: %s\n", e.c_str());
+        return 2;
+      }
     } else {
       std::fprintf(stderr,
                    "usage: bench_episode [--world ID]... [--board ID]... [--method ID] [--param k=v]... [--set k=v]...\n"
-                   "                     [--seed N] [--no-replay]\n");
+                   "                     [--seed N] [--no-replay] [--turbulence LEVEL] [--odometry-noise PRESET]\n");
       return a == "--help" ? 0 : 2;
     }
   }
@@ -342,7 +413,7 @@ int main(int argc, char** argv) {
         static_twin = sim::PrepareWorld(std::move(without));
       }
       for (const std::string& board : boards) {
-        nlohmann::json run = Bench(id, params, overrides, board, method, seed, *world, replay, static_twin.get());
+        nlohmann::json run = Bench(id, params, overrides, board, method, seed, *world, replay, static_twin.get(), wind, odometry);
         run["prepare_world_cpu_s"] = prepare_s;  // once per world, not part of the episode
         std::fprintf(stderr, "%s on %s: %.1f sim s in %.1f wall s, %.1f %% of the episode's CPU outside the navstack\n",
                      id.c_str(), board.c_str(), run["sim_s"].get<double>(), run["wall_s"].get<double>(),
