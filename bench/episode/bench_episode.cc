@@ -144,7 +144,7 @@ Replay ReplayWithoutNavstack(const api::EpisodeSpec& spec, const sim::PreparedWo
       if (movers) camera.Render(movers->SceneAt(t), X_WC, &image, noise_seed);
       else camera.Render(*world.scene, X_WC, &image, noise_seed);
       const double c1 = ThreadCpuSeconds();
-      navstack::ComputeEci(image, config.nav.camera, X_WC.linear().transpose() * ref.v, config.nav.eci);
+      navstack::ComputeEci(image, config.nav.camera, X_WC.linear().transpose() * ref.v, navstack::EciOptions{});
       const double c2 = ThreadCpuSeconds();
       r.render_s += c1 - c0;
       r.eci_s += c2 - c1;

@@ -17,7 +17,6 @@
 #include <vector>
 
 #include "navstack/methods/navigator.h"
-#include "navstack/rl/policy_io.h"
 #include "navstack/runtime/executor.h"
 #include "navstack/runtime/task.h"
 #include "navstack/runtime/virtual_executor.h"
@@ -40,11 +39,16 @@ struct MethodScheduler {
   int threads = 0;
 };
 
-/// What the episode hands a method's Configure() besides the common options.
+/// What the episode hands a method besides its tunables (ConfigureMethod copies it into the
+/// MethodOptions the factory reads).
 struct MethodSetup {
   std::uint64_t seed = 1;
   /// The frequency-adapter policy, loaded for methods with `uses_policy` (else null).
   std::shared_ptr<const rl::PolicyFile> policy;
+  /// Record a training rollout (methods with `records_rollouts`).
+  bool record_rollout = false;
+  /// Frequency decisions taken outside the method, or null (methods with `uses_policy`).
+  rl::DecisionPort* decisions = nullptr;
 };
 
 /// One flight of `enavi calibrate` (workers/board/calibration_flights.h): a scenario and overrides
@@ -77,10 +81,12 @@ struct MethodInfo {
   /// compare`, the dashboard), by TaskId: lower-case letters, digits and '_', distinct. A method
   /// whose tasks are other work than our stack's names them for what they are.
   std::array<std::string, kTaskCount> task_keys = {"perception", "planning", "collision", "difference", "eci", "adapter"};
-  /// Sets the method's part of the options (rates, strategy) before the tunables apply.
-  std::function<void(const MethodSetup&, NavStackOptions*)> configure;
-  /// Builds the method on `executor`; the vehicle hovers at `initial` until its first plan.
-  std::function<std::unique_ptr<Navigator>(const NavStackOptions&, TaskExecutor*, const VehicleState&)> make;
+  /// Checks the setup and sets the method's defaults of the common options (planner.*) before
+  /// the overrides apply; optional.
+  std::function<void(const MethodSetup&, MethodOptions*)> configure;
+  /// Builds the method on `executor` from the common options and its tunables; the vehicle hovers
+  /// at `initial` until its first plan.
+  std::function<std::unique_ptr<Navigator>(const MethodOptions&, TaskExecutor*, const VehicleState&)> make;
 };
 
 }  // namespace enavi::navstack

@@ -35,9 +35,9 @@ const std::vector<Setter>& Setters() {
          c.nav.planner.optimizer = v > 0 ? PlannerOptimizer::kRebound : PlannerOptimizer::kEsdf;
        }},
       {{"perception.stride", 1, 64, 2, true, "depth pixel stride for mapping"},
-       [](MethodConfig& c, double v) { c.nav.perception.stride = static_cast<int>(v); }},
+       [](MethodConfig& c, double v) { c.nav.perception_stride = static_cast<int>(v); }},
       {{"perception.max_range", 1.0, 10.0, 5.0, false, "mapping range, m"},
-       [](MethodConfig& c, double v) { c.nav.perception.max_range = v; }},
+       [](MethodConfig& c, double v) { c.nav.perception_max_range = v; }},
       {{"sched.threads", 0, 64, 0, true, "threads the jobs run on (0: the method's default; capped at the board's cores)"},
        [](MethodConfig& c, double v) {
          if (v > 0) c.scheduler.threads = static_cast<int>(v);

@@ -15,7 +15,7 @@ namespace enavi::navstack {
 
 struct MethodConfig {
   const MethodInfo* method = nullptr;
-  NavStackOptions nav;
+  MethodOptions nav;
   /// The method's scheduler, with the sched.* overrides applied (threads 0: all cores).
   MethodScheduler scheduler;
 };

@@ -86,9 +86,12 @@ void RegisterMethod(MethodInfo method) {
   methods.push_back(std::move(method));
 }
 
-void ConfigureMethod(const MethodInfo& info, const MethodSetup& setup, NavStackOptions* options) {
+void ConfigureMethod(const MethodInfo& info, const MethodSetup& setup, MethodOptions* options) {
   if (info.configure) info.configure(setup, options);
   options->seed = setup.seed;
+  options->policy = setup.policy;
+  options->record_rollout = setup.record_rollout;
+  options->decisions = setup.decisions;
   for (const MethodTunable& t : info.tunables) options->params[t.name] = t.default_value;
 }
 

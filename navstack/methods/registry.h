@@ -25,6 +25,6 @@ void RegisterMethod(MethodInfo method);
 std::vector<MethodInfo> BuiltinMethodList();
 
 /// Options for method `info`: configure(), then its tunables' defaults in options->params.
-void ConfigureMethod(const MethodInfo& info, const MethodSetup& setup, NavStackOptions* options);
+void ConfigureMethod(const MethodInfo& info, const MethodSetup& setup, MethodOptions* options);
 
 }  // namespace enavi::navstack

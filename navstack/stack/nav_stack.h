@@ -15,8 +15,10 @@
 #include <Eigen/Geometry>
 
 #include "navstack/methods/navigator.h"
+#include "navstack/stack/nav_stack_options.h"
 #include "navstack/planning/collision_check.h"
 #include "navstack/planning/observed_space.h"
+#include "navstack/planning/planner.h"
 #include "navstack/runtime/executor.h"
 
 namespace enavi::navstack {

@@ -82,7 +82,7 @@ struct NodeCore::Impl {
   // Caller holds in_mutex. Builds and starts the method once everything it needs has arrived.
   void TryStartLocked() {
     if (running || !goal || !intrinsics || !state) return;
-    navstack::NavStackOptions options = config.nav;
+    navstack::MethodOptions options = config.nav;
     options.goal = *goal;
     options.flight_bounds = params.bounds;
     options.camera = *intrinsics;

@@ -89,9 +89,9 @@ TEST(EnaviLoopTest, AVehicleWhosePlansKeepFailingTurnsOnTheSpot) {
   navstack::MethodInfo starved = *navstack::FindMethod("fixed");
   starved.name = "fixed-starved-search";
   const auto make = starved.make;
-  starved.make = [make](const navstack::NavStackOptions& options, navstack::TaskExecutor* executor,
+  starved.make = [make](const navstack::MethodOptions& options, navstack::TaskExecutor* executor,
                         const navstack::VehicleState& initial) {
-    navstack::NavStackOptions o = options;
+    navstack::MethodOptions o = options;
     o.planner.max_search_iterations = 40;
     return make(o, executor, initial);
   };

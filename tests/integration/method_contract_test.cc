@@ -203,7 +203,7 @@ TEST(MethodRegistryTest, RefusesBrokenRegistrations) {
   m.name = "no_factory";
   m.cost_family = "navstack";
   EXPECT_THROW(navstack::RegisterMethod(m), std::invalid_argument);
-  m.make = [](const navstack::NavStackOptions&, navstack::TaskExecutor*, const navstack::VehicleState&) {
+  m.make = [](const navstack::MethodOptions&, navstack::TaskExecutor*, const navstack::VehicleState&) {
     return std::unique_ptr<navstack::Navigator>();
   };
   m.tunables = {{"x.y", 0, 1, 2, false, "default outside its range"}};

@@ -39,7 +39,7 @@ struct LinkShared {
 /// valid in the child because fork copied it.
 struct ChildArgs {
   const navstack::MethodInfo* method = nullptr;  ///< builds the navigator in the child
-  const navstack::NavStackOptions* options = nullptr;
+  const navstack::MethodOptions* options = nullptr;
   const navstack::VehicleState* initial = nullptr;
   int threads = 1;
   navstack::SchedulingPolicy policy = navstack::SchedulingPolicy::kGlobalEdf;

@@ -59,7 +59,7 @@ std::int64_t ToNs(Clock::time_point t) {
 struct EmulatedNavLink::Impl {
   // Configuration.
   const navstack::MethodInfo* method = nullptr;
-  navstack::NavStackOptions options;
+  navstack::MethodOptions options;
   navstack::VehicleState initial;
   int threads = 1;
   navstack::SchedulingPolicy policy = navstack::SchedulingPolicy::kGlobalEdf;
@@ -413,16 +413,16 @@ void EmulatedNavLink::Impl::Shutdown() {
 
 // ---------------------------------------------------------------------------------------------
 
-EmulatedNavLink::EmulatedNavLink(const navstack::MethodInfo& method, const navstack::NavStackOptions& options,
+EmulatedNavLink::EmulatedNavLink(const navstack::MethodInfo& method, const navstack::MethodOptions& options,
                                  int threads,
                                  navstack::SchedulingPolicy policy, const board::BoardProfile& board,
                                  double dilation, const navstack::VehicleState& initial,
                                  const EmulationOptions& emulation)
     : impl_(std::make_unique<Impl>()) {
   if (threads < 1) throw std::invalid_argument("emulated clock: threads must be >= 1");
-  if (options.strategy && options.strategy->record)
+  if (options.record_rollout && method.records_rollouts)
     throw std::invalid_argument("emulated clock: E-Navi rollouts (training) are recorded on the virtual clock only");
-  if (options.strategy && options.strategy->decisions)
+  if (options.decisions)
     throw std::invalid_argument("emulated clock: decisions taken outside the stack stop the virtual clock only");
   impl_->method = &method;
   impl_->options = options;

@@ -5,7 +5,7 @@
 //
 // Process model: the simulator fork()s itself once the world is loaded; the child runs only the
 // navstack (NavStack on a navstack::RealtimeExecutor) and _exit()s, never returning into the
-// simulator's code. fork without exec hands the child the exact NavStackOptions the episode
+// simulator's code. fork without exec hands the child the exact MethodOptions the episode
 // built (no second serialisation to keep in step with the stack), works the same under
 // `enavi fly`, the farm's `enavi fly` subprocesses and in-process tests, and the child's
 // address space is shared copy-on-write. The child waits on a pipe until it is inside the
@@ -45,7 +45,7 @@ class EmulatedNavLink final : public sim::NavLink {
   /// free CPUs. Throws std::invalid_argument when this host cannot emulate the board (no valid
   /// host calibration, no writable cgroup hierarchy, admission refused, board faster than the
   /// host), std::runtime_error when the navstack process fails to start.
-  EmulatedNavLink(const navstack::MethodInfo& method, const navstack::NavStackOptions& options, int threads,
+  EmulatedNavLink(const navstack::MethodInfo& method, const navstack::MethodOptions& options, int threads,
                   navstack::SchedulingPolicy policy,
                   const board::BoardProfile& board, double dilation, const navstack::VehicleState& initial,
                   const EmulationOptions& emulation = {});

@@ -47,7 +47,7 @@ std::map<std::string, std::string> ModelNotes(const EpisodeModel& m) {
   if (!m.world->world.metadata.import_note.empty()) notes["world_import"] = m.world->world.metadata.import_note;
   notes["depth_stream"] = std::to_string(m.config.nav.camera.width) + "x" + std::to_string(m.config.nav.camera.height);
   notes.merge(EpisodeProvenance(spec, m.board, m.config.method ? m.config.method->cost_family : "",
-                                m.config.nav.strategy.has_value()));
+                                m.config.method && m.config.method->uses_policy));
   return notes;
 }
 
@@ -128,11 +128,11 @@ EpisodeModel MakeEpisodeModel(const api::EpisodeSpec& spec, const PreparedWorld&
   CheckSpeedProbeMode(spec.speed_probe);
   board::BoardProfile board = board::LoadBoard(spec.board);
   EpisodeConfig config = MakeEpisodeConfig(spec);
-  if (options.rollout && config.nav.strategy) config.nav.strategy->record = true;
+  config.nav.record_rollout = options.rollout != nullptr;
   if (options.decisions) {
-    if (!config.nav.strategy)
+    if (!config.method->uses_policy)
       throw std::invalid_argument("method: '" + spec.method + "' takes no frequency decisions from outside");
-    config.nav.strategy->decisions = options.decisions;
+    config.nav.decisions = options.decisions;
   }
   const navstack::VehicleParams vehicle;
   DepthCamera camera(config.nav.camera, config.noise);
@@ -148,8 +148,8 @@ EpisodeModel MakeEpisodeModel(const api::EpisodeSpec& spec, const PreparedWorld&
   m.straight_line_m = (w.goal - w.start).norm();
   const Eigen::Vector3d to_goal = w.goal - w.start;
   m.start_yaw = std::atan2(to_goal.y(), to_goal.x());
-  // The stack's mission: this world's goal and bounds, obstacles inflated by at least the body.
-  navstack::NavStackOptions& nav = m.config.nav;
+  // The method's mission: this world's goal and bounds, obstacles inflated by at least the body.
+  navstack::MethodOptions& nav = m.config.nav;
   nav.goal = w.goal;
   nav.flight_bounds = w.bounds;
   nav.planner.robot_radius = std::max(nav.planner.robot_radius, vehicle.collision_radius);
@@ -202,7 +202,7 @@ void Episode::Sense(double t) {
   const Eigen::Vector3d v_C = frame->X_WC.linear().transpose() * vehicle_.v_WB;
   const double eci_cpu0 = navstack::ThreadCpuSeconds();
   const navstack::EciResult eci =
-      navstack::ComputeEci(frame->image, model_.config.nav.camera, v_C, model_.config.nav.eci, &eci_work);
+      navstack::ComputeEci(frame->image, model_.config.nav.camera, v_C, navstack::EciOptions{}, &eci_work);
   const double eci_cpu = navstack::ThreadCpuSeconds() - eci_cpu0;
   if (model_.options.job_observer) model_.options.job_observer(TaskId::kEci, eci_work, eci_cpu);
   const double board_s = link_->OffBoardSeconds(TaskId::kEci, eci_work, eci_cpu);

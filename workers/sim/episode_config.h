@@ -19,7 +19,7 @@ using SchedulerConfig = navstack::MethodScheduler;
 
 struct EpisodeConfig {
   const navstack::MethodInfo* method = nullptr;  ///< from the registry
-  navstack::NavStackOptions nav;
+  navstack::MethodOptions nav;
   SchedulerConfig scheduler;
   DepthNoise noise;
 };

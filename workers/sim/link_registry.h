@@ -41,7 +41,7 @@ struct LinkRequest {
   const board::BoardProfile* board = nullptr;
   /// kNavstackMethod: the method and its options (null for a stack of its own processes).
   const navstack::MethodInfo* method = nullptr;
-  const navstack::NavStackOptions* nav = nullptr;
+  const navstack::MethodOptions* nav = nullptr;
   int threads = 1;  ///< threads the jobs may use, at most the board's cores
   navstack::SchedulingPolicy policy = navstack::SchedulingPolicy::kGlobalEdf;
   navstack::VehicleState initial;  ///< hovering at the start

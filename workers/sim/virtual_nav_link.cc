@@ -13,7 +13,7 @@ std::unique_ptr<navstack::CostModel> MakeCostModel(const api::EpisodeSpec& spec,
   throw std::invalid_argument("cost: unknown cost mode '" + spec.cost + "' (known: model, measured)");
 }
 
-VirtualNavLink::VirtualNavLink(const navstack::MethodInfo& method, const navstack::NavStackOptions& options,
+VirtualNavLink::VirtualNavLink(const navstack::MethodInfo& method, const navstack::MethodOptions& options,
                                int threads, navstack::SchedulingPolicy policy,
                                std::unique_ptr<navstack::CostModel> cost, const navstack::VehicleState& initial,
                                navstack::JobObserver observer)

@@ -21,7 +21,7 @@ std::unique_ptr<navstack::CostModel> MakeCostModel(const api::EpisodeSpec& spec,
 
 class VirtualNavLink final : public NavLink {
  public:
-  VirtualNavLink(const navstack::MethodInfo& method, const navstack::NavStackOptions& options, int threads,
+  VirtualNavLink(const navstack::MethodInfo& method, const navstack::MethodOptions& options, int threads,
                  navstack::SchedulingPolicy policy,
                  std::unique_ptr<navstack::CostModel> cost, const navstack::VehicleState& initial,
                  navstack::JobObserver observer = {});

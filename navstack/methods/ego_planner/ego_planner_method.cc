@@ -43,27 +43,28 @@ MethodInfo EgoPlannerMethod() {
       {"ego.ray_break", 0, 1, 1, true, "1: a ray stops at the first voxel this frame already cleared (grid_map raycast)"},
       {"ego.dense_map", 0, 1, 1, true, "1: log-odds in dense blocks as grid_map's arrays, 0: OctoMap's octree (same cells, slower)"},
   };
-  m.configure = [](const MethodSetup&, NavStackOptions* o) {
+  m.configure = [](const MethodSetup&, MethodOptions* o) {
     // Ego-Planner's ESDF-free rebound optimisation (navstack/planning/README.md).
     o->planner.optimizer = PlannerOptimizer::kRebound;
-    // grid_map parameters of launch/advanced_param.xml.
-    o->map.prob_hit = 0.65;
-    o->map.prob_miss = 0.35;
-    o->map.clamp_min = 0.12;
-    o->map.clamp_max = 0.90;
-    o->map.occupancy_threshold = 0.80;
-    o->map.local_half_extent = Eigen::Vector3d(5.5, 5.5, 4.5);
-    o->perception.min_range = 0.2;  // depth_filter_mindist
-    o->perception.max_range = 4.5;  // max_ray_length (depth_filter_maxdist 5.0 cuts further returns)
   };
-  m.make = [](const NavStackOptions& options, TaskExecutor* executor, const VehicleState& initial) {
-    NavStackOptions o = options;
-    o.map.resolution = o.Param("map.resolution");
-    o.map.stop_at_traversed = o.Param("ego.ray_break") > 0;
+  m.make = [](const MethodOptions& o, TaskExecutor* executor, const VehicleState& initial) {
+    EgoPlannerOptions e;
+    // grid_map parameters of launch/advanced_param.xml.
+    e.map.prob_hit = 0.65;
+    e.map.prob_miss = 0.35;
+    e.map.clamp_min = 0.12;
+    e.map.clamp_max = 0.90;
+    e.map.occupancy_threshold = 0.80;
+    e.map.local_half_extent = Eigen::Vector3d(5.5, 5.5, 4.5);
+    e.map.resolution = o.Param("map.resolution");
+    e.map.stop_at_traversed = o.Param("ego.ray_break") > 0;
     // plan_env/src/grid_map.cpp keeps the log-odds in dense arrays (occupancy_buffer_). The
     // baseline never changes resolution, so the octree's cheap rebuilds buy it nothing.
-    o.map.storage = o.Param("ego.dense_map") > 0 ? MapStorage::kBlocks : MapStorage::kOctree;
-    EgoPlannerOptions e;
+    e.map.storage = o.Param("ego.dense_map") > 0 ? MapStorage::kBlocks : MapStorage::kOctree;
+    e.perception.min_range = 0.2;  // depth_filter_mindist
+    e.perception.max_range = 4.5;  // max_ray_length (depth_filter_maxdist 5.0 cuts further returns)
+    if (o.perception_stride) e.perception.stride = *o.perception_stride;
+    if (o.perception_max_range) e.perception.max_range = *o.perception_max_range;
     e.occupancy_hz = o.Param("ego.occupancy_hz");
     e.safety_hz = o.Param("ego.safety_hz");
     e.fsm_hz = o.Param("ego.fsm_hz");

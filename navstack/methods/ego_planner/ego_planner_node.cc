@@ -19,7 +19,7 @@ struct EgoPlannerNode::Attempt {
   int failed_tries = 0;
 };
 
-EgoPlannerNode::EgoPlannerNode(const NavStackOptions& options, const EgoPlannerOptions& ego, TaskExecutor* executor,
+EgoPlannerNode::EgoPlannerNode(const MethodOptions& options, const EgoPlannerOptions& ego, TaskExecutor* executor,
                                const VehicleState& initial)
     : options_(options),
       ego_(ego),
@@ -27,10 +27,10 @@ EgoPlannerNode::EgoPlannerNode(const NavStackOptions& options, const EgoPlannerO
       state_(initial),
       local_target_(initial.p_WB, options.goal, ego.planning_horizon) {
   options_.planner.Validate();
-  options_.flight_bounds.max().z() = std::min(options_.flight_bounds.max().z(), initial.p_WB.z() + options_.max_climb);
-  map_ = std::make_shared<OccupancyMap>(options_.map);
+  options_.flight_bounds.max().z() = std::min(options_.flight_bounds.max().z(), initial.p_WB.z() + ego_.max_climb);
+  map_ = std::make_shared<OccupancyMap>(ego_.map);
   // skip_pixel counts pixels of the full sensor frame; the stream may be decimated.
-  perception_ = options_.perception;
+  perception_ = ego_.perception;
   const int decimation = std::max(1, CameraIntrinsics::Default().width / std::max(1, options_.camera.width));
   perception_.stride = std::max(1, ego_.skip_pixel / decimation);
   const Eigen::Vector3d to_goal = options_.goal - initial.p_WB;

@@ -42,6 +42,9 @@
 #include <vector>
 
 #include "navstack/methods/navigator.h"
+#include "navstack/perception/occupancy_map.h"
+#include "navstack/perception/points.h"
+#include "navstack/planning/planner.h"
 #include "navstack/runtime/executor.h"
 
 namespace enavi::navstack {
@@ -65,6 +68,10 @@ struct EgoPlannerOptions {
   bool emergency_stop = true;      ///< 0: a hit never stops, it only replans
   bool check_two_thirds = true;    ///< 0: the safety check samples the whole remaining trajectory
   bool newest_frame_only = true;   ///< 0: the occupancy update inserts every frame since the last
+  MapOptions map;                  ///< grid_map's parameters
+  PerceptionOptions perception;    ///< depth filter range (the stride comes from skip_pixel)
+  /// Plans stay at most this far above the start, m (as our stack's NavStackOptions::max_climb).
+  double max_climb = 1.5;
 };
 
 /// getLocalTarget (ego_replan_fsm.cpp) on a one-segment global path, the straight line from the
@@ -91,7 +98,7 @@ class EgoPlannerNode final : public Navigator {
  public:
   enum class State { kGenNewTraj, kReplanTraj, kExecTraj, kWaitTarget, kEmergencyStop };
 
-  EgoPlannerNode(const NavStackOptions& options, const EgoPlannerOptions& ego, TaskExecutor* executor,
+  EgoPlannerNode(const MethodOptions& options, const EgoPlannerOptions& ego, TaskExecutor* executor,
                  const VehicleState& initial);
 
   void OnFrame(DepthFramePtr frame) override;
@@ -122,7 +129,7 @@ class EgoPlannerNode final : public Navigator {
   bool Land(const Attempt& attempt, const std::string& trigger);
   void AddEvent(std::string kind, std::string detail = {});
 
-  NavStackOptions options_;
+  MethodOptions options_;
   EgoPlannerOptions ego_;
   TaskExecutor* executor_;
   std::shared_ptr<OccupancyMap> map_;

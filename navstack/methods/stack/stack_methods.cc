@@ -57,14 +57,14 @@ MethodInfo FixedMethod() {
       {"map.resolution", 0.05, 1.0, 0.1, false, "map resolution, m"},
       ScanResetTunable(),
   };
-  m.configure = [](const MethodSetup&, NavStackOptions* o) { o->rates = FixedRates(); };
-  m.make = [](const NavStackOptions& options, TaskExecutor* executor, const VehicleState& initial) {
-    NavStackOptions o = options;
-    o.rates.f_per = o.Param("rates.f_per");
-    o.rates.f_plan = o.Param("rates.f_plan");
-    o.rates.f_dif = o.Param("rates.f_dif");
-    o.rates.resolution = o.map.resolution = o.Param("map.resolution");
-    o.scan_reset_distance = o.Param("scan.reset_distance");
+  m.make = [](const MethodOptions& options, TaskExecutor* executor, const VehicleState& initial) {
+    NavStackOptions o = StackOptionsFrom(options);
+    o.rates = FixedRates();
+    o.rates.f_per = options.Param("rates.f_per");
+    o.rates.f_plan = options.Param("rates.f_plan");
+    o.rates.f_dif = options.Param("rates.f_dif");
+    o.rates.resolution = o.map.resolution = options.Param("map.resolution");
+    o.scan_reset_distance = options.Param("scan.reset_distance");
     return std::unique_ptr<Navigator>(std::make_unique<NavStack>(o, executor, initial));
   };
   return m;
@@ -90,21 +90,22 @@ MethodInfo EnaviMethod() {
        "each map refinement step expires this long after its trigger (the map goes one level coarser), sim s"},
       ScanResetTunable(),
   };
-  m.configure = [](const MethodSetup& setup, NavStackOptions* o) {
+  m.configure = [](const MethodSetup& setup, MethodOptions*) {
     if (!setup.policy) throw std::invalid_argument("policy: method enavi needs a frequency-adapter policy");
-    o->rates = EnaviInitialRates();
-    StrategyOptions strategy;
-    strategy.policy = setup.policy;
-    strategy.seed = setup.seed;
-    o->strategy = strategy;
   };
-  m.make = [](const NavStackOptions& options, TaskExecutor* executor, const VehicleState& initial) {
-    NavStackOptions o = options;
-    o.strategy->mode = o.Param("strategy.explore") > 0 ? rl::ActMode::kSample : rl::ActMode::kGreedy;
-    o.strategy->choice = o.Param("strategy.least_load") > 0 ? rl::ActionChoice::kLeastLoad : rl::ActionChoice::kPolicy;
-    o.strategy->f_adapt = o.Param("strategy.f_adapt");
-    o.strategy->resolution.step_lifetime = o.Param("resolution.step_lifetime");
-    o.scan_reset_distance = o.Param("scan.reset_distance");
+  m.make = [](const MethodOptions& options, TaskExecutor* executor, const VehicleState& initial) {
+    NavStackOptions o = StackOptionsFrom(options);
+    o.rates = EnaviInitialRates();
+    StrategyOptions& strategy = o.strategy.emplace();
+    strategy.policy = options.policy;
+    strategy.seed = options.seed;
+    strategy.record = options.record_rollout;
+    strategy.decisions = options.decisions;
+    strategy.mode = options.Param("strategy.explore") > 0 ? rl::ActMode::kSample : rl::ActMode::kGreedy;
+    strategy.choice = options.Param("strategy.least_load") > 0 ? rl::ActionChoice::kLeastLoad : rl::ActionChoice::kPolicy;
+    strategy.f_adapt = options.Param("strategy.f_adapt");
+    strategy.resolution.step_lifetime = options.Param("resolution.step_lifetime");
+    o.scan_reset_distance = options.Param("scan.reset_distance");
     return std::unique_ptr<Navigator>(std::make_unique<NavStack>(o, executor, initial));
   };
   return m;

@@ -13,7 +13,7 @@ namespace {
 // Plans once from the start to the goal on an empty map and follows that.
 class StraightToGoal final : public Navigator {
  public:
-  StraightToGoal(const NavStackOptions& o, TaskExecutor* exec, const VehicleState& s0)
+  StraightToGoal(const MethodOptions& o, TaskExecutor* exec, const VehicleState& s0)
       : options_(o), exec_(exec), start_(s0) {
     exec_->Register(TaskId::kPlanning, [this] { return Plan(); });
     exec_->SetRate(TaskId::kPlanning, 1.0);
@@ -53,7 +53,7 @@ class StraightToGoal final : public Navigator {
     };
     return out;
   }
-  NavStackOptions options_;
+  MethodOptions options_;
   TaskExecutor* exec_;
   VehicleState start_;
   std::shared_ptr<const Trajectory> traj_;
@@ -72,7 +72,7 @@ MethodInfo StraightToGoalMethod() {
   m.task_keys[static_cast<int>(TaskId::kPlanning)] = "one_plan";
   m.task_labels[static_cast<int>(TaskId::kPlanning)] = "the one plan";
   m.tunables = {{"straight.unused", 0, 1, 0, true, "a tunable of its own"}};
-  m.make = [](const NavStackOptions& o, TaskExecutor* e, const VehicleState& s) {
+  m.make = [](const MethodOptions& o, TaskExecutor* e, const VehicleState& s) {
     return std::unique_ptr<Navigator>(std::make_unique<StraightToGoal>(o, e, s));
   };
   return m;

@@ -59,7 +59,7 @@ DepthFramePtr WallFrame(const CameraIntrinsics& camera, const Eigen::Vector3d& p
 Flight Fly(const CostModel& cost, std::map<std::string, double> params, double duration = 8.0,
            std::optional<double> wall_x = std::nullopt, double half_width = 10.0, int search_iterations = 5000) {
   const MethodInfo& method = *FindMethod("baseline");
-  NavStackOptions o;
+  MethodOptions o;
   ConfigureMethod(method, MethodSetup{}, &o);
   for (const auto& [k, v] : params) o.params[k] = v;
   o.goal = Eigen::Vector3d(30, 0, 1.5);

@@ -54,7 +54,7 @@ TEST(MethodConfigTest, OverridesSetWhatTheyNameOnTopOfTheMethodsDefaults) {
        {"sched.global_edf", 1}, {"rates.f_per", 20}});
   EXPECT_EQ(c.nav.planner.v_max, 1.5);
   EXPECT_EQ(c.nav.planner.optimizer, PlannerOptimizer::kRebound);
-  EXPECT_EQ(c.nav.perception.stride, 4);
+  EXPECT_EQ(c.nav.perception_stride.value_or(0), 4);
   EXPECT_EQ(c.scheduler.threads, 2);
   EXPECT_EQ(c.scheduler.policy, SchedulingPolicy::kGlobalEdf);
   EXPECT_EQ(c.nav.seed, 7u);
