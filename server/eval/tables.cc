@@ -17,6 +17,24 @@
 namespace enavi::server {
 namespace {
 
+// A result's scenario as the tables name it: a custom world by its file.
+std::string ScenarioName(const nlohmann::json& r) {
+  return r.value("scenario", "") == "custom" ? r.value("world", "") : r.value("scenario", "");
+}
+
+// The cells of a table by scenario and method, in the order first seen.
+template <typename Cell>
+struct ScenarioMethodCells {
+  std::vector<std::pair<std::string, std::string>> order;
+  std::map<std::pair<std::string, std::string>, Cell> cells;
+
+  Cell& Of(const nlohmann::json& r) {
+    const auto [it, added] = cells.try_emplace({ScenarioName(r), r.value("method", "")});
+    if (added) order.push_back(it->first);
+    return it->second;
+  }
+};
+
 using api::Fixed;
 
 // Characters on a terminal, not bytes: UTF-8 continuation bytes take no column ("±").
@@ -157,8 +175,7 @@ std::string PaperTable(const nlohmann::json& results) {
   std::map<std::pair<std::string, std::string>, Row> table;
   for (const auto& r : results) {
     const std::string board = r.value("board", ""), method = r.value("method", "");
-    const std::string scenario =
-        r.value("scenario", "") == "custom" ? r.value("world", "") : r.value("scenario", "");
+    const std::string scenario = ScenarioName(r);
     note(&boards, board);
     note(&methods, method);
     note(&scenarios, scenario);
@@ -421,14 +438,11 @@ std::string EciRangeTable(const nlohmann::json& results) {
     double lowest = 1.0, highest = 0.0;
     int without = 0;  // flights with no range: never took off, or stored before the field existed
   };
-  std::vector<std::pair<std::string, std::string>> order;  // (scenario, method), first seen
-  std::map<std::pair<std::string, std::string>, Cell> cells;
+  ScenarioMethodCells<Cell> table;
+  const auto& order = table.order;
+  const auto& cells = table.cells;
   for (const auto& r : results) {
-    const std::string scenario =
-        r.value("scenario", "") == "custom" ? r.value("world", "") : r.value("scenario", "");
-    const std::pair<std::string, std::string> key{scenario, r.value("method", "")};
-    if (cells.find(key) == cells.end()) order.push_back(key);
-    Cell& c = cells[key];
+    Cell& c = table.Of(r);
     const nlohmann::json eci = r.value("eci", nlohmann::json::object());
     if (eci.value("flight_frames", 0) <= 0) {
       ++c.without;
@@ -479,14 +493,11 @@ std::string RobustnessTable(const nlohmann::json& results) {
     Mean success, flight, tracking, cpu, difference;
     double static_hits = 0, mover_hits = 0;
   };
-  std::vector<std::pair<std::string, std::string>> order;  // (scenario, method), first seen
-  std::map<std::pair<std::string, std::string>, Cell> cells;
+  ScenarioMethodCells<Cell> table;
+  const auto& order = table.order;
+  const auto& cells = table.cells;
   for (const auto& r : results) {
-    const std::string scenario =
-        r.value("scenario", "") == "custom" ? r.value("world", "") : r.value("scenario", "");
-    const std::pair<std::string, std::string> key{scenario, r.value("method", "")};
-    if (cells.find(key) == cells.end()) order.push_back(key);
-    Cell& c = cells[key];
+    Cell& c = table.Of(r);
     const bool ok = r.value("success", false);
     c.success.Add(ok ? 1.0 : 0.0);
     if (ok) c.flight.Add(r.value("flight_time_s", 0.0));
