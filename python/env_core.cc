@@ -10,13 +10,21 @@
 
 namespace enavi::python {
 
-EnvCore::EnvCore(EnvConfig config) : config_(std::move(config)) {
+void CheckBoard(const std::string& board) {
   const std::vector<std::string> boards = sim::FarmCatalog().boards;
-  if (std::find(boards.begin(), boards.end(), config_.board) == boards.end()) {
+  if (std::find(boards.begin(), boards.end(), board) == boards.end()) {
     std::string known;
     for (const std::string& b : boards) known += (known.empty() ? "" : ", ") + b;
-    throw std::invalid_argument("board: unknown board '" + config_.board + "' (known: " + known + ")");
+    throw std::invalid_argument("board: unknown board '" + board + "' (known: " + known + ")");
   }
+}
+
+std::shared_ptr<const sim::PreparedWorld> PrepareSpecWorld(const api::EpisodeSpec& spec) {
+  return sim::PrepareWorld(worlds::ResolveWorld(sim::WorldRequestOf(spec)));
+}
+
+EnvCore::EnvCore(EnvConfig config) : config_(std::move(config)) {
+  CheckBoard(config_.board);
   if (config_.overrides.count("strategy.explore")) {
     throw std::invalid_argument("overrides: strategy.explore is the environment's (its actions are yours)");
   }
@@ -43,11 +51,7 @@ Transition EnvCore::Reset(std::uint64_t seed) {
   spec.overrides = config_.overrides;
   // Sampled decisions are the ones left to the caller.
   spec.overrides["strategy.explore"] = 1;
-  worlds::WorldRequest request;
-  request.world = spec.world;
-  request.seed = spec.seed;
-  request.params = spec.world_params;
-  world_ = sim::PrepareWorld(worlds::ResolveWorld(request));
+  world_ = PrepareSpecWorld(spec);
 
   decisions_ = std::make_unique<navstack::rl::DecisionPort>();
   rollout_ = std::make_unique<navstack::rl::Rollout>();  // recording makes the controller compute rewards

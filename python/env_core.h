@@ -41,6 +41,12 @@ struct Transition {
   double t = 0;             ///< decision index
 };
 
+/// The environments' common checks and pieces.
+/// @throws std::invalid_argument "board: unknown board '...' (known: ...)".
+void CheckBoard(const std::string& board);
+/// The world `spec` names, generated and prepared. @throws as worlds::ResolveWorld.
+std::shared_ptr<const sim::PreparedWorld> PrepareSpecWorld(const api::EpisodeSpec& spec);
+
 class EnvCore {
  public:
   /// @throws std::invalid_argument for an unknown board, or strategy.explore among the overrides.

@@ -4,8 +4,9 @@ checked two ways:
 
   sources: every #include in api/, worlds/, navstack/, workers/ and server/ against the layer
            rules, every project header a library's sources include against the library's link
-           closure (a target includes only its own headers and those of targets it links), and
-           no target outside bench/ links one of bench/;
+           closure (a target includes only its own headers and those of targets it links), no
+           target outside bench/ links one of bench/, and the method interface
+           (enavi::method_api, which every method links) links none of our stack's modules;
   depfiles: the compiler's dependency output (*.o.d under the build tree) of every navstack,
            workers, server and ros object, which also sees headers reached through other headers (a
            unity build's object counts for the sources it includes).
@@ -196,6 +197,23 @@ def check_bench_links(root):
     return problems
 
 
+# What every method links stays narrow: a method links our stack's perception, eci, RL, strategy
+# or the stack itself only when it uses them (docs/design.md).
+METHOD_API_FORBIDS = ("enavi_rl", "enavi_strategy", "enavi_eci", "enavi_perception", "enavi_adapt",
+                      "enavi_stack", "enavi_episode")
+
+
+def check_method_api(root):
+    """enavi_method_api's link closure holds none of METHOD_API_FORBIDS."""
+    targets = cmake_targets(root)
+    if "enavi_method_api" not in targets:
+        return []
+    reached = closure(targets, "enavi_method_api")
+    return [f"{targets['enavi_method_api']['dir']}/CMakeLists.txt: enavi_method_api links {name} (through "
+            f"its link closure): the method interface every method links must not pull in our stack's modules"
+            for name in METHOD_API_FORBIDS if name in reached]
+
+
 # --- The compiler's dependency output ---
 
 def depfile_deps(path):
@@ -290,7 +308,7 @@ def main():
     if args.only != "depfiles":
         problems += check_layers(args.source_dir)
         problems += check_targets(args.source_dir) + check_unused_links(args.source_dir)
-        problems += check_bench_links(args.source_dir)
+        problems += check_bench_links(args.source_dir) + check_method_api(args.source_dir)
     if args.only != "sources":
         dep_problems, depfiles = check_depfiles(args.source_dir, args.build_dir, args.depfile)
         problems += dep_problems

@@ -47,8 +47,10 @@ struct MethodSetup {
   std::shared_ptr<const rl::PolicyFile> policy;
   /// Record a training rollout (methods with `records_rollouts`).
   bool record_rollout = false;
-  /// Frequency decisions taken outside the method, or null (methods with `uses_policy`).
+  /// Decisions taken outside the method, or null (methods with `external_decisions`).
   rl::DecisionPort* decisions = nullptr;
+  /// The job's policy file (spec.policy; empty: none given), for methods with `uses_nav_policy`.
+  std::string policy_path;
 };
 
 /// One flight of `enavi calibrate` (workers/board/calibration_flights.h): a scenario and overrides
@@ -74,6 +76,10 @@ struct MethodInfo {
   /// flight on each of s1-s5 at its defaults.
   std::vector<MethodCalibrationFlight> calibration;
   bool uses_policy = false;      ///< reads a frequency-adapter policy (--policy)
+  bool uses_nav_policy = false;  ///< reads a navigation policy file (--policy, navstack/rl/nav_policy.h)
+  /// Can take its decisions from outside, one at a time (EpisodeOptions::decisions: the Python
+  /// environments).
+  bool external_decisions = false;
   bool records_rollouts = false;  ///< can record a training rollout
   /// What each task's CPU is for this method (results' per-task utilisation), by TaskId.
   std::array<std::string, kTaskCount> task_labels = {"perception", "planning", "collision", "difference", "eci", "adapter"};

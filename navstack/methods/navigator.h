@@ -57,8 +57,10 @@ struct MethodOptions {
   std::shared_ptr<const rl::PolicyFile> policy;
   /// Record a training rollout (methods with MethodInfo::records_rollouts; read by rollout()).
   bool record_rollout = false;
-  /// Frequency decisions taken outside the method (the Python env), or null.
+  /// Decisions taken outside the method (the Python envs), or null.
   rl::DecisionPort* decisions = nullptr;
+  /// The job's policy file for methods with MethodInfo::uses_nav_policy (empty: none given).
+  std::string policy_path;
   /// The method's own tunables by name (MethodInfo::tunables), defaults filled in and ranges
   /// checked by ConfigureMethod() and ApplyOverride().
   std::map<std::string, double> params;

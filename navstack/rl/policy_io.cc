@@ -8,10 +8,9 @@
 #include <vector>
 
 #include "api/atomic_file.h"
-#include "api/base64.h"
-#include "api/content_hash.h"
 #include "navstack/adapt/policy_state.h"
 #include "navstack/rl/json_read.h"
+#include "navstack/rl/weight_block.h"
 
 namespace enavi::navstack::rl {
 namespace {
@@ -44,78 +43,34 @@ void ForEachParameter(Net& net, Visit&& visit) {
 
 Eigen::Index ParameterCount(const ActorCritic& net) { return net.actor().num_params() + net.critic().num_params(); }
 
-const char* DtypeName(WeightPrecision p) { return p == WeightPrecision::kFloat32 ? "float32" : "float64"; }
-std::size_t DtypeBytes(WeightPrecision p) { return p == WeightPrecision::kFloat32 ? 4 : 8; }
+// The weights in kPolicyParameterLayout order, and the name of weight i (for errors).
+std::vector<double> Weights(const ActorCritic& net) {
+  std::vector<double> values;
+  values.reserve(static_cast<std::size_t>(ParameterCount(net)));
+  ForEachParameter(net, [&](double v, const auto&) { values.push_back(v); });
+  return values;
+}
+detail::WeightName WeightNames(const ActorCritic& net) {
+  return [&net](std::size_t i) {
+    std::string name;
+    std::size_t k = 0;
+    ForEachParameter(net, [&](double, const auto& spell) {
+      if (k++ == i) name = spell();
+    });
+    return name;
+  };
+}
 
-// Little-endian bytes of each weight at `precision`, whatever the host's byte order.
 json ParametersToJson(const ActorCritic& net, WeightPrecision precision) {
-  std::string bytes;
-  bytes.reserve(static_cast<std::size_t>(ParameterCount(net)) * DtypeBytes(precision));
-  ForEachParameter(net, [&](double v, const auto& name) {
-    if (!std::isfinite(v)) throw std::domain_error("policy: " + name() + " is not finite");
-    std::uint64_t bits = 0;
-    if (precision == WeightPrecision::kFloat32) {
-      const float f = static_cast<float>(v);
-      if (!std::isfinite(f)) throw std::domain_error("policy: " + name() + " is beyond float32's range");
-      bits = std::bit_cast<std::uint32_t>(f);
-    } else {
-      bits = std::bit_cast<std::uint64_t>(v);
-    }
-    for (std::size_t k = 0; k < DtypeBytes(precision); ++k) bytes.push_back(static_cast<char>((bits >> (8 * k)) & 0xff));
-  });
-  return {{"dtype", DtypeName(precision)},      {"byte_order", "little"},
-          {"encoding", "base64"},               {"layout", kPolicyParameterLayout},
-          {"count", ParameterCount(net)},       {"sha256", api::Sha256Hex(bytes)},
-          {"data", api::Base64Encode(bytes)}};
+  return detail::EncodeWeights(Weights(net), precision, kPolicyParameterLayout, WeightNames(net));
 }
 
 // Version 2: the "parameters" block into `net`, whose shapes the architecture already fixed.
 void ParametersFromJson(const json& j, const JsonReader& r, ActorCritic* net) {
-  const std::string f = "parameters";
-  r.Object(j, f);
-  const std::string dtype = r.String(r.Field(j, f, "dtype"), f + ".dtype");
-  if (dtype != "float32" && dtype != "float64") {
-    r.Fail(f + ".dtype", "expected \"float32\" or \"float64\", got \"" + dtype + "\"");
-  }
-  const WeightPrecision precision = dtype == "float32" ? WeightPrecision::kFloat32 : WeightPrecision::kFloat64;
-  const auto expect = [&](const char* key, const std::string& value) {
-    const std::string got = r.String(r.Field(j, f, key), f + "." + key);
-    if (got != value) r.Fail(f + "." + key, "expected \"" + value + "\", got \"" + got + "\"");
-  };
-  expect("byte_order", "little");
-  expect("encoding", "base64");
-  expect("layout", kPolicyParameterLayout);
-  const Eigen::Index count = ParameterCount(*net);
-  if (r.Integer(r.Field(j, f, "count"), f + ".count") != count) {
-    r.Fail(f + ".count", "expected " + std::to_string(count) + " (the architecture's weights and biases)");
-  }
-  const std::string sha256 = r.String(r.Field(j, f, "sha256"), f + ".sha256");
-  std::string bytes;
-  try {
-    bytes = api::Base64Decode(r.String(r.Field(j, f, "data"), f + ".data"));
-  } catch (const std::invalid_argument& e) {
-    r.Fail(f + ".data", e.what());
-  }
-  const std::size_t width = DtypeBytes(precision);
-  const std::size_t expected = static_cast<std::size_t>(count) * width;
-  if (bytes.size() != expected) {
-    r.Fail(f + ".data", std::string(bytes.size() < expected ? "truncated: " : "too long: ") +
-                            std::to_string(bytes.size()) + " bytes, expected " + std::to_string(expected) + " (" +
-                            std::to_string(count) + " " + dtype + " values)");
-  }
-  const std::string digest = api::Sha256Hex(bytes);
-  if (digest != sha256) {
-    r.Fail(f + ".sha256", "does not match the weights (their sha256 is " + digest + "): the file is damaged or was edited");
-  }
+  const std::vector<double> values = detail::DecodeWeights(
+      j, r, "parameters", static_cast<std::size_t>(ParameterCount(*net)), kPolicyParameterLayout, WeightNames(*net));
   std::size_t at = 0;
-  ForEachParameter(*net, [&](double& v, const auto& name) {
-    std::uint64_t bits = 0;
-    for (std::size_t k = 0; k < width; ++k) bits |= std::uint64_t{static_cast<unsigned char>(bytes[at + k])} << (8 * k);
-    at += width;
-    v = precision == WeightPrecision::kFloat32 ? static_cast<double>(std::bit_cast<float>(static_cast<std::uint32_t>(bits)))
-                                               : std::bit_cast<double>(bits);
-    if (!std::isfinite(v)) r.Fail(f + ".data", name() + " is not finite");
-  });
+  ForEachParameter(*net, [&](double& v, const auto&) { v = values[at++]; });
 }
 
 // Version 1: the layers of one network as nested arrays into `mlp`, whose sizes are already fixed

@@ -41,6 +41,7 @@
 
 #include "navstack/adapt/action_grid.h"
 #include "navstack/rl/policy.h"
+#include "navstack/rl/weight_block.h"
 
 namespace enavi::navstack::rl {
 
@@ -49,9 +50,6 @@ inline constexpr int kPolicyVersion = 2;
 /// The order of the weights in the "parameters" block.
 inline constexpr const char* kPolicyParameterLayout =
     "actor then critic; per layer the weights (out x in, row-major) then the bias";
-
-/// Width of the packed weights.
-enum class WeightPrecision { kFloat32, kFloat64 };
 
 /// A policy and what it means.
 struct PolicyFile {

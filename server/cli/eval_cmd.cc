@@ -38,6 +38,7 @@ struct EvalFlags {
   std::string preset;  ///< "paper" or empty
   std::vector<std::string> overrides;  ///< --set items
   std::vector<std::string> labels;     ///< --label items
+  std::vector<std::string> params;     ///< --param items
   std::vector<std::string> ros_stacks; ///< --ros-stack files
 };
 
@@ -86,6 +87,7 @@ void RunEvalCommand(EvalFlags f, const CLI::App& root, const CLI::App& sub) {
   ApplyPreset(&f, sub);
   ApplyOverrides(&f);
   f.options.labels = ParseNameValues("--label", f.labels);
+  f.options.world_params = ParseNameValues("--param", f.params);
   RequireEpisodeUnlessEpisodeCmd(root, f.options.episode_command);
   StopSignals signals;
   SetupLogging(f.verbose);
@@ -193,7 +195,10 @@ void RegisterEvalCommand(CLI::App& app) {
   sub->add_option("--set", f->overrides,
                   "override a tunable, NAME=VALUE for every listed method or METHOD:NAME=VALUE for one "
                   "(repeatable; `enavi fly --help` lists each method's tunables)");
-  sub->add_option("--policy", o.policy, "E-Navi's frequency-adapter policy file (default: the shipped one)");
+  sub->add_option("--policy", o.policy,
+                  "E-Navi's frequency-adapter policy file (default: the shipped one), or the learned method's "
+                  "nav policy file (one policy a job: fly learned in an eval of its own)");
+  sub->add_option("--param", f->params, "world generator parameter k=v of every scenario (repeatable)");
   sub->add_option("--label", f->labels,
                   "tag the job, KEY=VALUE (repeatable): the dashboard and `enavi compare` tell jobs apart by them");
   sub->add_option("--db", f->db, "keep the results in this SQLite database (default: temporary)");

@@ -238,7 +238,8 @@ void RegisterFlyCommand(CLI::App& app) {
       ->check(CLI::IsMember(std::vector<std::string>(api::kCostModes.begin(), api::kCostModes.end())));
   fly->add_option("--timeout", args->spec.timeout_s, "episode timeout in sim seconds (0: from the distance)")
       ->check(CLI::Range(0.0, api::kMaxTimeoutS));
-  fly->add_option("--policy", args->spec.policy, "E-Navi frequency-adapter policy (default: the shipped one)");
+  fly->add_option("--policy", args->spec.policy,
+                  "E-Navi frequency-adapter policy (default: the shipped one), or the learned method's nav policy");
   std::string tunables = "override a tunable, name=value (repeatable); every method's:";
   auto list = [&](const std::vector<sim::Tunable>& ts) {
     for (const auto& t : ts)

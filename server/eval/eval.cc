@@ -70,6 +70,8 @@ std::string FlagOf(const EvalOptions& o, const std::string& field) {
   if (is("dilation")) return "--dilation " + o.dilation;
   if (is("speed_probe")) return "--speed-probe " + o.speed_probe;
   if (is("policy")) return "--policy " + o.policy;
+  if (field.rfind("world_params.", 0) == 0) return "--param " + field.substr(13);
+  if (is("world_params")) return "--param";
   if (is("odometry_noise")) return "--odometry-noise " + o.odometry_noise;
   if (is("wind.gust.speed_mps")) return "--gust";
   if (is("wind.gust.direction_deg")) return "--gust-dir";
@@ -125,6 +127,10 @@ std::string EvalJobYaml(const EvalOptions& o) {
   // Also when asked for on the virtual clock, so that the job's check refuses it by name.
   if (o.clock == "emulated" || o.speed_probe != "check") y << "speed_probe: " << YamlQuoted(o.speed_probe) << "\n";
   if (!o.policy.empty()) y << "policy: " << YamlQuoted(o.policy) << "\n";
+  if (!o.world_params.empty()) {
+    y << "world_params:\n";
+    for (const auto& [k, v] : o.world_params) y << "  " << YamlQuoted(k) << ": " << YamlQuoted(v) << "\n";
+  }
   if (o.timeout_s > 0) y << "timeout_s: " << o.timeout_s << "\n";
   if (o.wind != api::WindSpec{}) {
     // Shortest text that reads back to the same double: the job flies exactly what was typed.

@@ -41,6 +41,7 @@ struct EvalOptions {
   api::WindSpec wind;  ///< every episode's air (the job's `wind`)
   std::string odometry_noise = "none";  ///< the job's `odometry_noise`
   std::map<std::string, std::string> labels;  ///< the job's labels (dashboard, `enavi compare`)
+  std::map<std::string, std::string> world_params;  ///< `--param k=v`: every scenario's generator (the job's `world_params`)
   /// `--set NAME=VALUE`: a tunable of every listed method (the job's `overrides`).
   std::map<std::string, double> overrides;
   /// `--set METHOD:NAME=VALUE`: a tunable of one method (an `episode_overrides` entry matching

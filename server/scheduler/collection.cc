@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "api/content_hash.h"
+#include "navstack/rl/nav_policy.h"
 #include "navstack/rl/policy_io.h"
 #include "server/scheduler/farm_server.h"
 #include "server/store/collect_store.h"
@@ -30,8 +31,12 @@ std::optional<CollectionInfo> PrepareCollection(Store* store, const api::JobSpec
         throw std::invalid_argument("policy: " + e.policy +
                                     ": a policy by hash is for collection jobs (collect: rollouts)");
       }
-      // Loaded once here, or a bad file fails every episode that flies it, each after its retries.
-      if (!e.policy.empty() && checked.insert(e.policy).second) navstack::rl::LoadFrequencyPolicy(e.policy);
+      // Loaded once here, or a bad file fails every episode that flies it, each after its retries:
+      // a nav policy (the learned method's) or a frequency policy, by its format.
+      if (!e.policy.empty() && checked.insert(e.policy).second) {
+        if (navstack::rl::IsNavPolicyFile(e.policy)) navstack::rl::LoadNavPolicy(e.policy);
+        else navstack::rl::LoadFrequencyPolicy(e.policy);
+      }
     }
     return std::nullopt;
   }

@@ -20,6 +20,7 @@
 
 #include "navstack/adapt/action_grid.h"
 #include "navstack/methods/registry.h"
+#include "navstack/rl/nav_policy.h"
 #include "navstack/rl/policy_io.h"
 #include "workers/sim/episode.h"
 
@@ -61,18 +62,28 @@ const char* const kScenarios[] = {"s1", "s2", "s3", "s4", "s5"};
 class ScratchPolicy {
  public:
   ScratchPolicy()
-      : path_((std::filesystem::temp_directory_path() / ("enavi-calibrate-policy-" + std::to_string(getpid()) + ".json"))
-                  .string()) {
+      : path_(Scratch("policy")), nav_path_(Scratch("nav-policy")) {
     navstack::rl::SavePolicyFile(path_, navstack::rl::MakeFrequencyPolicy(navstack::ActionGrid(), 1));
+    // A learned method's work does not depend on its weights: an untrained network at the
+    // default stream's size.
+    navstack::rl::SaveNavPolicy(nav_path_, navstack::rl::MakeNavPolicy(320, 240, 1));
   }
   ~ScratchPolicy() {
     std::error_code ec;
     std::filesystem::remove(path_, ec);
+    std::filesystem::remove(nav_path_, ec);
   }
-  const std::string& path() const { return path_; }
+  /// The file a method of `info` reads, or "".
+  std::string For(const navstack::MethodInfo& info) const {
+    return info.uses_policy ? path_ : info.uses_nav_policy ? nav_path_ : "";
+  }
 
  private:
-  std::string path_;
+  static std::string Scratch(const std::string& what) {
+    return (std::filesystem::temp_directory_path() / ("enavi-calibrate-" + what + "-" + std::to_string(getpid()) + ".json"))
+        .string();
+  }
+  std::string path_, nav_path_;
 };
 
 double LoadAverage() {
@@ -125,7 +136,7 @@ std::vector<JobSample> FlyMeasured(const std::vector<CalibrationFlight>& flights
     const navstack::MethodInfo* info = navstack::FindMethod(flight.method);
     if (info == nullptr) throw std::logic_error("calibration plan names an unknown method " + flight.method);
     family = info->cost_family;
-    if (info->uses_policy) spec.policy = policy.path();
+    spec.policy = policy.For(*info);
     spec.overrides = flight.overrides;
     if (on_flight) on_flight(flight);
     sim::RunEpisode(spec, episode);

@@ -47,7 +47,7 @@ std::map<std::string, std::string> ModelNotes(const EpisodeModel& m) {
   if (!m.world->world.metadata.import_note.empty()) notes["world_import"] = m.world->world.metadata.import_note;
   notes["depth_stream"] = std::to_string(m.config.nav.camera.width) + "x" + std::to_string(m.config.nav.camera.height);
   notes.merge(EpisodeProvenance(spec, m.board, m.config.method ? m.config.method->cost_family : "",
-                                m.config.method && m.config.method->uses_policy));
+                                m.config.method && (m.config.method->uses_policy || m.config.method->uses_nav_policy)));
   return notes;
 }
 
@@ -127,13 +127,7 @@ EpisodeModel MakeEpisodeModel(const api::EpisodeSpec& spec, const PreparedWorld&
                               const EpisodeOptions& options) {
   CheckSpeedProbeMode(spec.speed_probe);
   board::BoardProfile board = board::LoadBoard(spec.board);
-  EpisodeConfig config = MakeEpisodeConfig(spec);
-  config.nav.record_rollout = options.rollout != nullptr;
-  if (options.decisions) {
-    if (!config.method->uses_policy)
-      throw std::invalid_argument("method: '" + spec.method + "' takes no frequency decisions from outside");
-    config.nav.decisions = options.decisions;
-  }
+  EpisodeConfig config = MakeEpisodeConfig(spec, options.rollout != nullptr, options.decisions);
   const navstack::VehicleParams vehicle;
   DepthCamera camera(config.nav.camera, config.noise);
   EpisodeModel m{.spec = spec,

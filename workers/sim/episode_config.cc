@@ -26,7 +26,7 @@ struct Setter {
 // (navstack/methods/method_config.h).
 const std::vector<Setter>& CameraSetters() {
   static const std::vector<Setter> setters = {
-      {{"camera.decimation", 1, 8, 2, true, "depth stream: the 640x480 sensor decimated n x n (2: 320x240); perception.stride counts its pixels"},
+      {{"camera.decimation", 1, 10, 2, true, "depth stream: the 640x480 sensor decimated n x n (2: 320x240, 10: 64x48); perception.stride counts its pixels"},
        [](EpisodeConfig& c, double v) {
          c.nav.camera = navstack::CameraIntrinsics::Default().Decimated(static_cast<int>(v));
        }},
@@ -68,7 +68,8 @@ api::Catalog FarmCatalog() {
   return catalog;
 }
 
-EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
+EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec, bool record_rollout,
+                                navstack::rl::DecisionPort* decisions) {
   EpisodeConfig config;
   if (spec.ros) {
     // A user's ROS stack: no method of ours, no tunables (its launch arguments configure it); it
@@ -102,9 +103,14 @@ EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec) {
                                   "method) and rebuild, or fly it on the virtual clock with cost: measured");
     }
   }
+  if (decisions && !method.external_decisions)
+    throw std::invalid_argument("method: '" + spec.method + "' takes no decisions from outside");
   navstack::MethodSetup setup;
   setup.seed = spec.seed;
+  setup.record_rollout = record_rollout;
+  setup.decisions = decisions;
   if (method.uses_policy) setup.policy = navstack::rl::LoadPolicyOrShipped(spec.policy);
+  if (method.uses_nav_policy) setup.policy_path = spec.policy;
   navstack::MethodConfig stack = navstack::ConfigureMethodDefaults(method, setup);
   // The camera's overrides set what the stack's leave alone (nav.camera, noise): applied last.
   std::vector<std::pair<const Setter*, double>> camera;

@@ -36,9 +36,12 @@ std::vector<Tunable> TunablesFor(const navstack::MethodInfo& method);
 /// navstack's methods with their tunables, the board profiles, the scenario generators, the clocks.
 api::Catalog FarmCatalog();
 
-/// Builds the configuration for `spec.method` (the registry's) and applies `spec.overrides`.
-/// Throws std::invalid_argument naming an unknown method or override, or an out-of-range value
-/// with its range.
-EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec);
+/// Builds the configuration for `spec.method` (the registry's) and applies `spec.overrides`; the
+/// method is told whether to record a training rollout and where its decisions come from when they
+/// are taken outside it (EpisodeOptions::rollout, ::decisions). Throws std::invalid_argument naming
+/// an unknown method or override, an out-of-range value with its range, or decisions a method
+/// cannot take from outside.
+EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec, bool record_rollout = false,
+                                navstack::rl::DecisionPort* decisions = nullptr);
 
 }  // namespace enavi::sim

@@ -77,6 +77,7 @@ MethodInfo EnaviMethod() {
   m.scheduler = {SchedulingPolicy::kGlobalEdf, 0};
   m.cost_family = "navstack";
   m.uses_policy = true;
+  m.external_decisions = true;
   m.records_rollouts = true;
   // Calibration: once on each scenario with sampled actions, so that its adapter walks the
   // resolution ladder and the rates across the policy's grid.

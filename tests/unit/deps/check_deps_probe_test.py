@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """scripts/check_deps.py fails on a planted upward include in a navstack probe (and on a server
-probe that includes bench/, the top layer, and on a ros probe that includes workers/ or server/)
+probe that includes bench/, the top layer, on a ros probe that includes workers/ or server/, and on
+a method interface that links RL)
 and passes on a clean one (a method folder's library, enavi_add_method, included), through both of its
 routes: the source scan and the compiler's dependency output (the probe is run through the
 compiler with -M, as the build does with -MD), the latter also with the probe compiled through a
@@ -86,6 +87,21 @@ def make_method_tree(root, repo, links):
             f.write(text)
 
 
+def make_method_api_tree(root, repo, extra_link):
+    """A copy of navstack/ whose method interface also links `extra_link`."""
+    for layer in LAYERS:
+        if layer != "navstack":
+            os.symlink(os.path.join(repo, layer), os.path.join(root, layer))
+    shutil.copytree(os.path.join(repo, "navstack"), os.path.join(root, "navstack"))
+    path = os.path.join(root, "navstack", "methods", "CMakeLists.txt")
+    with open(path) as f:
+        text = f.read()
+    line = "target_link_libraries(enavi_method_api INTERFACE enavi::planning enavi::runtime)"
+    assert line in text, "the probe edits the method interface's link line"
+    with open(path, "w") as f:
+        f.write(text.replace(line, line[:-1] + " " + extra_link + ")"))
+
+
 def run_checker(checker, root, only, depfile=None):
     cmd = [sys.executable, checker, "--source-dir", root, "--only", only]
     if depfile:
@@ -162,6 +178,19 @@ def main():
                   f"linking {links} and including the stack's header")
             if not ok:
                 failures.append(f"method folder probe ({links}): exit {r.returncode}, wanted {expected} "
+                                f"and '{needle}' in:\n{report}")
+    # The method interface every method links stays narrow: linking RL (through anything) fails.
+    for extra, expected in (("enavi::rl", 1), ("", 0)):
+        with tempfile.TemporaryDirectory() as root:
+            make_method_api_tree(root, repo, extra)
+            r = run_checker(args.checker, root, "sources")
+            report = r.stdout + r.stderr
+            needle = "enavi_method_api links enavi_rl" if expected else "clean"
+            ok = r.returncode == expected and needle in report
+            print(f"{'ok  ' if ok else 'FAIL'} cmake    exit {r.returncode} (want {expected}) for the method "
+                  f"interface linking {extra or 'nothing more'}")
+            if not ok:
+                failures.append(f"method interface probe ({extra}): exit {r.returncode}, wanted {expected} "
                                 f"and '{needle}' in:\n{report}")
     for f in failures:
         print(f, file=sys.stderr)
