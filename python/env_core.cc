@@ -19,6 +19,20 @@ void CheckBoard(const std::string& board) {
   }
 }
 
+api::EpisodeSpec EnvEpisodeSpec(const std::string& method, const std::string& world,
+                                const std::map<std::string, std::string>& world_params, const std::string& board,
+                                double timeout_s, std::uint64_t seed) {
+  api::EpisodeSpec spec;
+  spec.world = world;
+  spec.seed = seed;
+  spec.world_params = world_params;
+  spec.board = board;
+  spec.method = method;
+  spec.clock = "virtual";
+  spec.timeout_s = timeout_s;
+  return spec;
+}
+
 std::shared_ptr<const sim::PreparedWorld> PrepareSpecWorld(const api::EpisodeSpec& spec) {
   return sim::PrepareWorld(worlds::ResolveWorld(sim::WorldRequestOf(spec)));
 }
@@ -39,14 +53,8 @@ int EnvCore::action_size() const { return navstack::ActionGrid().size(); }
 Transition EnvCore::Reset(std::uint64_t seed) {
   episode_.reset();
   finished_ = true;
-  api::EpisodeSpec spec;
-  spec.world = config_.world;
-  spec.seed = seed;
-  spec.world_params = config_.world_params;
-  spec.board = config_.board;
-  spec.method = "enavi";
-  spec.clock = "virtual";
-  spec.timeout_s = config_.timeout_s;
+  api::EpisodeSpec spec =
+      EnvEpisodeSpec("enavi", config_.world, config_.world_params, config_.board, config_.timeout_s, seed);
   spec.policy = config_.policy;
   spec.overrides = config_.overrides;
   // Sampled decisions are the ones left to the caller.

@@ -44,6 +44,11 @@ struct Transition {
 /// The environments' common checks and pieces.
 /// @throws std::invalid_argument "board: unknown board '...' (known: ...)".
 void CheckBoard(const std::string& board);
+/// An environment's episode: `method` in `world` (with its generator parameters) on `board`,
+/// virtual clock, world and episode seed `seed`.
+api::EpisodeSpec EnvEpisodeSpec(const std::string& method, const std::string& world,
+                                const std::map<std::string, std::string>& world_params, const std::string& board,
+                                double timeout_s, std::uint64_t seed);
 /// The world `spec` names, generated and prepared. @throws as worlds::ResolveWorld.
 std::shared_ptr<const sim::PreparedWorld> PrepareSpecWorld(const api::EpisodeSpec& spec);
 

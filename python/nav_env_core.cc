@@ -22,7 +22,7 @@ NavEnvCore::NavEnvCore(NavEnvConfig config) : config_(std::move(config)) {
   width_ = 640 / config_.decimation;
   height_ = 480 / config_.decimation;
   multiply_adds_ = config_.multiply_adds > 0 ? config_.multiply_adds
-                                             : navstack::rl::MakeNavPolicy(width_, height_, 0).multiply_adds();
+                                             : navstack::rl::DefaultNavArchitecture(width_, height_).multiply_adds();
 }
 
 // The episode goes first (members go in reverse order), before the port it writes to.
@@ -31,14 +31,8 @@ NavEnvCore::~NavEnvCore() = default;
 NavTransition NavEnvCore::Reset(std::uint64_t seed) {
   episode_.reset();
   finished_ = true;
-  api::EpisodeSpec spec;
-  spec.world = config_.world;
-  spec.seed = seed;
-  spec.world_params = config_.world_params;
-  spec.board = config_.board;
-  spec.method = "learned";
-  spec.clock = "virtual";
-  spec.timeout_s = config_.timeout_s;
+  api::EpisodeSpec spec =
+      EnvEpisodeSpec("learned", config_.world, config_.world_params, config_.board, config_.timeout_s, seed);
   spec.overrides = config_.overrides;
   spec.overrides["camera.decimation"] = config_.decimation;
   spec.overrides["learned.zero_latency"] = config_.zero_latency ? 1 : 0;

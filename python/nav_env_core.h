@@ -37,7 +37,7 @@ struct NavEnvConfig {
   int decimation = 10;           ///< of the 640x480 sensor: 10 -> 64x48, 4 -> 160x120, 2 -> 320x240
   bool zero_latency = false;     ///< no board in the loop (the ablation)
   /// Multiply-adds of the policy's network per inference, priced on the board; 0: the default
-  /// architecture's at this image size (rl::MakeNavPolicy).
+  /// architecture's at this image size (rl::DefaultNavArchitecture).
   std::int64_t multiply_adds = 0;
   double timeout_s = 0;          ///< 0: derived from the start-goal distance
   std::map<std::string, std::string> world_params;

@@ -49,8 +49,8 @@ struct MethodSetup {
   bool record_rollout = false;
   /// Decisions taken outside the method, or null (methods with `external_decisions`).
   rl::DecisionPort* decisions = nullptr;
-  /// The job's policy file (spec.policy; empty: none given), for methods with `uses_nav_policy`.
-  std::string policy_path;
+  /// The job's navigation policy, loaded once for methods with `uses_nav_policy` (null: none given).
+  std::shared_ptr<const rl::NavPolicyNet> nav_policy;
 };
 
 /// One flight of `enavi calibrate` (workers/board/calibration_flights.h): a scenario and overrides

@@ -21,6 +21,7 @@
 
 namespace enavi::navstack {
 namespace rl {
+class NavPolicyNet;
 struct PolicyFile;
 struct Rollout;
 class DecisionPort;
@@ -59,8 +60,8 @@ struct MethodOptions {
   bool record_rollout = false;
   /// Decisions taken outside the method (the Python envs), or null.
   rl::DecisionPort* decisions = nullptr;
-  /// The job's policy file for methods with MethodInfo::uses_nav_policy (empty: none given).
-  std::string policy_path;
+  /// The navigation policy (methods with MethodInfo::uses_nav_policy), else null.
+  std::shared_ptr<const rl::NavPolicyNet> nav_policy;
   /// The method's own tunables by name (MethodInfo::tunables), defaults filled in and ranges
   /// checked by ConfigureMethod() and ApplyOverride().
   std::map<std::string, double> params;

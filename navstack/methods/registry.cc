@@ -92,7 +92,7 @@ void ConfigureMethod(const MethodInfo& info, const MethodSetup& setup, MethodOpt
   options->policy = setup.policy;
   options->record_rollout = setup.record_rollout;
   options->decisions = setup.decisions;
-  options->policy_path = setup.policy_path;
+  options->nav_policy = setup.nav_policy;
   for (const MethodTunable& t : info.tunables) options->params[t.name] = t.default_value;
 }
 

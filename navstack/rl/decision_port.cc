@@ -40,12 +40,14 @@ void DecisionPort::OpenContinuous(const Eigen::VectorXd& obs, int action_size) {
 }
 
 Eigen::VectorXd DecisionPort::TakeVector() {
+  if (!continuous()) throw std::logic_error("decision port: a discrete decision is taken with Take()");
   if (state_ != State::kSupplied) throw std::logic_error("decision port: the method went on without the decision's action");
   state_ = State::kIdle;
   return action_vector_;
 }
 
 int DecisionPort::Take() {
+  if (continuous()) throw std::logic_error("decision port: a continuous decision is taken with TakeVector()");
   if (state_ != State::kSupplied) throw std::logic_error("decision port: the stack went on without the decision's action");
   state_ = State::kIdle;
   return action_;

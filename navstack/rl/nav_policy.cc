@@ -101,8 +101,12 @@ Eigen::Matrix<double, kNavActionSize, 1> NavPolicyNet::Forward(const NavObservat
   return h;
 }
 
+NavPolicyNet DefaultNavArchitecture(int width, int height) {
+  return NavPolicyNet(width, height, 10.0, {{8, 5, 2}, {16, 3, 2}, {16, 3, 2}}, {64}, {2.0, 2.0, 1.0, 1.0});
+}
+
 NavPolicyNet MakeNavPolicy(int width, int height, std::uint64_t seed) {
-  NavPolicyNet net(width, height, 10.0, {{8, 5, 2}, {16, 3, 2}, {16, 3, 2}}, {64}, {2.0, 2.0, 1.0, 1.0});
+  NavPolicyNet net = DefaultNavArchitecture(width, height);
   Rng rng(seed);
   Eigen::Index at = 0;
   for (const auto& [count, fan_in] : net.layer_sizes())

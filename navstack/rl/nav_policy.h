@@ -95,8 +95,11 @@ class NavPolicyNet {
 
 /// The architecture examples/torch_nav_ppo.py trains (three convolutions 8x5/2, 16x3/2, 16x3/2,
 /// one hidden layer of 64, speeds up to 2 m/s, yaw rate up to 1 rad/s) on a width x height image,
-/// its weights drawn as PyTorch's defaults draw them (uniform within 1/sqrt(fan-in)) from `seed`:
-/// an untrained network for tests and calibration flights (their work does not depend on it).
+/// weights zero (its sizes and multiply-adds are what it is for).
+NavPolicyNet DefaultNavArchitecture(int width, int height);
+/// DefaultNavArchitecture with its weights drawn as PyTorch's defaults draw them (uniform within
+/// 1/sqrt(fan-in)) from `seed`: an untrained network for tests and calibration flights (their
+/// work does not depend on it).
 NavPolicyNet MakeNavPolicy(int width, int height, std::uint64_t seed);
 
 /// The observation of a frame at the state `state` with the goal at `goal_W`, for `net`'s input:

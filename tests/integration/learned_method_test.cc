@@ -75,7 +75,7 @@ TEST(LearnedMethodTest, TheActionTakesEffectWhenTheBoardFinishesTheInference) {
   const navstack::MethodInfo* info = navstack::FindMethod("learned");
   ASSERT_NE(info, nullptr);
   navstack::MethodSetup setup;
-  setup.policy_path = policy;
+  setup.nav_policy = std::make_shared<const navstack::rl::NavPolicyNet>(navstack::rl::LoadNavPolicy(policy));
   navstack::MethodConfig config = navstack::ConfigureMethodDefaults(*info, setup);
   config.nav.goal = {20, 0, 2};
   const board::BoardProfile pi4b = board::LoadBoard("pi4b");

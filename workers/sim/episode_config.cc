@@ -8,6 +8,7 @@
 
 #include "navstack/methods/method_config.h"
 #include "navstack/methods/registry.h"
+#include "navstack/rl/nav_policy.h"
 #include "navstack/rl/shipped_policy.h"
 #include "workers/board/board_profile.h"
 #include "workers/sim/link_registry.h"
@@ -110,7 +111,9 @@ EpisodeConfig MakeEpisodeConfig(const api::EpisodeSpec& spec, bool record_rollou
   setup.record_rollout = record_rollout;
   setup.decisions = decisions;
   if (method.uses_policy) setup.policy = navstack::rl::LoadPolicyOrShipped(spec.policy);
-  if (method.uses_nav_policy) setup.policy_path = spec.policy;
+  if (method.uses_nav_policy && !spec.policy.empty()) {
+    setup.nav_policy = std::make_shared<const navstack::rl::NavPolicyNet>(navstack::rl::LoadNavPolicy(spec.policy));
+  }
   navstack::MethodConfig stack = navstack::ConfigureMethodDefaults(method, setup);
   // The camera's overrides set what the stack's leave alone (nav.camera, noise): applied last.
   std::vector<std::pair<const Setter*, double>> camera;

@@ -31,7 +31,7 @@ class LearnedNavigator final : public Navigator {
       : options_(o), exec_(exec), state_(s0), hold_(HoldAt(s0.p_WB, YawOf(s0.q_WB))),
         zero_latency_(o.Param("learned.zero_latency") > 0) {
     if (o.decisions == nullptr) {
-      net_ = rl::LoadNavPolicy(o.policy_path);
+      net_ = o.nav_policy;
       width_ = net_->width();
       height_ = net_->height();
       max_depth_ = net_->max_depth_m();
@@ -130,7 +130,7 @@ class LearnedNavigator final : public Navigator {
   VehicleState state_;
   TrajectorySample hold_;  ///< before the first action: hover at the start
   bool zero_latency_;
-  std::optional<rl::NavPolicyNet> net_;
+  std::shared_ptr<const rl::NavPolicyNet> net_;  ///< null: actions from outside
   std::int64_t multiply_adds_ = 0;
   int width_ = 0, height_ = 0;
   double max_depth_ = 10;
@@ -160,11 +160,11 @@ MethodInfo LearnedMethod() {
                  "a policy file counts its own"}};
   m.configure = [](const MethodSetup& setup, MethodOptions* o) {
     if (setup.decisions) return;  // the actions come from outside: no file
-    if (setup.policy_path.empty())
+    if (!setup.nav_policy)
       throw std::invalid_argument("policy: method learned needs a nav policy file (--policy FILE; "
                                   "examples/torch_nav_ppo.py trains one)");
     // The depth stream at the network's resolution (a whole decimation of the 640x480 sensor).
-    const rl::NavPolicyNet net = rl::LoadNavPolicy(setup.policy_path);
+    const rl::NavPolicyNet& net = *setup.nav_policy;
     const CameraIntrinsics sensor = CameraIntrinsics::Default();
     if (sensor.width % net.width() == 0 && sensor.width / net.width() == sensor.height / net.height() &&
         sensor.height % net.height() == 0)

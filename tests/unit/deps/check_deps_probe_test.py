@@ -152,45 +152,32 @@ def main():
                 if not ok:
                     failures.append(f"{route}: {layer} {probe.strip()!r}: exit {r.returncode}, wanted {expected} "
                                     f"and '{needle}' in:\n{report}")
-    # A library outside bench/ linking one of bench/ (without including it) breaks the rule too.
-    for link_bench, expected in ((True, 1), (False, 0)):
+    # CMake probes, on the source scan: (what, how to lay out the tree, expected exit, needle).
+    cmake_cases = [
+        # A library outside bench/ linking one of bench/ (without including it) breaks the rule too.
+        ("a server library linking a bench/ library", lambda root: make_link_tree(root, repo, True), 1,
+         "links enavi_bench_probe of bench/"),
+        ("a server library not linking a bench/ library", lambda root: make_link_tree(root, repo, False), 0, "clean"),
+        # A method folder's library (enavi_add_method) includes only what it links, as any library does.
+        ("a method folder linking enavi::planning and including the stack's header",
+         lambda root: make_method_tree(root, repo, "enavi::planning"), 1,
+         "enavi_probe includes navstack/stack/nav_stack.h of enavi_stack, which it does not link"),
+        ("a method folder linking enavi::stack and including the stack's header",
+         lambda root: make_method_tree(root, repo, "enavi::stack"), 0, "clean"),
+        # The method interface every method links stays narrow: linking RL (through anything) fails.
+        ("the method interface linking enavi::rl", lambda root: make_method_api_tree(root, repo, "enavi::rl"), 1,
+         "enavi_method_api links enavi_rl"),
+        ("the method interface linking nothing more", lambda root: make_method_api_tree(root, repo, ""), 0, "clean"),
+    ]
+    for what, lay_out, expected, needle in cmake_cases:
         with tempfile.TemporaryDirectory() as root:
-            make_link_tree(root, repo, link_bench)
+            lay_out(root)
             r = run_checker(args.checker, root, "sources")
             report = r.stdout + r.stderr
-            needle = "links enavi_bench_probe of bench/" if expected else "clean"
             ok = r.returncode == expected and needle in report
-            print(f"{'ok  ' if ok else 'FAIL'} cmake    exit {r.returncode} (want {expected}) for a server "
-                  f"library {'linking' if link_bench else 'not linking'} a bench/ library")
+            print(f"{'ok  ' if ok else 'FAIL'} cmake    exit {r.returncode} (want {expected}) for {what}")
             if not ok:
-                failures.append(f"cmake link probe ({link_bench}): exit {r.returncode}, wanted {expected} "
-                                f"and '{needle}' in:\n{report}")
-    # A method folder's library (enavi_add_method) includes only what it links, as any library does.
-    for links, expected in (("enavi::planning", 1), ("enavi::stack", 0)):
-        with tempfile.TemporaryDirectory() as root:
-            make_method_tree(root, repo, links)
-            r = run_checker(args.checker, root, "sources")
-            report = r.stdout + r.stderr
-            needle = ("enavi_probe includes navstack/stack/nav_stack.h of enavi_stack, which it does not link"
-                      if expected else "clean")
-            ok = r.returncode == expected and needle in report
-            print(f"{'ok  ' if ok else 'FAIL'} cmake    exit {r.returncode} (want {expected}) for a method folder "
-                  f"linking {links} and including the stack's header")
-            if not ok:
-                failures.append(f"method folder probe ({links}): exit {r.returncode}, wanted {expected} "
-                                f"and '{needle}' in:\n{report}")
-    # The method interface every method links stays narrow: linking RL (through anything) fails.
-    for extra, expected in (("enavi::rl", 1), ("", 0)):
-        with tempfile.TemporaryDirectory() as root:
-            make_method_api_tree(root, repo, extra)
-            r = run_checker(args.checker, root, "sources")
-            report = r.stdout + r.stderr
-            needle = "enavi_method_api links enavi_rl" if expected else "clean"
-            ok = r.returncode == expected and needle in report
-            print(f"{'ok  ' if ok else 'FAIL'} cmake    exit {r.returncode} (want {expected}) for the method "
-                  f"interface linking {extra or 'nothing more'}")
-            if not ok:
-                failures.append(f"method interface probe ({extra}): exit {r.returncode}, wanted {expected} "
+                failures.append(f"cmake probe, {what}: exit {r.returncode}, wanted {expected} "
                                 f"and '{needle}' in:\n{report}")
     for f in failures:
         print(f, file=sys.stderr)
