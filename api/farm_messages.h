@@ -59,8 +59,10 @@ struct PolicyBlob {
   std::string json;
 };
 
-/// A rollout travels in one sample, so one episode's experience stays bounded on the bus.
-inline constexpr std::size_t kMaxRolloutBytes = std::size_t{4} << 20;
+/// A rollout travels in one sample, so one episode's experience stays bounded on the bus. Sized
+/// for the learned method's depth images: 64x48 steps take ~3.7 kB compressed, so 16 MiB hold
+/// ~4,500 decisions (150 s at 30 Hz); E-Navi's take 170 bytes.
+inline constexpr std::size_t kMaxRolloutBytes = std::size_t{16} << 20;
 
 enum class ResultStatus { kOk, kError, kRejected };
 const char* ToString(ResultStatus s);

@@ -559,8 +559,10 @@ JobSpec ParseJobSpec(const std::string& yaml_text, const std::string& file_name,
       ctx.Fail(root["collect"], "collect", "the only collection is 'rollouts'");
     }
     job.collect = CollectSpec{};
-    if (job.methods != std::vector<std::string>{"enavi"}) {
-      ctx.Fail(root["methods"], "methods", "a collection job flies [enavi] only (rollouts are E-Navi's)");
+    if (job.methods != std::vector<std::string>{"enavi"} && job.methods != std::vector<std::string>{"learned"}) {
+      ctx.Fail(root["methods"], "methods",
+               "a collection job flies one method that records rollouts: [enavi] (its frequency policy) or "
+               "[learned] (a nav policy)");
     }
     if (job.clock != "virtual") {
       ctx.Fail(root["clock"], "clock", "rollouts are recorded on the virtual clock only");
@@ -675,8 +677,9 @@ std::vector<EpisodeSpec> ExpandJob(const JobSpec& job) {
             for (const auto& [k, v] : o.overrides) e.overrides[k] = v;
             for (const auto& [k, v] : o.world_params) e.world_params[k] = v;
           }
-          // Collection: the strategy controller samples its actions (a named tunable).
-          if (job.collect) e.overrides["strategy.explore"] = job.collect->sample ? 1.0 : 0.0;
+          // Collection: the policy samples its actions (a named tunable of the method).
+          if (job.collect)
+            e.overrides[e.method == "learned" ? "learned.explore" : "strategy.explore"] = job.collect->sample ? 1.0 : 0.0;
           episodes.push_back(std::move(e));
         }
       }

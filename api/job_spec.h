@@ -38,7 +38,8 @@
 //
 // Instead of the boards x scenarios x seeds matrix, `episodes:` may list the episodes one by one
 // (each is flown with every method): [{board: tx2, scenario: s1, seed: 104}, ...].
-// A collection job needs methods [enavi], the virtual clock and a policy: a file, or
+// A collection job needs one method, [enavi] (its frequency policy's decisions) or [learned] (a
+// nav policy's velocity commands and depth images), the virtual clock and a policy: a file, or
 // `sha256:HEX` for a policy uploaded to the server (POST /api/policies).
 
 #include <array>

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Loads an exported E-Navi dataset (enavi dataset export JOB --out DIR) with numpy and checks it
-against its schema.json: every documented array in every shard, one row per transition, shapes
-as documented, each episode exactly once.
+"""Loads an exported dataset (enavi dataset export JOB --out DIR) with numpy and checks it against
+its schema.json: every documented array in every shard, one row per transition, shapes as
+documented, each episode exactly once. Either kind: E-Navi's frequency decisions ("frequency") or
+the learned method's depth images and velocity commands ("nav").
 
     python3 examples/load_dataset.py DIR [--episodes N]
 """
@@ -23,7 +24,7 @@ def main():
     with open(os.path.join(args.dir, "schema.json")) as f:
         schema = json.load(f)
     assert schema["format"] == "enavi-rollout-dataset", schema["format"]
-    obs_dim, num_actions = schema["obs_dim"], schema["num_actions"]
+    kind = schema.get("kind", "frequency")
     names = [a["name"] for a in schema["arrays"]]
 
     steps, episode_ids, pairs = 0, set(), set()
@@ -35,11 +36,18 @@ def main():
             assert n == shard["steps"], (shard["file"], n, shard["steps"])
             for name in names:
                 assert data[name].shape[0] == n, (shard["file"], name, data[name].shape)
-            assert data["obs"].shape == (n, obs_dim)
-            assert data["mask"].shape == (n, num_actions) and data["mask"].dtype == np.bool_
-            # Every action was feasible when it was taken; log-probabilities are <= 0.
-            assert data["mask"][np.arange(n), data["action"]].all()
-            assert (data["log_prob"] <= 0).all()
+            if kind == "nav":
+                image = schema["image"]
+                assert data["depth"].shape == (n, image["height"], image["width"])
+                assert data["depth"].dtype == np.uint16
+                assert data["state"].shape == (n, 8) and data["action"].shape == (n, 4)
+                assert np.isfinite(data["action"]).all() and np.isfinite(data["log_prob"]).all()
+            else:
+                assert data["obs"].shape == (n, schema["obs_dim"])
+                assert data["mask"].shape == (n, schema["num_actions"]) and data["mask"].dtype == np.bool_
+                # Every action was feasible when it was taken; log-probabilities are <= 0.
+                assert data["mask"][np.arange(n), data["action"]].all()
+                assert (data["log_prob"] <= 0).all()
             # Episodes never straddle shards and end with a terminal or a truncation.
             ends = data["done"] | data["truncated"]
             assert ends[-1]
@@ -57,7 +65,7 @@ def main():
     assert len(pairs) == len(episode_ids), "episode index and id disagree"
     if args.episodes is not None:
         assert len(episode_ids) == args.episodes, (len(episode_ids), args.episodes)
-    print(f"{args.dir}: {len(episode_ids)} episodes, {steps} transitions, "
+    print(f"{args.dir}: {kind}, {len(episode_ids)} episodes, {steps} transitions, "
           f"{len(schema['shards'])} shards: ok")
 
 

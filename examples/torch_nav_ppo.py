@@ -70,9 +70,10 @@ class Critic(nn.Module):
         return self.fc(torch.cat([self.conv(depth.unsqueeze(1)), state], dim=1)).squeeze(-1)
 
 
-def save_policy(actor, width, height, path, metadata):
+def save_policy(actor, width, height, path, metadata, log_std=None):
     """The actor as an enavi nav policy file (navstack/rl/nav_policy.h): float32 little-endian
-    weights in base64 with their sha256."""
+    weights in base64 with their sha256, and the exploration Gaussian's log_std (a farm collection
+    job with `sample: true` draws from it)."""
     values = []
     for module in list(actor.conv) + list(actor.fc):
         if isinstance(module, (nn.Conv2d, nn.Linear)):
@@ -87,6 +88,8 @@ def save_policy(actor, width, height, path, metadata):
                           "count": len(values), "sha256": hashlib.sha256(raw).hexdigest(),
                           "data": base64.b64encode(raw).decode()},
            "metadata": metadata}
+    if log_std is not None:
+        doc["log_std"] = [float(v) for v in log_std.detach().double().tolist()]
     tmp = path + ".tmp"
     with open(tmp, "w") as f:
         json.dump(doc, f, separators=(",", ":"))
@@ -208,7 +211,7 @@ def main():
             save_policy(actor, width, height, args.out,
                         {"trainer": "examples/torch_nav_ppo.py", "board": args.board, "latency": args.latency,
                          "world": WORLD, "world_params": WORLD_PARAMS, "env_steps": steps,
-                         "iterations": iteration, "seed": args.seed})
+                         "iterations": iteration, "seed": args.seed}, log_std)
     envs.close()
 
 

@@ -1,17 +1,7 @@
 #pragma once
 // Learned navigation as a step-by-step environment (docs/rl.md, "Learned navigation"): each step
-// is one inference of the `learned` method (navstack/methods/learned/) in a real virtual-clock
-// flight: the observation is the depth frame at the network's size and the vehicle's state with
-// the goal (navstack/rl/nav_policy.h), the action a velocity setpoint with yaw rate. The inference
-// runs on the board: the job waits in a DecisionPort at the instant the board's scheduler starts
-// it, and the action supplied takes effect when the board would have finished it (with
-// zero_latency, at once and for free).
-//
-// Reward of a step (from the vehicle's true position at the two decisions):
-//   progress: the decrease of the distance to the goal, m
-//   smoothness: -kSmoothnessWeight x |a - a_prev|^2 (actions in [-1, 1])
-//   at the end: +kGoalReward at the goal, -kCrashPenalty on a collision or on leaving the flight
-//   bounds (the episode ends: terminated); a time-out truncates.
+// is one inference of the `learned` method in a real virtual-clock flight, stepped by
+// sim::NavStepper (its header documents the observation, the board's latency and the rewards).
 
 #include <cstdint>
 #include <map>
@@ -21,15 +11,12 @@
 
 #include <Eigen/Core>
 
-#include "navstack/rl/decision_port.h"
 #include "navstack/rl/nav_policy.h"
-#include "workers/sim/episode.h"
+#include "workers/sim/nav_stepper.h"
 
 namespace enavi::python {
 
-inline constexpr double kGoalReward = 10.0;
-inline constexpr double kCrashPenalty = 10.0;
-inline constexpr double kSmoothnessWeight = 0.01;
+using sim::NavTransition;
 
 struct NavEnvConfig {
   std::string world = "forest";  ///< any world the CLI accepts (a scenario id or a file)
@@ -42,17 +29,6 @@ struct NavEnvConfig {
   double timeout_s = 0;          ///< 0: derived from the start-goal distance
   std::map<std::string, std::string> world_params;
   std::map<std::string, double> overrides;
-};
-
-struct NavTransition {
-  std::vector<float> depth;  ///< height x width, row-major, in [0, 1]
-  Eigen::Matrix<double, navstack::rl::kNavStateSize, 1> state;
-  double reward = 0;
-  bool terminated = false;  ///< goal, collision or out of bounds
-  bool truncated = false;   ///< time-out (or another end of the episode's)
-  std::map<std::string, double> metrics;  ///< at the end: success, collided, flight_time_s, ...
-  std::string end_reason;
-  double t = 0;             ///< sim time of the observation, s
 };
 
 class NavEnvCore {
@@ -75,18 +51,11 @@ class NavEnvCore {
   std::int64_t multiply_adds() const { return multiply_adds_; }
 
  private:
-  NavTransition Advance();
-
   NavEnvConfig config_;
   int width_ = 0, height_ = 0;
   std::int64_t multiply_adds_ = 0;
   std::shared_ptr<const sim::PreparedWorld> world_;
-  std::unique_ptr<navstack::rl::DecisionPort> decisions_;
-  std::unique_ptr<sim::Episode> episode_;
-  double last_distance_ = 0;
-  Eigen::VectorXd last_action_;
-  NavTransition last_;
-  bool finished_ = true;
+  std::unique_ptr<sim::NavStepper> stepper_;  ///< before world_ goes (members go in reverse order)
 };
 
 }  // namespace enavi::python

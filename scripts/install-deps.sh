@@ -11,7 +11,7 @@ packages=(
   libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev liblbfgs-dev
   libboost-program-options-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev libsqlite3-dev sqlite3
-  libcpp-httplib-dev libssl-dev libpng-dev libcairo2-dev fonts-dejavu-core
+  libcpp-httplib-dev libssl-dev zlib1g-dev libpng-dev libcairo2-dev fonts-dejavu-core
   libjs-chart.js  # the dashboard's charts, embedded into enavi at build time
   libassimp-dev libsdformat-dev
   libgtest-dev libgmock-dev libbenchmark-dev

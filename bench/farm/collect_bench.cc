@@ -5,6 +5,11 @@
 // rollout. Loopback with 1 and 2 workers, and 4 workers each in its own network namespace (root
 // only) with the server in a fifth, as separate hosts would be.
 //
+// The nav variants collect the learned method's rollouts instead (64x48 depth images, 30
+// decisions a second of flight): a zero-weight network with exploration noise (log_std -1)
+// hovering and drifting in a sparse forest for 10 s per episode, so every episode records about
+// 300 decisions; compare with the in-process environment's steps/s (bench/rl/nav_env_bench.py).
+//
 // Reported against the 1-worker figure of the same run: scaling = rate(N) / (N x rate(1)).
 // Goal: >= 0.9 from 1 to 2 workers (needs 2 idle cores: every worker is CPU-bound). Because wall
 // rates only mean something on an idle machine, transitions_per_cpu_s also reports transitions
@@ -24,7 +29,8 @@
 
 #include "api/client.h"
 #include "bench/farm/farm_processes.h"
-#include "navstack/rl/rollout.h"
+#include "navstack/rl/nav_policy.h"
+#include "navstack/rl/nav_rollout.h"
 
 namespace enavi {
 namespace {
@@ -33,7 +39,26 @@ namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
 constexpr int kEpisodesPerWorker = 8;
-double one_worker_rate = 0;  // transitions/s with one worker, this run
+
+enum class Kind { kFrequency, kNav };
+double one_worker_rate[2] = {0, 0};  // transitions/s with one worker, this run, per kind
+
+// The job and its policy of each kind.
+std::string JobYaml(Kind kind) {
+  if (kind == Kind::kNav)
+    return "boards: [pi4b]\nscenarios: [forest]\nworld_params: {density: \"2\", length: \"20\"}\n"
+           "methods: [learned]\ntimeout_s: 10\n";
+  return "boards: [tx2]\nscenarios: [empty]\nmethods: [enavi]\n";
+}
+
+std::string PolicyText(Kind kind) {
+  if (kind == Kind::kNav) {
+    navstack::rl::NavPolicyNet net = navstack::rl::DefaultNavArchitecture(64, 48);
+    net.set_log_std({-1, -1, -1, -1});
+    return navstack::rl::NavPolicyToJson(net).dump();
+  }
+  return bench::ReadText(fs::path(ENAVI_SOURCE_DIR) / "navstack/rl/policies/enavi_default.json");
+}
 
 // CPU seconds of this process's waited-for descendants so far.
 double ChildrenCpuSeconds() {
@@ -43,24 +68,23 @@ double ChildrenCpuSeconds() {
 }
 
 // Submits a collection job of `episodes` and waits for it; returns the transitions collected.
-std::size_t Collect(api::FarmClient& client, const std::string& policy, int episodes, int first_seed) {
+std::size_t Collect(api::FarmClient& client, Kind kind, const std::string& policy, int episodes, int first_seed) {
   std::string seeds = "[";
   for (int i = 0; i < episodes; ++i) seeds += (i ? ", " : "") + std::to_string(first_seed + i);
-  const auto job = client.Submit("name: bench\nboards: [tx2]\nscenarios: [empty]\nmethods: [enavi]\n"
-                                 "seeds: " + seeds + "]\ncollect: rollouts\nsample: true\npolicy: \"" +
-                                     policy + "\"\n",
+  const auto job = client.Submit("name: bench\n" + JobYaml(kind) + "seeds: " + seeds +
+                                     "]\ncollect: rollouts\nsample: true\npolicy: \"" + policy + "\"\n",
                                  "bench.yaml");
   if (!bench::Eventually([&] { return client.Status(job.job_id).terminal(); }, 600s)) {
     throw std::runtime_error("collection job did not finish");
   }
   std::size_t steps = 0;
   for (const auto& r : client.Rollouts(job.job_id)) {
-    steps += navstack::rl::DecodeRollout(r.rollout, r.episode_id).steps.size();
+    steps += navstack::rl::CheckRolloutBlob(r.rollout, r.episode_id);
   }
   return steps;
 }
 
-void BM_Collect(benchmark::State& state, bool netns) {
+void BM_Collect(benchmark::State& state, bool netns, Kind kind) {
   const int workers = static_cast<int>(state.range(0));
   if (netns && geteuid() != 0) {
     state.SkipWithError("needs root for network namespaces");
@@ -89,12 +113,11 @@ void BM_Collect(benchmark::State& state, bool netns) {
       if (!bench::Eventually([&] { return static_cast<int>(client.Workers().size()) == workers; }, 60s)) {
         throw std::runtime_error("workers not discovered");
       }
-      const std::string policy = client.UploadPolicy(
-          bench::ReadText(fs::path(ENAVI_SOURCE_DIR) / "navstack/rl/policies/enavi_default.json"));
-      all_steps += Collect(client, policy, workers, 1000);  // warm-up: every worker caches the policy
+      const std::string policy = client.UploadPolicy(PolicyText(kind));
+      all_steps += Collect(client, kind, policy, workers, 1000);  // warm-up: every worker caches the policy
       for (auto _ : state) {
         const auto t0 = std::chrono::steady_clock::now();
-        steps = Collect(client, policy, kEpisodesPerWorker * workers, 1);
+        steps = Collect(client, kind, policy, kEpisodesPerWorker * workers, 1);
         all_steps += steps;
         seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         state.SetIterationTime(seconds);
@@ -108,16 +131,21 @@ void BM_Collect(benchmark::State& state, bool netns) {
   fs::remove_all(dir);
   if (seconds <= 0) return;
   const double rate = static_cast<double>(steps) / seconds;
-  if (workers == 1 && !netns) one_worker_rate = rate;
+  double& reference = one_worker_rate[static_cast<int>(kind)];
+  if (workers == 1 && !netns) reference = rate;
   state.counters["transitions_per_s"] = rate;
   state.counters["episodes_per_s"] = kEpisodesPerWorker * workers / seconds;
   state.counters["transitions"] = static_cast<double>(steps);
   if (cpu > 0) state.counters["transitions_per_cpu_s"] = static_cast<double>(all_steps) / cpu;
-  if (one_worker_rate > 0) state.counters["scaling"] = rate / (workers * one_worker_rate);
+  if (reference > 0) state.counters["scaling"] = rate / (workers * reference);
 }
 
-BENCHMARK_CAPTURE(BM_Collect, loopback, false)->Arg(1)->Arg(2)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
-BENCHMARK_CAPTURE(BM_Collect, netns, true)->Arg(4)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(BM_Collect, loopback, false, Kind::kFrequency)
+    ->Arg(1)->Arg(2)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(BM_Collect, netns, true, Kind::kFrequency)
+    ->Arg(4)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(BM_Collect, nav_loopback, false, Kind::kNav)
+    ->Arg(1)->Arg(2)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 
 }  // namespace
 }  // namespace enavi

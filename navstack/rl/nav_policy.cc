@@ -101,6 +101,31 @@ Eigen::Matrix<double, kNavActionSize, 1> NavPolicyNet::Forward(const NavObservat
   return h;
 }
 
+void NavPolicyNet::set_log_std(const std::array<double, kNavActionSize>& log_std) {
+  for (const double v : log_std)
+    if (!(v >= kMinLogStd && v <= kMaxLogStd))
+      throw std::invalid_argument("must be finite and in [" + std::to_string(kMinLogStd) + ", " +
+                                  std::to_string(kMaxLogStd) + "]");
+  log_std_ = log_std;
+}
+
+SampledNavAction SampleNavAction(const NavPolicyNet& net, const NavObservation& obs, Rng* rng) {
+  if (!net.log_std())
+    throw std::invalid_argument("nav policy: sampling needs the policy's log_std (examples/torch_nav_ppo.py writes it)");
+  SampledNavAction s;
+  s.action = net.Forward(obs);
+  constexpr double kHalfLog2Pi = 0.91893853320467274178;
+  for (int i = 0; i < kNavActionSize; ++i) {
+    const double log_std = (*net.log_std())[static_cast<std::size_t>(i)];
+    const double z = rng->Normal();
+    s.action[i] += std::exp(log_std) * z;
+    s.log_prob += -0.5 * z * z - log_std - kHalfLog2Pi;
+  }
+  return s;
+}
+
+std::uint64_t NavExploreSeed(std::uint64_t episode_seed) { return DeriveSeed(episode_seed, 0x6e6176 /* "nav" */); }
+
 NavPolicyNet DefaultNavArchitecture(int width, int height) {
   return NavPolicyNet(width, height, 10.0, {{8, 5, 2}, {16, 3, 2}, {16, 3, 2}}, {64}, {2.0, 2.0, 1.0, 1.0});
 }
@@ -152,7 +177,7 @@ json NavPolicyToJson(const NavPolicyNet& net, const json& metadata) {
   json conv = json::array();
   for (const ConvLayer& c : net.conv()) conv.push_back({{"out", c.out}, {"kernel", c.kernel}, {"stride", c.stride}});
   const Eigen::VectorXd& p = net.params();
-  return {{"format", kNavPolicyFormat},
+  json j = {{"format", kNavPolicyFormat},
           {"version", kNavPolicyVersion},
           {"input", {{"width", net.width()}, {"height", net.height()}, {"max_depth_m", net.max_depth_m()}}},
           {"conv", conv},
@@ -162,6 +187,8 @@ json NavPolicyToJson(const NavPolicyNet& net, const json& metadata) {
                                                kNavPolicyParameterLayout,
                                                [](std::size_t i) { return "parameters[" + std::to_string(i) + "]"; })},
           {"metadata", metadata}};
+  if (net.log_std()) j["log_std"] = *net.log_std();
+  return j;
 }
 
 NavPolicyNet NavPolicyFromJson(const json& j, const std::string& source) {
@@ -204,6 +231,16 @@ NavPolicyNet NavPolicyFromJson(const json& j, const std::string& source) {
       detail::DecodeWeights(r.Field(j, "", "parameters"), r, "parameters", static_cast<std::size_t>(net.params().size()),
                             kNavPolicyParameterLayout, [](std::size_t i) { return "parameters[" + std::to_string(i) + "]"; });
   net.params() = Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size()));
+  if (j.contains("log_std")) {
+    const std::vector<double> v = r.Numbers(j["log_std"], "log_std", kNavActionSize);
+    std::array<double, kNavActionSize> log_std{};
+    std::copy(v.begin(), v.end(), log_std.begin());
+    try {
+      net.set_log_std(log_std);
+    } catch (const std::invalid_argument& e) {
+      r.Fail("log_std", e.what());
+    }
+  }
   r.Object(r.Field(j, "", "metadata"), "metadata");
   return net;
 }
@@ -219,6 +256,17 @@ bool IsNavPolicyFile(const std::string& path) {
   } catch (const std::exception&) {
     return false;
   }
+}
+
+bool IsNavPolicyText(const std::string& text) {
+  const json j = json::parse(text, nullptr, false);
+  return j.is_object() && j.value("format", std::string()) == kNavPolicyFormat;
+}
+
+std::string CanonicalNavPolicyText(const std::string& text, const std::string& source) {
+  const json j = detail::ParseJson(text, source);
+  const NavPolicyNet net = NavPolicyFromJson(j, source);
+  return NavPolicyToJson(net, j.at("metadata")).dump();
 }
 
 void SaveNavPolicy(const std::string& path, const NavPolicyNet& net, const json& metadata) {

@@ -13,12 +13,15 @@
 //    "conv": [{"out": 8, "kernel": 5, "stride": 2}, ...],   (valid padding, ReLU after each)
 //    "hidden": [64],                                         (tanh)
 //    "action_scale": [2, 2, 1, 1],                           (m/s, m/s, m/s, rad/s at output 1)
+//    "log_std": [-0.5, -0.5, -0.5, -0.5],   (optional: the Gaussian around the output that PPO
+//                                            samples from; sampling collection jobs need it)
 //    "parameters": {"dtype": "float32", "byte_order": "little", "encoding": "base64",
 //                   "layout": kNavPolicyParameterLayout, "count": n, "sha256": "...", "data": "..."},
 //    "metadata": {...}}
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -43,6 +46,12 @@ inline constexpr const char* kNavPolicyParameterLayout =
 inline constexpr int kNavStateSize = 8;
 /// The action: forward, left and up velocity and yaw rate, each in [-1, 1] times action_scale.
 inline constexpr int kNavActionSize = 4;
+
+/// Bounds of a policy's log_std (a std of 2e-9 to 7.4 in action units of [-1, 1]).
+inline constexpr double kMinLogStd = -20.0;
+inline constexpr double kMaxLogStd = 2.0;
+
+class Rng;
 
 struct ConvLayer {
   int out = 0, kernel = 0, stride = 1;
@@ -70,6 +79,10 @@ class NavPolicyNet {
   const std::vector<ConvLayer>& conv() const { return conv_; }
   const std::vector<int>& hidden() const { return hidden_; }
   const std::array<double, kNavActionSize>& action_scale() const { return action_scale_; }
+  /// Log standard deviation of the exploration Gaussian per action (PPO's), if the file has one.
+  const std::optional<std::array<double, kNavActionSize>>& log_std() const { return log_std_; }
+  /// @throws std::invalid_argument for a value outside [kMinLogStd, kMaxLogStd] or not finite.
+  void set_log_std(const std::array<double, kNavActionSize>& log_std);
   /// Flat parameters in kNavPolicyParameterLayout's order.
   Eigen::VectorXd& params() { return params_; }
   const Eigen::VectorXd& params() const { return params_; }
@@ -87,6 +100,7 @@ class NavPolicyNet {
   std::vector<ConvLayer> conv_;
   std::vector<int> hidden_;
   std::array<double, kNavActionSize> action_scale_{};
+  std::optional<std::array<double, kNavActionSize>> log_std_;
   std::vector<std::array<int, 3>> shapes_;  ///< channels, height, width after each convolution (input first)
   std::vector<std::pair<Eigen::Index, int>> layers_;
   Eigen::VectorXd params_;
@@ -110,6 +124,17 @@ NavObservation MakeNavObservation(const DepthImage& image, const VehicleState& s
                                   int width, int height, double max_depth_m,
                                   const std::array<double, kNavActionSize>& action_scale);
 
+/// An action drawn from the policy's Gaussian, N(Forward(obs), exp(log_std)^2) per component
+/// (as examples/torch_nav_ppo.py samples it), and its log-density; the method clips it to [-1, 1]
+/// when it lands. @throws std::invalid_argument when the policy has no log_std.
+struct SampledNavAction {
+  Eigen::Matrix<double, kNavActionSize, 1> action;
+  double log_prob = 0;
+};
+SampledNavAction SampleNavAction(const NavPolicyNet& net, const NavObservation& obs, Rng* rng);
+/// The seed of an episode's exploration draws (the `learned` method's and a collection's alike).
+std::uint64_t NavExploreSeed(std::uint64_t episode_seed);
+
 nlohmann::json NavPolicyToJson(const NavPolicyNet& net, const nlohmann::json& metadata = nlohmann::json::object());
 /// @throws std::invalid_argument "<source>: <field>: <reason>".
 NavPolicyNet NavPolicyFromJson(const nlohmann::json& j, const std::string& source);
@@ -118,6 +143,11 @@ NavPolicyNet LoadNavPolicy(const std::string& path);
 /// Whether the file at `path` says it is a nav policy (its "format"); false for anything else,
 /// also an unreadable file (whose loader then names the problem).
 bool IsNavPolicyFile(const std::string& path);
+/// Whether `text` is a JSON object that says it is a nav policy (its "format").
+bool IsNavPolicyText(const std::string& text);
+/// The nav policy in `text`, validated and written as SaveNavPolicy writes it (its metadata kept):
+/// the form its content hash is taken of. @throws std::invalid_argument as NavPolicyFromJson.
+std::string CanonicalNavPolicyText(const std::string& text, const std::string& source);
 /// Writes the file atomically. @throws std::runtime_error on I/O failure.
 void SaveNavPolicy(const std::string& path, const NavPolicyNet& net,
                    const nlohmann::json& metadata = nlohmann::json::object());

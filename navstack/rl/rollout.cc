@@ -4,6 +4,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "navstack/rl/blob_io.h"
 #include "navstack/rl/json_read.h"
 
 namespace enavi::navstack::rl {
@@ -133,49 +134,10 @@ namespace {
 
 constexpr char kBinaryMagic[4] = {'E', 'N', 'R', '1'};
 
-// Host byte order: every platform the farm runs on (x86-64, aarch64) is little-endian.
-template <typename T>
-void Put(std::string* out, T v) {
-  out->append(reinterpret_cast<const char*>(&v), sizeof v);
-}
-
-class BlobReader {
- public:
-  BlobReader(std::string_view bytes, const std::string& source) : bytes_(bytes), source_(source) {}
-  template <typename T>
-  T Get(const char* field) {
-    T v;
-    Need(sizeof v, field);
-    std::memcpy(&v, bytes_.data() + at_, sizeof v);
-    at_ += sizeof v;
-    return v;
-  }
-  double Finite(const char* field) {
-    const double v = Get<double>(field);
-    if (!std::isfinite(v)) Fail(field, "not a finite number");
-    return v;
-  }
-  std::string_view Bytes(std::size_t n, const char* field) {
-    Need(n, field);
-    const std::string_view v = bytes_.substr(at_, n);
-    at_ += n;
-    return v;
-  }
-  std::size_t left() const { return bytes_.size() - at_; }
-  [[noreturn]] void Fail(const std::string& field, const std::string& why) const {
-    throw std::invalid_argument(source_ + ": rollout " + field + ": " + why);
-  }
-
- private:
-  void Need(std::size_t n, const char* field) const {
-    if (n > bytes_.size() - at_) Fail(field, "truncated");
-  }
-  std::string_view bytes_;
-  const std::string& source_;
-  std::size_t at_ = 0;
-};
-
 }  // namespace
+
+using detail::BlobReader;
+using detail::Put;
 
 std::string EncodeRollout(const Rollout& rollout) {
   const std::uint32_t obs_dim = rollout.steps.empty() ? 0 : static_cast<std::uint32_t>(rollout.steps.front().obs.size());
@@ -188,14 +150,7 @@ std::string EncodeRollout(const Rollout& rollout) {
   Put(&out, static_cast<std::uint32_t>(rollout.steps.size()));
   Put(&out, rollout.bootstrap_value);
   Put(&out, static_cast<std::int64_t>(rollout.policy_iteration));
-  Put(&out, static_cast<std::uint32_t>(rollout.id.size()));
-  out += rollout.id;
-  Put(&out, static_cast<std::uint32_t>(rollout.info.size()));
-  for (const auto& [k, v] : rollout.info) {
-    Put(&out, static_cast<std::uint32_t>(k.size()));
-    out += k;
-    Put(&out, v);
-  }
+  detail::PutIdAndInfo(&out, rollout.id, rollout.info);
   for (const RolloutStep& s : rollout.steps) {
     if (s.obs.size() != obs_dim || s.mask.size() != num_actions) {
       throw std::logic_error("EncodeRollout: steps of different shapes");
@@ -228,14 +183,7 @@ Rollout DecodeRollout(std::string_view bytes, const std::string& source) {
   Rollout out;
   out.bootstrap_value = r.Finite("bootstrap_value");
   out.policy_iteration = r.Get<std::int64_t>("policy_iteration");
-  const auto id_len = r.Get<std::uint32_t>("id");
-  out.id = std::string(r.Bytes(id_len, "id"));
-  const auto info_count = r.Get<std::uint32_t>("info");
-  for (std::uint32_t i = 0; i < info_count; ++i) {
-    const auto key_len = r.Get<std::uint32_t>("info");
-    const std::string key(r.Bytes(key_len, "info"));
-    out.info[key] = r.Finite("info");
-  }
+  detail::ReadIdAndInfo(&r, &out.id, &out.info);
   if (static_cast<std::size_t>(steps) * step_bytes != r.left()) {
     r.Fail("steps", std::to_string(steps) + " steps need " + std::to_string(steps * step_bytes) +
                         " bytes, " + std::to_string(r.left()) + " left");

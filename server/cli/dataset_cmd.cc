@@ -22,8 +22,10 @@ void RegisterDatasetCommands(CLI::App& app) {
       "export", "Write a collection job's transitions as NumPy .npz shards and schema.json (docs/rl.md)");
   cmd->add_option("job", f->options.job_id, "job id (a job with collect: rollouts)")->required();
   cmd->add_option("--out", f->out, "output directory")->required();
-  cmd->add_option("--shard-steps", f->options.shard_steps, "transitions per shard (whole episodes)")
-      ->capture_default_str();
+  cmd->add_option("--shard-steps", f->options.shard_steps,
+                  "transitions per shard, whole episodes (default " + std::to_string(dataset::kFrequencyShardSteps) +
+                      ", or " + std::to_string(dataset::kNavShardSteps) + " for the learned method's depth images)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--server", f->server, "farm server URL")->envname("ENAVI_SERVER")->capture_default_str();
   cmd->add_option("--token", f->token, "token")->envname("ENAVI_TOKEN");
   cmd->callback([f] {

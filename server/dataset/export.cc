@@ -1,12 +1,15 @@
 #include "server/dataset/export.h"
 
 #include <cstring>
+#include <optional>
+#include <span>
 #include <set>
 #include <stdexcept>
 
 #include "api/atomic_file.h"
 #include "navstack/rl/json_read.h"
 #include "navstack/adapt/policy_state.h"
+#include "navstack/rl/nav_rollout.h"
 #include "navstack/rl/rollout.h"
 #include "server/dataset/npz.h"
 
@@ -43,6 +46,35 @@ constexpr Column kColumns[] = {
     {"policy_hash", "U", "[N]", "SHA-256 of the policy that collected the step"},
 };
 
+// A collection job of the learned method: depth images, state and continuous actions.
+constexpr Column kNavColumns[] = {
+    {"depth", "<u2", "[N, height, width]", "depth / max_depth_m x 65535 (the policy saw depth / 65535)"},
+    {"state", "<f8", "[N, 8]", "goal direction (3), goal distance (1), velocity (3), yaw rate (1) in the yaw frame"},
+    {"action", "<f8", "[N, 4]", "forward, left, up velocity and yaw rate in [-1, 1] x action_scale, before the clip"},
+    {"reward", "<f8", "[N]", "reward received after the action (progress, smoothness, goal and crash terms)"},
+    {"done", "|b1", "[N]", "true terminal after this step (goal, collision, out of bounds): no value beyond"},
+    {"truncated", "|b1", "[N]", "last step of an episode that ended without a terminal (time-out)"},
+    {"log_prob", "<f8", "[N]", "log pi(action | obs) under the policy's Gaussian when sampled; 0 when greedy"},
+    {"step", "<i4", "[N]", "decision index within the episode"},
+    {"episode", "<i4", "[N]", "episode index within the job"},
+    {"episode_id", "U", "[N]", "farm episode id"},
+    {"board", "U", "[N]", "board profile the episode flew on"},
+    {"scenario", "U", "[N]", "scenario id (a registered generator, or custom for a world file)"},
+    {"seed", "<u8", "[N]", "world and episode seed"},
+    {"policy_hash", "U", "[N]", "SHA-256 of the policy that collected the step"},
+};
+
+nlohmann::json ArraysOf(std::span<const Column> columns) {
+  nlohmann::json arrays = nlohmann::json::array();
+  for (const Column& c : columns) {
+    arrays.push_back({{"name", c.name},
+                      {"dtype", std::string(c.dtype) == "U" ? "<U (fixed width)" : c.dtype},
+                      {"shape", c.shape},
+                      {"meaning", c.meaning}});
+  }
+  return arrays;
+}
+
 template <typename T>
 void Append(std::string* data, T v) {
   data->append(reinterpret_cast<const char*>(&v), sizeof v);
@@ -62,10 +94,42 @@ NpyArray Strings(const std::string& name, const std::vector<std::string>& values
   return a;
 }
 
+// The columns every kind has: where each step came from.
+struct Provenance {
+  std::string step, episode, seed;
+  std::vector<std::string> episode_id, board, scenario, policy_hash;
+
+  void Add(const api::StoredRollout& r, std::size_t t) {
+    Append(&step, static_cast<std::int32_t>(t));
+    Append(&episode, static_cast<std::int32_t>(r.index));
+    Append(&seed, static_cast<std::uint64_t>(r.seed));
+    episode_id.push_back(r.episode_id);
+    board.push_back(r.board);
+    scenario.push_back(r.scenario);
+    policy_hash.push_back(r.policy_hash);
+  }
+  void AppendTo(std::vector<NpyArray>* arrays, std::size_t n) const {
+    arrays->push_back({"step", "<i4", {n}, step});
+    arrays->push_back({"episode", "<i4", {n}, episode});
+    arrays->push_back(Strings("episode_id", episode_id));
+    arrays->push_back(Strings("board", board));
+    arrays->push_back(Strings("scenario", scenario));
+    arrays->push_back({"seed", "<u8", {n}, seed});
+    arrays->push_back(Strings("policy_hash", policy_hash));
+  }
+};
+
 struct Shard {
   std::size_t n = 0;
-  std::string obs, action, mask, reward, done, truncated, bootstrap, log_prob, value, step, episode, seed;
-  std::vector<std::string> episode_id, board, scenario, policy_hash;
+  std::string obs, action, mask, reward, done, truncated, bootstrap, log_prob, value;
+  Provenance from;
+  int episodes = 0;
+};
+
+struct NavShard {
+  std::size_t n = 0;
+  std::string depth, state, action, reward, done, truncated, log_prob;
+  Provenance from;
   int episodes = 0;
 };
 
@@ -83,13 +147,7 @@ void AddEpisode(Shard* s, const api::StoredRollout& r, const rl::Rollout& ro) {
     Append(&s->bootstrap, truncated ? ro.bootstrap_value : 0.0);
     Append(&s->log_prob, st.log_prob);
     Append(&s->value, st.value);
-    Append(&s->step, static_cast<std::int32_t>(t));
-    Append(&s->episode, static_cast<std::int32_t>(r.index));
-    Append(&s->seed, static_cast<std::uint64_t>(r.seed));
-    s->episode_id.push_back(r.episode_id);
-    s->board.push_back(r.board);
-    s->scenario.push_back(r.scenario);
-    s->policy_hash.push_back(r.policy_hash);
+    s->from.Add(r, t);
   }
   s->n += steps;
   ++s->episodes;
@@ -107,81 +165,142 @@ void WriteShard(const fs::path& path, const Shard& s, std::size_t obs_dim, std::
       {"bootstrap_value", "<f8", {n}, s.bootstrap},
       {"log_prob", "<f8", {n}, s.log_prob},
       {"value", "<f8", {n}, s.value},
-      {"step", "<i4", {n}, s.step},
-      {"episode", "<i4", {n}, s.episode},
-      Strings("episode_id", s.episode_id),
-      Strings("board", s.board),
-      Strings("scenario", s.scenario),
-      {"seed", "<u8", {n}, s.seed},
-      Strings("policy_hash", s.policy_hash),
   };
+  s.from.AppendTo(&arrays, n);
+  WriteNpz(path, arrays);
+}
+
+void AddNavEpisode(NavShard* s, const api::StoredRollout& r, const rl::NavRollout& ro) {
+  const std::size_t steps = ro.steps.size();
+  for (std::size_t t = 0; t < steps; ++t) {
+    const rl::NavRolloutStep& st = ro.steps[t];
+    s->depth.append(reinterpret_cast<const char*>(st.depth.data()), st.depth.size() * sizeof(std::uint16_t));
+    s->state.append(reinterpret_cast<const char*>(st.state.data()), st.state.size() * sizeof(double));
+    s->action.append(reinterpret_cast<const char*>(st.action.data()), st.action.size() * sizeof(double));
+    Append(&s->reward, st.reward);
+    s->done.push_back(st.done ? 1 : 0);
+    s->truncated.push_back(t + 1 == steps && !st.done ? 1 : 0);
+    Append(&s->log_prob, st.log_prob);
+    s->from.Add(r, t);
+  }
+  s->n += steps;
+  ++s->episodes;
+}
+
+void WriteNavShard(const fs::path& path, const NavShard& s, std::size_t width, std::size_t height) {
+  const std::size_t n = s.n;
+  std::vector<NpyArray> arrays = {
+      {"depth", "<u2", {n, height, width}, s.depth},
+      {"state", "<f8", {n, std::size_t{rl::kNavStateSize}}, s.state},
+      {"action", "<f8", {n, std::size_t{rl::kNavActionSize}}, s.action},
+      {"reward", "<f8", {n}, s.reward},
+      {"done", "|b1", {n}, s.done},
+      {"truncated", "|b1", {n}, s.truncated},
+      {"log_prob", "<f8", {n}, s.log_prob},
+  };
+  s.from.AppendTo(&arrays, n);
   WriteNpz(path, arrays);
 }
 
 }  // namespace
 
 nlohmann::json DatasetSchema(int obs_dim, int num_actions) {
-  nlohmann::json arrays = nlohmann::json::array();
-  for (const Column& c : kColumns) {
-    arrays.push_back({{"name", c.name},
-                      {"dtype", std::string(c.dtype) == "U" ? "<U (fixed width)" : c.dtype},
-                      {"shape", c.shape},
-                      {"meaning", c.meaning}});
-  }
   return {{"format", "enavi-rollout-dataset"},
           {"version", 1},
+          {"kind", "frequency"},
           {"obs_dim", obs_dim},
           {"num_actions", num_actions},
           {"observation_features", navstack::PolicyStateFeatureNames()},
-          {"arrays", arrays}};
+          {"arrays", ArraysOf(kColumns)}};
+}
+
+nlohmann::json NavDatasetSchema(int width, int height, double max_depth_m) {
+  return {{"format", "enavi-rollout-dataset"},
+          {"version", 1},
+          {"kind", "nav"},
+          {"image", {{"width", width}, {"height", height}, {"max_depth_m", max_depth_m}}},
+          {"state_features", {"goal_dir_x", "goal_dir_y", "goal_dir_z", "goal_distance", "v_forward", "v_left", "v_up",
+                              "yaw_rate"}},
+          {"action_names", {"v_forward", "v_left", "v_up", "yaw_rate"}},
+          {"arrays", ArraysOf(kNavColumns)}};
 }
 
 ExportSummary ExportDataset(const std::vector<api::StoredRollout>& records, const ExportOptions& options) {
-  if (options.shard_steps < 1) throw std::invalid_argument("--shard-steps: must be >= 1");
+  const bool nav = !records.empty() && rl::IsNavRolloutBlob(records.front().rollout);
+  const std::size_t shard_steps =
+      options.shard_steps > 0 ? options.shard_steps : nav ? kNavShardSteps : kFrequencyShardSteps;
   fs::create_directories(options.out);
   ExportSummary summary;
   std::set<std::string> seen;
-  int obs_dim = -1, num_actions = -1;
+  int obs_dim = -1, num_actions = -1;  // nav: width, height
+  double max_depth_m = 0;
   nlohmann::json shards = nlohmann::json::array();
   nlohmann::json episodes = nlohmann::json::array();
   Shard shard;
+  NavShard nav_shard;
   auto flush = [&] {
-    if (shard.n == 0) return;
+    const std::size_t n = nav ? nav_shard.n : shard.n;
+    if (n == 0) return;
     char name[32];
     std::snprintf(name, sizeof name, "shard-%05zu.npz", summary.shards.size());
-    WriteShard(options.out / name, shard, static_cast<std::size_t>(obs_dim), static_cast<std::size_t>(num_actions));
-    shards.push_back({{"file", name}, {"steps", shard.n}, {"episodes", shard.episodes}});
+    if (nav) WriteNavShard(options.out / name, nav_shard, static_cast<std::size_t>(obs_dim), static_cast<std::size_t>(num_actions));
+    else WriteShard(options.out / name, shard, static_cast<std::size_t>(obs_dim), static_cast<std::size_t>(num_actions));
+    shards.push_back({{"file", name}, {"steps", n}, {"episodes", nav ? nav_shard.episodes : shard.episodes}});
     summary.shards.push_back(name);
     shard = Shard{};
+    nav_shard = NavShard{};
   };
   for (const api::StoredRollout& r : records) {
     if (!seen.insert(r.episode_id).second) {
       throw std::invalid_argument("episode " + r.episode_id + " appears twice in the job's rollouts");
     }
-    const rl::Rollout ro = rl::DecodeRollout(r.rollout, "rollout of " + r.episode_id);
-    if (ro.steps.empty()) continue;
-    const int od = static_cast<int>(ro.steps.front().obs.size());
-    const int na = static_cast<int>(ro.steps.front().mask.size());
+    const std::string source = "rollout of " + r.episode_id;
+    if (rl::IsNavRolloutBlob(r.rollout) != nav)
+      throw std::invalid_argument(source + ": a " + (nav ? "frequency" : "nav") + " rollout among the job's " +
+                                  (nav ? "nav" : "frequency") + " rollouts");
+    std::size_t steps = 0;
+    double ret = 0;
+    int od = 0, na = 0;
+    std::optional<rl::Rollout> ro;
+    std::optional<rl::NavRollout> nro;
+    if (nav) {
+      nro = rl::DecodeNavRollout(r.rollout, source);
+      steps = nro->steps.size();
+      ret = nro->Return();
+      od = nro->width;
+      na = nro->height;
+    } else {
+      ro = rl::DecodeRollout(r.rollout, source);
+      steps = ro->steps.size();
+      ret = ro->Return();
+      if (steps) {
+        od = static_cast<int>(ro->steps.front().obs.size());
+        na = static_cast<int>(ro->steps.front().mask.size());
+      }
+    }
+    if (steps == 0) continue;
     if (obs_dim < 0) {
       obs_dim = od;
       num_actions = na;
-    } else if (od != obs_dim || na != num_actions) {
-      throw std::invalid_argument("rollout of " + r.episode_id + ": shape differs from the job's first rollout");
+      if (nro) max_depth_m = nro->max_depth_m;
+    } else if (od != obs_dim || na != num_actions || (nro && nro->max_depth_m != max_depth_m)) {
+      throw std::invalid_argument(source + ": shape differs from the job's first rollout");
     }
-    AddEpisode(&shard, r, ro);
+    if (nav) AddNavEpisode(&nav_shard, r, *nro);
+    else AddEpisode(&shard, r, *ro);
     episodes.push_back({{"episode", r.index}, {"episode_id", r.episode_id}, {"board", r.board},
                         {"scenario", r.scenario}, {"world", r.world}, {"seed", r.seed},
                         {"policy_hash", r.policy_hash}, {"attempt", r.attempt}, {"worker", r.worker},
-                        {"steps", ro.steps.size()}, {"return", ro.Return()}, {"success", r.success},
+                        {"steps", steps}, {"return", ret}, {"success", r.success},
                         {"collided", r.collided}, {"flight_time_s", r.flight_time_s},
                         {"nav_cpu_util_pct", r.nav_cpu_util_pct}, {"shard", summary.shards.size()}});
     ++summary.episodes;
-    summary.steps += ro.steps.size();
-    if (shard.n >= options.shard_steps) flush();
+    summary.steps += steps;
+    if ((nav ? nav_shard.n : shard.n) >= shard_steps) flush();
   }
   if (summary.episodes == 0) throw std::invalid_argument("job " + options.job_id + " has no stored rollouts yet");
   flush();
-  nlohmann::json schema = DatasetSchema(obs_dim, num_actions);
+  nlohmann::json schema = nav ? NavDatasetSchema(obs_dim, num_actions, max_depth_m) : DatasetSchema(obs_dim, num_actions);
   schema["job_id"] = options.job_id;
   schema["episodes"] = summary.episodes;
   schema["steps"] = summary.steps;

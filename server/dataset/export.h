@@ -1,5 +1,6 @@
 #pragma once
-// `enavi dataset export`: a collection job's transitions as NumPy .npz shards plus a JSON schema
+// `enavi dataset export`: a collection job's transitions (E-Navi's frequency decisions, or the
+// learned method's depth images and velocity commands) as NumPy .npz shards plus a JSON schema
 // (docs/rl.md, "Datasets"). Episodes are never split across shards; every array of a shard has
 // one row per transition.
 
@@ -14,9 +15,14 @@
 
 namespace enavi::dataset {
 
+inline constexpr std::size_t kFrequencyShardSteps = 100000;  // ~19 MB
+inline constexpr std::size_t kNavShardSteps = 5000;          // ~31 MB at 64x48
+
 struct ExportOptions {
   std::filesystem::path out;        ///< directory, created; shards and schema.json go here
-  std::size_t shard_steps = 100000; ///< a shard closes after the episode that reaches this
+  /// A shard closes after the episode that reaches this many steps; 0: the kind's default
+  /// (kFrequencyShardSteps, or kNavShardSteps: images make a step ~3,000x larger).
+  std::size_t shard_steps = 0;
   std::string job_id;
 };
 
@@ -31,8 +37,10 @@ struct ExportSummary {
 ///   episode; std::runtime_error on I/O failure.
 ExportSummary ExportDataset(const std::vector<api::StoredRollout>& records, const ExportOptions& options);
 
-/// The schema document (arrays, dtypes, shapes, meanings) for observations of `obs_dim` and
-/// `num_actions` actions; ExportDataset adds the shards and totals.
+/// The schema documents (arrays, dtypes, shapes, meanings): of E-Navi's frequency rollouts, for
+/// observations of `obs_dim` and `num_actions` actions; of the learned method's (kind "nav"), for
+/// width x height depth images. ExportDataset adds the shards and totals.
 nlohmann::json DatasetSchema(int obs_dim, int num_actions);
+nlohmann::json NavDatasetSchema(int width, int height, double max_depth_m);
 
 }  // namespace enavi::dataset

@@ -15,7 +15,9 @@ namespace enavi::server {
 
 std::string StorePolicy(Store* store, const std::string& text, const std::string& source) {
   const std::string canonical =
-      navstack::rl::CanonicalPolicyText(navstack::rl::FrequencyPolicyFromText(text, source));
+      navstack::rl::IsNavPolicyText(text)
+          ? navstack::rl::CanonicalNavPolicyText(text, source)
+          : navstack::rl::CanonicalPolicyText(navstack::rl::FrequencyPolicyFromText(text, source));
   const std::string hash = api::Sha256Hex(canonical);
   store->collect().PutPolicy(hash, canonical, NowMs());
   return hash;
@@ -57,6 +59,21 @@ std::optional<CollectionInfo> PrepareCollection(Store* store, const api::JobSpec
     std::ostringstream text;
     text << in.rdbuf();
     hash = StorePolicy(store, text.str(), "policy file '" + job.policy + "'");
+  }
+  // The policy fits the method: a nav policy flies `learned`, a frequency policy `enavi`.
+  const std::string stored = *store->collect().Policy(hash);
+  const bool nav = navstack::rl::IsNavPolicyText(stored);
+  const std::string& method = job.methods.front();
+  if (nav != (method == "learned")) {
+    throw std::invalid_argument("policy: " + job.policy + " is a " +
+                                (nav ? "nav policy (method learned)" : "frequency policy (method enavi)") +
+                                "; the job flies " + method);
+  }
+  if (nav && job.collect->sample &&
+      !navstack::rl::NavPolicyFromJson(nlohmann::json::parse(stored), "policy " + job.policy).log_std()) {
+    throw std::invalid_argument("sample: true draws from the nav policy's Gaussian, and policy " + job.policy +
+                                " has no log_std (examples/torch_nav_ppo.py writes it); sample: false collects its "
+                                "greedy actions");
   }
   for (auto& e : *episodes) e.policy = prefix + hash;
   return CollectionInfo{hash, job.collect->sample};

@@ -12,11 +12,13 @@
 
 namespace enavi::server {
 
-/// Validates an E-Navi policy (JSON text), stores its canonical bytes and returns their SHA-256.
+/// Validates a policy (JSON text: a frequency policy, or a nav policy by its "format"), stores its
+/// canonical bytes and returns their SHA-256.
 /// @throws std::invalid_argument naming `source` for a policy that does not load.
 std::string StorePolicy(Store* store, const std::string& text, const std::string& source);
 
-/// For a collection job: stores its policy (a file, or a hash already stored), points every
+/// For a collection job: stores its policy (a file, or a hash already stored), checks that it fits
+/// the method (and has a log_std when a nav policy is sampled), points every
 /// episode at "sha256:HASH" and returns what the store records. Nullopt for other jobs.
 /// Any other job's policy files are loaded once, so a bad one is refused at submit.
 /// @throws std::invalid_argument for an unknown policy hash, a bad policy file, or a policy hash

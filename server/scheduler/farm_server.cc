@@ -5,7 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "api/provenance.h"
-#include "navstack/rl/rollout.h"
+#include "navstack/rl/nav_rollout.h"
 #include "server/scheduler/collection.h"
 #include "server/store/collect_store.h"
 #include "server/store/ingest.h"
@@ -302,7 +302,7 @@ void FarmServer::HandleResults(const std::vector<api::ResultMessage>& input,
     // A rollout that does not decode is the episode's error, not data.
     if (m.rollout.empty()) continue;
     try {
-      navstack::rl::DecodeRollout(m.rollout, "rollout of " + m.episode_id);
+      navstack::rl::CheckRolloutBlob(m.rollout, "rollout of " + m.episode_id);
     } catch (const std::exception& e) {
       m.status = api::ResultStatus::kError;
       m.error = e.what();

@@ -32,7 +32,8 @@ ON CONFLICT (job_id, board, scenario, method, name) DO UPDATE SET
   max_ok = COALESCE(MAX(max_ok, excluded.max_ok), max_ok, excluded.max_ok)
 )sql";
 
-// Step count from a rollout blob's header ("ENR1", obs_dim, num_actions, steps: u32 each).
+// Step count from a rollout blob's header: u32 at offset 12 in both forms ("ENR1" obs_dim,
+// num_actions, steps; "ENV1" width, height, steps).
 std::uint32_t RolloutSteps(const std::string& blob) {
   std::uint32_t steps = 0;
   if (blob.size() >= 16) std::memcpy(&steps, blob.data() + 12, sizeof steps);

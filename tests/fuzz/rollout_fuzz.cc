@@ -1,5 +1,6 @@
-// Rollouts: the binary blob a worker sends (navstack::rl::DecodeRollout), its JSON form and the
-// HTTP rollout stream (api::DecodeRolloutStream). The first byte picks the decoder; any input is
+// Rollouts: the binary blob a worker sends (navstack::rl::DecodeRollout), its JSON form, the
+// learned method's compressed blob (DecodeNavRollout) and the HTTP rollout stream
+// (api::DecodeRolloutStream). The first byte picks the decoder; any input is
 // decoded or refused naming the source, and a decoded blob re-encodes to one that decodes.
 
 #include <cstddef>
@@ -8,6 +9,7 @@
 #include <string_view>
 
 #include "api/rollout_records.h"
+#include "navstack/rl/nav_rollout.h"
 #include "navstack/rl/rollout.h"
 #include "tests/fuzz/fuzz_check.h"
 
@@ -17,7 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string_view bytes(reinterpret_cast<const char*>(data) + 1, size - 1);
   constexpr const char* kSource = "fuzz-rollout";
   try {
-    switch (data[0] % 3) {
+    switch (data[0] % 4) {
       case 0: {
         const navstack::rl::Rollout r = navstack::rl::DecodeRollout(bytes, kSource);
         navstack::rl::DecodeRollout(navstack::rl::EncodeRollout(r), "re-encoded");
@@ -26,6 +28,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       case 1: {
         const navstack::rl::Rollout r = navstack::rl::DeserializeRollout(std::string(bytes), kSource);
         navstack::rl::DeserializeRollout(navstack::rl::SerializeRollout(r), "re-serialised");
+        break;
+      }
+      case 3: {
+        const navstack::rl::NavRollout r = navstack::rl::DecodeNavRollout(bytes, kSource);
+        navstack::rl::DecodeNavRollout(navstack::rl::EncodeNavRollout(r), "re-encoded");
         break;
       }
       default: {

@@ -1,6 +1,8 @@
 // The `learned` method (navstack/methods/learned/): a nav policy file flown through the episode,
 // its inference priced on the board, its action landing when the board finishes it.
 #include <filesystem>
+#include <fstream>
+#include <tuple>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -8,9 +10,11 @@
 #include "navstack/methods/method_config.h"
 #include "navstack/methods/registry.h"
 #include "navstack/rl/nav_policy.h"
+#include "navstack/rl/nav_rollout.h"
 #include "navstack/runtime/virtual_executor.h"
 #include "workers/board/board_profile.h"
 #include "workers/sim/episode.h"
+#include "workers/sim/episode_child.h"
 
 namespace enavi::integration {
 namespace {
@@ -105,6 +109,76 @@ TEST(LearnedMethodTest, TheActionTakesEffectWhenTheBoardFinishesTheInference) {
   }
   bad.policy.clear();
   EXPECT_THROW(sim::RunEpisode(bad), std::invalid_argument) << "no policy file";
+}
+
+// Collection (a job with collect: rollouts and method learned): the worker's child draws each
+// action from the file's Gaussian outside the flight, decision by decision, and records it. The
+// flight is the method's own with learned.explore (the same draws at the same instants), and the
+// rollout holds every inference with its reward.
+TEST(LearnedMethodTest, ACollectionFlightIsTheMethodsOwnFlightAndRecordsEveryDecision) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(::testing::TempDir()) / "learned-collect";
+  fs::create_directories(dir);
+  navstack::rl::NavPolicyNet net = navstack::rl::MakeNavPolicy(64, 48, 3);
+  net.set_log_std({-1, -1, -1, -1});
+  const std::string policy = (dir / "sampled.json").string();
+  navstack::rl::SaveNavPolicy(policy, net);
+
+  auto collect = [&](bool explore, const std::string& name) {
+    api::EpisodeSpec spec = LearnedSpec(policy, "pi4b");
+    spec.overrides["learned.explore"] = explore ? 1 : 0;
+    const sim::ChildFiles files{(dir / (name + ".spec.json")).string(), (dir / (name + ".result.json")).string(),
+                                (dir / (name + ".rollout")).string()};
+    std::ofstream(files.spec_file) << nlohmann::json(spec).dump();
+    const api::EpisodeResult result = sim::RunEpisodeChild(files);
+    std::ifstream in(files.rollout_file, std::ios::binary);
+    const std::string blob((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return std::make_tuple(spec, result, blob);
+  };
+  const auto strip = [](const api::EpisodeResult& r) {
+    nlohmann::json j = r;
+    j.erase("wall_time_s");
+    return j.dump();
+  };
+  for (const bool explore : {false, true}) {
+    SCOPED_TRACE(explore ? "sampled" : "greedy");
+    const auto [spec, result, blob] = collect(explore, explore ? "sampled" : "greedy");
+    EXPECT_EQ(strip(result), strip(sim::RunEpisode(spec))) << "the method's own flight";
+    EXPECT_EQ(std::get<2>(collect(explore, "again")), blob) << "the same rollout, byte for byte";
+
+    const navstack::rl::NavRollout r = navstack::rl::DecodeNavRollout(blob, "test");
+    EXPECT_EQ(r.width, 64);
+    EXPECT_EQ(r.height, 48);
+    // One decision per frame at 30 Hz until the end; a terminal only on a goal or a collision.
+    EXPECT_NEAR(static_cast<double>(r.steps.size()), 30 * result.flight_time_s, 2.0);
+    EXPECT_EQ(r.steps.back().done, result.success || result.collided);
+    EXPECT_EQ(r.info.at("flight_time_s"), result.flight_time_s);
+    // Greedy: the network's output on what it saw (the stored depth is within 7.7e-6 of it);
+    // sampled: that plus the Gaussian's noise (sigma e^-1 per component).
+    double deviation = 0;
+    for (const auto& s : r.steps) {
+      navstack::rl::NavObservation seen{{}, s.state};
+      for (const std::uint16_t d : s.depth) seen.depth.push_back(navstack::rl::DepthValue(d));
+      const Eigen::Vector4d z = (s.action - net.Forward(seen)) / std::exp(-1.0);
+      const double dev = z.norm() * std::exp(-1.0);
+      if (!explore) EXPECT_LT(dev, 1e-3);
+      deviation += dev / static_cast<double>(r.steps.size());
+      // The log-density of the draw: sum over components of -z^2/2 - log sigma - log(2 pi)/2.
+      const double log_prob = -0.5 * z.squaredNorm() + 4 * (1.0 - 0.5 * std::log(2 * M_PI));
+      EXPECT_NEAR(s.log_prob, explore ? log_prob : 0.0, 0.01);
+    }
+    if (explore) EXPECT_NEAR(deviation, std::exp(-1.0) * 1.88, 0.15) << "E|N(0, sigma^2 I_4)| = 1.88 sigma";
+  }
+  // Sampling needs the file's Gaussian: refused by name, before any flight.
+  api::EpisodeSpec greedy_only = LearnedSpec(PolicyFile("learned-nostd.json", 64, 48), "pi4b");
+  greedy_only.overrides["learned.explore"] = 1;
+  try {
+    sim::RunEpisode(greedy_only);
+    ADD_FAILURE() << "sampled without a log_std";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("learned.explore: the policy file has no log_std"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -131,6 +131,8 @@ class TorchExampleTest(unittest.TestCase):
                             "--steps", "256", "--batch", "128"], check=True, env=os.environ)
             with open(os.path.join(tmp, "nav.csv")) as f:
                 self.assertEqual(len(f.read().splitlines()), 3, "header and two iterations")
+            with open(out) as f:
+                self.assertEqual(len(json.load(f)["log_std"]), 4, "the Gaussian a sampling collection draws from")
             # The file holds the torch network: the same action on the same observation.
             torch.manual_seed(7)
             actor = torch_nav_ppo.Actor(64, 48)

@@ -260,6 +260,12 @@ StepStatus Episode::Step() {
   return StepStatus::kRunning;
 }
 
+void Episode::Stop(EpisodeEnd end) {
+  if (end_) throw std::logic_error("Stop: the episode has ended");
+  if (resuming_) throw std::logic_error("Stop: a decision is pending");
+  end_ = std::move(end);
+}
+
 api::EpisodeResult Episode::Finish() {
   if (!end_) throw std::logic_error("Finish: the episode has not ended");
   if (finished_) throw std::logic_error("Finish: called twice");

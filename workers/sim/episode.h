@@ -153,6 +153,9 @@ class Episode {
   /// Closes the stack (rollouts get their last reward) and writes the results. Once, after
   /// Step() returned kEnded. @throws std::logic_error before the end.
   api::EpisodeResult Finish();
+  /// Ends the flight from outside at its current step (the navigation environment's flight
+  /// bounds); then Finish(). @throws std::logic_error after the end or with a decision pending.
+  void Stop(EpisodeEnd end);
 
   const EpisodeModel& model() const { return model_; }
   double t() const;                                     ///< sim time of the next step

@@ -7,7 +7,12 @@
 
 #include "api/atomic_file.h"
 #include "api/job_spec.h"
+#include "navstack/rl/nav_policy.h"
+#include "navstack/rl/nav_rollout.h"
+#include "navstack/rl/random.h"
 #include "navstack/rl/rollout.h"
+#include "workers/sim/nav_stepper.h"
+#include "worlds/resolve.h"
 
 namespace enavi::sim {
 namespace {
@@ -38,6 +43,37 @@ void CheckSpecFields(const nlohmann::json& j, const std::string& file) {
   }
 }
 
+// A collection episode of the learned method: its policy file's actions (drawn from its Gaussian
+// with learned.explore, as the method draws them) supplied decision by decision, so that each
+// step's reward is the navigation environment's.
+api::EpisodeResult CollectNavRollout(const api::EpisodeSpec& spec, EpisodeOptions options,
+                                     navstack::rl::NavRollout* rollout) {
+  namespace rl = navstack::rl;
+  if (spec.policy.empty()) throw std::invalid_argument("policy: method learned flies a nav policy file");
+  const rl::NavPolicyNet net = rl::LoadNavPolicy(spec.policy);
+  const auto explore = spec.overrides.find("learned.explore");
+  const bool sample = explore != spec.overrides.end() && explore->second > 0;
+  rl::Rng rng(rl::NavExploreSeed(spec.seed));
+  const auto world = PrepareWorld(worlds::ResolveWorld(WorldRequestOf(spec)));
+  NavStepper stepper(spec, *world, std::move(options));
+  rollout->width = net.width();
+  rollout->height = net.height();
+  rollout->max_depth_m = net.max_depth_m();
+  NavTransition t = stepper.First();
+  while (!stepper.finished()) {
+    const rl::NavObservation obs{t.depth, t.state};
+    rl::SampledNavAction a;
+    if (sample) a = rl::SampleNavAction(net, obs, &rng);
+    else a.action = net.Forward(obs);
+    rl::NavRolloutStep step{rl::QuantizeDepth(t.depth), t.state, a.action, a.log_prob};
+    t = stepper.Step(a.action);
+    step.reward = t.reward;
+    step.done = t.terminated;
+    rollout->steps.push_back(std::move(step));
+  }
+  return stepper.result();
+}
+
 }  // namespace
 
 api::EpisodeSpec ReadSpecFile(const std::string& file) {
@@ -65,15 +101,27 @@ api::EpisodeSpec ReadSpecFile(const std::string& file) {
 
 api::EpisodeResult RunEpisodeChild(const ChildFiles& files, EpisodeOptions options) {
   const api::EpisodeSpec spec = ReadSpecFile(files.spec_file);
+  const bool nav = !files.rollout_file.empty() && spec.method == "learned";
   navstack::rl::Rollout rollout;
-  if (!files.rollout_file.empty()) options.rollout = &rollout;
-  const api::EpisodeResult result = RunEpisode(spec, options);
+  navstack::rl::NavRollout nav_rollout;
+  if (!files.rollout_file.empty() && !nav) options.rollout = &rollout;
+  const api::EpisodeResult result = nav ? CollectNavRollout(spec, std::move(options), &nav_rollout)
+                                        : RunEpisode(spec, options);
   if (!files.result_file.empty()) api::WriteFileAtomic(files.result_file, nlohmann::json(result).dump() + "\n");
   if (!files.rollout_file.empty()) {
-    rollout.id = spec.world + "-" + std::to_string(spec.seed) + "-" + spec.board;
-    rollout.info = {{"success", result.success ? 1.0 : 0.0}, {"collided", result.collided ? 1.0 : 0.0},
-                    {"flight_time_s", result.flight_time_s}, {"nav_cpu_util_pct", result.nav_cpu_util_pct}};
-    api::WriteFileAtomic(files.rollout_file, navstack::rl::SerializeRollout(rollout));
+    const std::string id = spec.world + "-" + std::to_string(spec.seed) + "-" + spec.board;
+    const std::map<std::string, double> info = {
+        {"success", result.success ? 1.0 : 0.0}, {"collided", result.collided ? 1.0 : 0.0},
+        {"flight_time_s", result.flight_time_s}, {"nav_cpu_util_pct", result.nav_cpu_util_pct}};
+    if (nav) {
+      nav_rollout.id = id;
+      nav_rollout.info = info;
+      api::WriteFileAtomic(files.rollout_file, navstack::rl::EncodeNavRollout(nav_rollout));
+    } else {
+      rollout.id = id;
+      rollout.info = info;
+      api::WriteFileAtomic(files.rollout_file, navstack::rl::SerializeRollout(rollout));
+    }
   }
   return result;
 }

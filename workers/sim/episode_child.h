@@ -21,11 +21,14 @@ api::EpisodeSpec ReadSpecFile(const std::string& file);
 struct ChildFiles {
   std::string spec_file;     ///< in
   std::string result_file;   ///< out: the full EpisodeResult as JSON
-  std::string rollout_file;  ///< out, optional: E-Navi's training rollout
+  /// out, optional: the training rollout: E-Navi's frequency decisions (JSON, rollout.h), or the
+  /// learned method's navigation decisions (binary, nav_rollout.h)
+  std::string rollout_file;
 };
 
 /// Flies the spec in files.spec_file with `options` (a rollout is recorded when
-/// files.rollout_file is set) and writes the result and the rollout files.
+/// files.rollout_file is set: method learned then flies its file's actions through a NavStepper,
+/// decision by decision) and writes the result and the rollout files.
 /// @throws std::invalid_argument for a bad spec (ReadSpecFile) or world; what RunEpisode throws.
 api::EpisodeResult RunEpisodeChild(const ChildFiles& files, EpisodeOptions options = {});
 

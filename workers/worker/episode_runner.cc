@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "navstack/rl/nav_rollout.h"
 #include "navstack/rl/rollout.h"
 #include "workers/worker/process.h"
 
@@ -52,7 +53,7 @@ EpisodeOutcome RunEpisode(const api::EpisodeSpec& spec, const EpisodeRun& run,
   const fs::path spec_file = dir / "spec.json";
   const fs::path result_file = dir / "result.json";
   const fs::path stderr_file = dir / "stderr.log";
-  const fs::path rollout_file = dir / "rollout.json";
+  const fs::path rollout_file = dir / "rollout";
   fs::remove(result_file);
   fs::remove(rollout_file);
   {
@@ -119,15 +120,18 @@ EpisodeOutcome RunEpisode(const api::EpisodeSpec& spec, const EpisodeRun& run,
   } catch (const std::exception& e) {
     return Error("invalid result file " + result_file.string() + ": " + e.what(), wall_s);
   }
-  // The rollout goes on in its compact binary form, checked on the way.
+  // The rollout goes on in its compact binary form, checked on the way: E-Navi's comes as JSON,
+  // the learned method's (depth images) already binary.
   if (run.collect_rollout) {
     std::ifstream rin(rollout_file, std::ios::binary);
     if (!rin) return Error("episode command exited 0 but wrote no " + rollout_file.string(), wall_s);
     const std::string text((std::istreambuf_iterator<char>(rin)), std::istreambuf_iterator<char>());
     try {
-      const navstack::rl::Rollout rollout = navstack::rl::DeserializeRollout(text, rollout_file.string());
-      if (rollout.steps.empty()) return Error("the episode recorded an empty rollout", wall_s);
-      out.rollout = navstack::rl::EncodeRollout(rollout);
+      out.rollout = navstack::rl::IsNavRolloutBlob(text)
+                        ? text
+                        : navstack::rl::EncodeRollout(navstack::rl::DeserializeRollout(text, rollout_file.string()));
+      if (navstack::rl::CheckRolloutBlob(out.rollout, rollout_file.string()) == 0)
+        return Error("the episode recorded an empty rollout", wall_s);
     } catch (const std::exception& e) {
       return Error(std::string("invalid rollout: ") + e.what(), wall_s);
     }

@@ -36,7 +36,7 @@ struct EpisodeOutcome {
   std::string error;       ///< kError: what went wrong
   double wall_time_s = 0;
   api::EpisodeResult result;  ///< kResult
-  std::string rollout;        ///< kResult of a collect_rollout run: navstack::rl::EncodeRollout
+  std::string rollout;        ///< kResult of a collect_rollout run: EncodeRollout or EncodeNavRollout
 };
 
 /// The production episode command: this executable's `fly` subcommand.

@@ -315,7 +315,8 @@ void Worker::CollectFinished() {
         if (m.rollout.size() > api::kMaxRolloutBytes) {
           m.status = api::ResultStatus::kError;
           m.error = "rollout of " + std::to_string(m.rollout.size()) + " bytes exceeds the " +
-                    std::to_string(api::kMaxRolloutBytes) + "-byte limit of one bus sample";
+                    std::to_string(api::kMaxRolloutBytes) +
+                    "-byte limit of one bus sample (a learned policy's: smaller images or a shorter timeout_s)";
           m.rollout.clear();
         }
         break;

@@ -11,6 +11,7 @@
 #include "navstack/methods/method_util.h"
 #include "navstack/rl/decision_port.h"
 #include "navstack/rl/nav_policy.h"
+#include "navstack/rl/random.h"
 
 namespace enavi::navstack {
 namespace {
@@ -29,25 +30,31 @@ class LearnedNavigator final : public Navigator {
  public:
   LearnedNavigator(const MethodOptions& o, TaskExecutor* exec, const VehicleState& s0)
       : options_(o), exec_(exec), state_(s0), hold_(HoldAt(s0.p_WB, YawOf(s0.q_WB))),
-        zero_latency_(o.Param("learned.zero_latency") > 0) {
-    if (o.decisions == nullptr) {
+        zero_latency_(o.Param("learned.zero_latency") > 0), explore_(o.Param("learned.explore") > 0),
+        rng_(rl::NavExploreSeed(o.seed)) {
+    if (o.nav_policy) {
+      // The file's network: its image size, range and action scale, also when its actions are
+      // taken outside (a collection job's worker draws them from it).
       net_ = o.nav_policy;
       width_ = net_->width();
       height_ = net_->height();
       max_depth_ = net_->max_depth_m();
       scale_ = net_->action_scale();
+      if (o.Param("learned.multiply_adds") > 0)
+        throw std::invalid_argument("learned.multiply_adds: the policy file's network has its own count (" +
+                                    std::to_string(net_->multiply_adds()) + "); set it only for actions from outside");
+      multiply_adds_ = net_->multiply_adds();
+      if (explore_ && !net_->log_std())
+        throw std::invalid_argument("learned.explore: the policy file has no log_std to sample with");
     } else {
-      // Actions from outside: the observation at the stream's own size, the default scales.
+      // Actions from outside (the Python environment): the observation at the stream's own size,
+      // the default scales.
       width_ = o.camera.width;
       height_ = o.camera.height;
       max_depth_ = o.camera.max_range;
       scale_ = {o.planner.v_max, o.planner.v_max, 1.0, 1.0};
       multiply_adds_ = static_cast<std::int64_t>(o.Param("learned.multiply_adds"));
     }
-    if (net_ && o.Param("learned.multiply_adds") > 0)
-      throw std::invalid_argument("learned.multiply_adds: the policy file's network has its own count (" +
-                                  std::to_string(net_->multiply_adds()) + "); set it only for actions from outside");
-    if (net_) multiply_adds_ = net_->multiply_adds();
     if (o.camera.width % width_ != 0 || o.camera.width / width_ != o.camera.height / height_ ||
         o.camera.height % height_ != 0)
       throw std::invalid_argument("policy: the network reads " + std::to_string(width_) + "x" +
@@ -106,7 +113,8 @@ class LearnedNavigator final : public Navigator {
       out.awaits_decision = true;
       out.commit = [this] { Apply(options_.decisions->TakeVector()); };
     } else {
-      const Eigen::VectorXd action = net_->Forward(obs);
+      const Eigen::VectorXd action = explore_ ? Eigen::VectorXd(rl::SampleNavAction(*net_, obs, &rng_).action)
+                                              : Eigen::VectorXd(net_->Forward(obs));
       out.commit = [this, action] { Apply(action); };
     }
     return out;
@@ -130,7 +138,9 @@ class LearnedNavigator final : public Navigator {
   VehicleState state_;
   TrajectorySample hold_;  ///< before the first action: hover at the start
   bool zero_latency_;
-  std::shared_ptr<const rl::NavPolicyNet> net_;  ///< null: actions from outside
+  bool explore_;  ///< sample the file's Gaussian instead of taking its mean
+  rl::Rng rng_;
+  std::shared_ptr<const rl::NavPolicyNet> net_;  ///< null: actions from outside, no file
   std::int64_t multiply_adds_ = 0;
   int width_ = 0, height_ = 0;
   double max_depth_ = 10;
@@ -157,9 +167,12 @@ MethodInfo LearnedMethod() {
                  "1: the inference is free and its action applies at the frame's instant (no board in the loop)"},
                 {"learned.multiply_adds", 0, 1e9, 0, true,
                  "multiply-adds per inference when the actions come from outside (the Python environment's network); "
-                 "a policy file counts its own"}};
+                 "a policy file counts its own"},
+                {"learned.explore", 0, 1, 0, true,
+                 "1: each action drawn from the policy file's Gaussian (its log_std), seeded by the episode's seed; "
+                 "a collection job sets it from `sample`"}};
   m.configure = [](const MethodSetup& setup, MethodOptions* o) {
-    if (setup.decisions) return;  // the actions come from outside: no file
+    if (!setup.nav_policy && setup.decisions) return;  // the Python environment sets the camera
     if (!setup.nav_policy)
       throw std::invalid_argument("policy: method learned needs a nav policy file (--policy FILE; "
                                   "examples/torch_nav_ppo.py trains one)");

@@ -12,7 +12,8 @@ const std::string kHashRef = "sha256:" + std::string(64, 'c');
 JobSpecOptions Options() {
   JobSpecOptions o;
   o.catalog.methods = {{"baseline", "", {}},
-                       {"enavi", "", {{"strategy.explore", 0, 1, true}, {"strategy.least_load", 0, 1, true}}}};
+                       {"enavi", "", {{"strategy.explore", 0, 1, true}, {"strategy.least_load", 0, 1, true}}},
+                       {"learned", "", {{"learned.explore", 0, 1, true}}}};
   o.catalog.boards = {"pi4b", "tx2"};
   o.catalog.scenarios = {"s1", "s2", "empty"};
   o.catalog.clocks = {"virtual", "emulated"};
@@ -41,6 +42,16 @@ TEST(JobSpecCollectTest, CollectionJobSamplesWithThePolicyByHash) {
   for (const auto& e : episodes) {
     EXPECT_EQ(e.policy, kHashRef);
     EXPECT_EQ(e.overrides.at("strategy.explore"), 1.0);
+  }
+}
+
+TEST(JobSpecCollectTest, LearnedCollectionSamplesWithItsOwnSwitch) {
+  const JobSpec job = Parse("boards: [tx2]\nscenarios: [empty]\nmethods: [learned]\nseeds: 2\n"
+                            "collect: rollouts\nsample: true\npolicy: \"" + kHashRef + "\"\n");
+  for (const auto& e : ExpandJob(job)) {
+    EXPECT_EQ(e.method, "learned");
+    EXPECT_EQ(e.overrides.at("learned.explore"), 1.0);
+    EXPECT_FALSE(e.overrides.contains("strategy.explore")) << "not a tunable of learned";
   }
 }
 
@@ -78,7 +89,10 @@ TEST(JobSpecCollectTest, ACollectionJobCannotFlyTheLeastLoadRule) {
 TEST(JobSpecCollectTest, BadCollectionSpecsNameLineAndField) {
   const std::string base = "boards: [tx2]\nscenarios: [empty]\nseeds: 1\n";
   EXPECT_NE(Error(base + "methods: [baseline]\ncollect: rollouts\npolicy: \"" + kHashRef + "\"\n")
-                .find("job.yaml:4: methods: a collection job flies [enavi] only"),
+                .find("job.yaml:4: methods: a collection job flies one method that records rollouts: [enavi]"),
+            std::string::npos);
+  EXPECT_NE(Error(base + "methods: [enavi, learned]\ncollect: rollouts\npolicy: \"" + kHashRef + "\"\n")
+                .find("methods: a collection job flies one method"),
             std::string::npos);
   EXPECT_NE(Error(base + "methods: [enavi]\ncollect: rollouts\n").find("policy: a collection job names its policy"),
             std::string::npos);

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "navstack/rl/random.h"
 
 namespace enavi::navstack::rl {
 namespace {
@@ -87,8 +88,62 @@ TEST(NavPolicyTest, ABadFileNamesItsFieldAndReason) {
   bad = j;
   bad["action_scale"] = {1, 1, 1};
   refused(bad, "action_scale");
+  bad = j;
+  bad["log_std"] = {-0.5, -0.5, 5, -0.5};
+  refused(bad, "log_std: must be finite and in [-20");
+  bad = j;
+  bad["log_std"] = {-0.5};
+  refused(bad, "log_std");
   std::ofstream(path) << "{\"format\": ";
   EXPECT_THROW(LoadNavPolicy(path), std::invalid_argument);
+}
+
+TEST(NavPolicyTest, SamplesFromItsGaussianWithTheLogDensityOfTheDraw) {
+  NavPolicyNet net = MakeNavPolicy(64, 48, 2);
+  const NavObservation obs = RampObservation(64, 48);
+  Rng rng(NavExploreSeed(5));
+  EXPECT_THROW(SampleNavAction(net, obs, &rng), std::invalid_argument) << "no log_std: nothing to sample";
+  const std::array<double, kNavActionSize> log_std = {-0.5, -1.0, -2.0, 0.0};
+  net.set_log_std(log_std);
+  // The file keeps it: a saved and loaded network samples the same draws.
+  const std::string path = TempFile("sampled-nav.json");
+  SaveNavPolicy(path, net);
+  EXPECT_EQ(*LoadNavPolicy(path).log_std(), log_std);
+
+  const Eigen::Vector4d mean = net.Forward(obs);
+  Rng a(NavExploreSeed(5)), b(NavExploreSeed(5));
+  Eigen::Vector4d sum = Eigen::Vector4d::Zero(), sq = Eigen::Vector4d::Zero();
+  constexpr int kDraws = 4000;
+  for (int n = 0; n < kDraws; ++n) {
+    const SampledNavAction s = SampleNavAction(net, obs, &a);
+    EXPECT_EQ(s.action, SampleNavAction(net, obs, &b).action) << "the same seed draws the same";
+    // log N(x; mu, sigma) summed over the four components, from the draw itself.
+    double log_prob = 0;
+    for (int i = 0; i < kNavActionSize; ++i) {
+      const double sigma = std::exp(log_std[static_cast<std::size_t>(i)]);
+      const double z = (s.action[i] - mean[i]) / sigma;
+      log_prob += -0.5 * z * z - std::log(sigma) - 0.5 * std::log(2 * M_PI);
+    }
+    ASSERT_NEAR(s.log_prob, log_prob, 1e-9);
+    sum += s.action - mean;
+    sq += (s.action - mean).cwiseAbs2();
+  }
+  for (int i = 0; i < kNavActionSize; ++i) {
+    const double sigma = std::exp(log_std[static_cast<std::size_t>(i)]);
+    EXPECT_NEAR(sum[i] / kDraws, 0.0, 4 * sigma / std::sqrt(double(kDraws))) << i;
+    EXPECT_NEAR(std::sqrt(sq[i] / kDraws), sigma, 0.05 * sigma) << i;
+  }
+}
+
+TEST(NavPolicyTest, TheCanonicalTextIsOnePerNetworkAndKeepsTheMetadata) {
+  NavPolicyNet net = MakeNavPolicy(64, 48, 4);
+  net.set_log_std({-1, -1, -1, -1});
+  const std::string canonical = CanonicalNavPolicyText(NavPolicyToJson(net, {{"run", 7}}).dump(2), "a");
+  EXPECT_EQ(CanonicalNavPolicyText(canonical, "b"), canonical);
+  EXPECT_NE(canonical.find("\"run\":7"), std::string::npos);
+  EXPECT_TRUE(IsNavPolicyText(canonical));
+  EXPECT_FALSE(IsNavPolicyText("{\"format\": \"enavi-frequency-policy\"}"));
+  EXPECT_FALSE(IsNavPolicyText("not json"));
 }
 
 TEST(NavPolicyTest, TheObservationKeepsTheNearestReturnOfEachBlockAndTheGoalInTheYawFrame) {

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "navstack/rl/nav_policy.h"
 #include "navstack/rl/policy_io.h"
 #include "navstack/rl/rollout.h"
 #include "server/scheduler/collection.h"
@@ -150,6 +151,51 @@ TEST_F(CollectStoreTest, AJobsPolicyFileThatDoesNotLoadIsRefusedAtSubmit) {
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()), "policy file '" + bad.string() + "': format: missing");
   }
+}
+
+// A collection of the learned method stores its nav policy by the hash of its canonical text, and
+// refuses a policy of the other kind, or sampling from a policy without a log_std.
+TEST_F(CollectStoreTest, ANavPolicyCollectsForTheLearnedMethodOnly) {
+  navstack::rl::NavPolicyNet net = navstack::rl::MakeNavPolicy(64, 48, 3);
+  const fs::path greedy = dir_ / "greedy.json", sampled = dir_ / "sampled.json", freq = dir_ / "freq.json";
+  navstack::rl::SaveNavPolicy(greedy.string(), net, {{"note", "kept"}});
+  net.set_log_std({-0.5, -0.5, -1, -1});
+  navstack::rl::SaveNavPolicy(sampled.string(), net);
+  navstack::rl::SavePolicyFile(freq.string(), navstack::rl::MakeFrequencyPolicy(navstack::ActionGrid(), 1));
+  auto prepare = [&](const std::string& method, const fs::path& policy, bool sample) {
+    api::JobSpec job;
+    job.methods = {method};
+    job.policy = policy.string();
+    job.collect = api::CollectSpec{sample};
+    std::vector<api::EpisodeSpec> episodes(2);
+    for (auto& e : episodes) {
+      e.method = method;
+      e.policy = job.policy;
+    }
+    const auto info = PrepareCollection(store_.get(), job, &episodes);
+    EXPECT_EQ(episodes[0].policy, "sha256:" + info->policy_hash);
+    return *info;
+  };
+  const CollectionInfo info = prepare("learned", sampled, true);
+  const std::string stored = *store_->collect().Policy(info.policy_hash);
+  EXPECT_EQ(navstack::rl::NavPolicyFromJson(nlohmann::json::parse(stored), "stored").log_std()->at(2), -1.0);
+  EXPECT_EQ(prepare("learned", sampled, true).policy_hash, info.policy_hash) << "one hash per network";
+  EXPECT_NE(store_->collect().Policy(prepare("learned", greedy, false).policy_hash)->find("\"kept\""),
+            std::string::npos) << "the metadata is kept";
+  auto refusal = [&](const std::string& method, const fs::path& policy, bool sample) {
+    try {
+      prepare(method, policy, sample);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << method << " collected with " << policy;
+    return std::string();
+  };
+  EXPECT_NE(refusal("learned", greedy, true).find("sample: true draws from the nav policy's Gaussian"), std::string::npos);
+  EXPECT_NE(refusal("enavi", sampled, true).find("is a nav policy (method learned); the job flies enavi"),
+            std::string::npos);
+  EXPECT_NE(refusal("learned", freq, false).find("is a frequency policy (method enavi); the job flies learned"),
+            std::string::npos);
 }
 
 TEST_F(CollectStoreTest, DatabaseFromBeforeCollectionGainsTheTables) {
