@@ -3,7 +3,7 @@
 # paper's matrix (5 boards x s1-s5, seed 1, virtual clock) in still air and in light, moderate
 # and severe Dryden turbulence, and on 5 boards x the two mover worlds (park-people,
 # street-traffic) x seeds 1-3; each eval's results as JSON in OUT_DIR, then the table
-# (air_table.py) on stdout. About 40 minutes on 2 idle cores.
+# (air_table.py) on stdout. About 21 minutes on 2 idle cores (2026-12-06).
 # Usage: bench/air/air_table.sh OUT_DIR   (from the repository root, after ./scripts/build.sh)
 set -euo pipefail
 [ $# -eq 1 ] || { echo "usage: $0 OUT_DIR" >&2; exit 2; }

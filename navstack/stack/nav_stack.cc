@@ -151,11 +151,17 @@ JobOutput NavStack::PerceptionJob() {
   double rejected = 0.0;
   const std::shared_ptr<const Trajectory> traj = trajectory_;
   const double now = executor_->now();
-  if (next && !reset && strategy_ && next->resolution() > map_->resolution() && traj && !stopped_ &&
-      !scanning_ && now < traj->end_time() && PredictHit(*next, *traj, now, nullptr, &out.work).collides) {
+  const bool coarser_checked = next && !reset && strategy_ && next->resolution() > map_->resolution() && traj &&
+                               !stopped_ && !scanning_ && now < traj->end_time();
+  if (coarser_checked && PredictHit(*next, *traj, now, nullptr, &out.work).collides) {
     rejected = next->resolution();
     next.reset();
   }
+  // A coarser map adopted after that check holds the trajectory being flown clear: the paper's
+  // planning triggers are the collision and change detections (Sec. III), and nothing on the
+  // coarser map asks for a new plan. Replanning anyway picked another route at each coarsening
+  // (docs/results.md, "Wind, turbulence and movers").
+  const std::shared_ptr<const Trajectory> cleared = coarser_checked && next ? traj : nullptr;
   const OccupancyMap& target = next ? *next : *map_;
   std::shared_ptr<const MapUpdate> update;
   if (frame && frame != last_mapped_frame_) {
@@ -166,7 +172,7 @@ JobOutput NavStack::PerceptionJob() {
                  static_cast<std::int64_t>(update->free_keys.size() + update->occupied_keys.size()));
     last_mapped_frame_ = frame;
   }
-  out.commit = [this, next, update, reset, rejected] {
+  out.commit = [this, next, update, reset, rejected, cleared] {
     if (rejected > 0.0) {
       AddEvent("resolution_kept", std::to_string(map_->resolution()) + " (" + std::to_string(rejected) +
                                       " would put the trajectory in collision)");
@@ -175,9 +181,11 @@ JobOutput NavStack::PerceptionJob() {
     }
     if (next) map_ = next;
     if (update) map_->Apply(*update);
-    // A refined (or coarsened) map is what the Resolution Adapter asked for, a reset map what
-    // the scan asked for: plan on it now.
-    if (next && (strategy_ || reset)) RequestReplan(reset ? "map_reset" : "resolution");
+    // A refined map is what the Resolution Adapter asked for, a reset map what the scan asked
+    // for: plan on it now. A coarsened one that keeps the trajectory clear needs no new plan
+    // (unless another plan replaced that trajectory meanwhile, unchecked on this map).
+    if (next && (strategy_ || reset) && !(cleared && cleared == trajectory_))
+      RequestReplan(reset ? "map_reset" : "resolution");
     if (rates_.collision_on_map_update && trajectory_) executor_->Trigger(TaskId::kCollision, 1.0 / rates_.f_per);
   };
   return out;

@@ -1,5 +1,6 @@
 // Episodes in worlds with movers (issue 45 part 2): a Gazebo actor flown moving, collisions with
 // a mover told apart from the static world's, and the same spec giving the same bytes.
+#include <cmath>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -74,6 +75,52 @@ TEST(MoversEpisodeTest, SameSpecTwiceGivesIdenticalJsonWithMovers) {
   const api::EpisodeResult second = sim::RunEpisode(spec);
   ASSERT_GT(first.series.size(), 40u) << Describe(first);
   EXPECT_EQ(nlohmann::json(first).dump(), nlohmann::json(second).dump());
+}
+
+// E-Navi replans when its map is refined, not when it is coarsened with the trajectory being
+// flown checked clear on the coarser map (docs/models.md, "Resolution Adapter"). The flight that
+// showed replans at coarsenings picking new routes while a van passed: street-traffic seed 1 on
+// tx2 (docs/results.md, "E-Navi without a replan at each coarsening").
+TEST(MoversEpisodeTest, EnaviReplansOnARefinedMapNotOnACoarsenedOne) {
+  api::EpisodeSpec spec = Spec("street-traffic", 1);
+  spec.board = "tx2";
+  spec.method = "enavi";
+  const api::EpisodeResult r = sim::RunEpisode(spec);
+  const api::TimeSeries& s = r.series;
+  ASSERT_GT(s.size(), 100u) << Describe(r);
+  int coarsenings = 0, refinements = 0;
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    coarsenings += s.res[i] > s.res[i - 1];
+    refinements += s.res[i] < s.res[i - 1];
+  }
+  ASSERT_GE(coarsenings, 3) << "the flight has coarsenings to answer or not";
+  ASSERT_GE(refinements, 3);
+  int resolution_replans = 0, after_coarsening = 0;
+  for (const api::EpisodeEvent& e : r.events) {
+    if (e.kind != "replan" || e.detail != "resolution") continue;
+    ++resolution_replans;
+    // The map the plan was made on (the first sample at or after the plan) and the map before
+    // its last switch.
+    std::size_t i = 0;
+    while (i + 1 < s.size() && s.t[i] < e.t) ++i;
+    std::size_t j = i;
+    while (j > 0 && s.res[j - 1] == s.res[i]) --j;
+    ASSERT_GT(j, 0u) << "a resolution replan at t = " << e.t << " with no switch before it";
+    if (s.res[i] < s.res[j - 1]) continue;  // a refinement
+    // A coarsening replans only when another plan replaced the checked trajectory meanwhile:
+    // one landed after the coarser level was announced.
+    ++after_coarsening;
+    double announced = -1;
+    for (const api::EpisodeEvent& a : r.events)
+      if (a.t <= e.t && a.kind == "resolution" && std::abs(std::stod(a.detail) - s.res[i]) < 1e-9) announced = a.t;
+    bool replaced = false;
+    for (const api::EpisodeEvent& p : r.events)
+      replaced |= p.kind == "replan" && p.t > announced && p.t < e.t;
+    EXPECT_TRUE(replaced) << "a replan at t = " << e.t << " after the map went from " << s.res[j - 1] << " to "
+                          << s.res[i] << " m, its trajectory unchanged since " << announced;
+  }
+  EXPECT_EQ(resolution_replans, r.replans_by_trigger.at("resolution"));
+  EXPECT_LT(after_coarsening, resolution_replans - after_coarsening) << "most are refinements' replans";
 }
 
 }  // namespace
