@@ -6,7 +6,6 @@
 #include "navstack/adapt/action_grid.h"
 #include "navstack/adapt/policy_state.h"
 #include "workers/sim/episode_config.h"
-#include "worlds/resolve.h"
 
 namespace enavi::python {
 
@@ -33,10 +32,6 @@ api::EpisodeSpec EnvEpisodeSpec(const std::string& method, const std::string& wo
   return spec;
 }
 
-std::shared_ptr<const sim::PreparedWorld> PrepareSpecWorld(const api::EpisodeSpec& spec) {
-  return sim::PrepareWorld(worlds::ResolveWorld(sim::WorldRequestOf(spec)));
-}
-
 EnvCore::EnvCore(EnvConfig config) : config_(std::move(config)) {
   CheckBoard(config_.board);
   if (config_.overrides.count("strategy.explore")) {
@@ -59,7 +54,7 @@ Transition EnvCore::Reset(std::uint64_t seed) {
   spec.overrides = config_.overrides;
   // Sampled decisions are the ones left to the caller.
   spec.overrides["strategy.explore"] = 1;
-  world_ = PrepareSpecWorld(spec);
+  world_ = sim::PrepareSpecWorld(spec);
 
   decisions_ = std::make_unique<navstack::rl::DecisionPort>();
   rollout_ = std::make_unique<navstack::rl::Rollout>();  // recording makes the controller compute rewards

@@ -49,8 +49,6 @@ void CheckBoard(const std::string& board);
 api::EpisodeSpec EnvEpisodeSpec(const std::string& method, const std::string& world,
                                 const std::map<std::string, std::string>& world_params, const std::string& board,
                                 double timeout_s, std::uint64_t seed);
-/// The world `spec` names, generated and prepared. @throws as worlds::ResolveWorld.
-std::shared_ptr<const sim::PreparedWorld> PrepareSpecWorld(const api::EpisodeSpec& spec);
 
 class EnvCore {
  public:

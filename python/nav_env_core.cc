@@ -29,7 +29,7 @@ NavTransition NavEnvCore::Reset(std::uint64_t seed) {
   spec.overrides["camera.decimation"] = config_.decimation;
   spec.overrides["learned.zero_latency"] = config_.zero_latency ? 1 : 0;
   spec.overrides["learned.multiply_adds"] = config_.zero_latency ? 0 : static_cast<double>(multiply_adds_);
-  world_ = PrepareSpecWorld(spec);
+  world_ = sim::PrepareSpecWorld(spec);
   stepper_ = std::make_unique<sim::NavStepper>(spec, *world_);
   return stepper_->First();
 }

@@ -24,7 +24,6 @@
 #include "workers/board/calibration_flights.h"
 #include "workers/sim/episode.h"
 #include "workers/sim/episode_config.h"
-#include "worlds/resolve.h"
 
 namespace enavi::cli {
 namespace {
@@ -107,7 +106,7 @@ void Run(FlyArgs args) {
   }
   std::vector<sim::EciFrame> eci_frames;
   if (!args.out_dir.empty()) options.eci_observer = [&eci_frames](const sim::EciFrame& f) { eci_frames.push_back(f); };
-  const auto world = sim::PrepareWorld(worlds::ResolveWorld(sim::WorldRequestOf(spec)));
+  const auto world = sim::PrepareSpecWorld(spec);
   const api::EpisodeResult result = sim::RunEpisode(spec, *world, options);
   if (tty) std::fprintf(stderr, "\n");
 

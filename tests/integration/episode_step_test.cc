@@ -11,13 +11,12 @@
 #include "navstack/rl/rollout.h"
 #include "tests/integration/loop_test_util.h"
 #include "workers/sim/episode.h"
-#include "worlds/resolve.h"
 
 namespace enavi::integration {
 namespace {
 
 std::shared_ptr<const sim::PreparedWorld> Prepare(const api::EpisodeSpec& spec) {
-  return sim::PrepareWorld(worlds::ResolveWorld(sim::WorldRequestOf(spec)));
+  return sim::PrepareSpecWorld(spec);
 }
 
 // E-Navi sampling its decisions (as in training) on s1 for 8 s: some 40 decisions.

@@ -10,7 +10,6 @@
 #include "tests/integration/loop_test_util.h"
 #include "workers/sim/episode.h"
 #include "worlds/movers.h"
-#include "worlds/resolve.h"
 
 namespace enavi::integration {
 namespace {
@@ -68,7 +67,7 @@ TEST(MoversEpisodeTest, SameSpecTwiceGivesIdenticalJsonWithMovers) {
   api::EpisodeSpec spec = Spec("park-people", 2, {{"length", "24"}});
   spec.method = "fixed";
   spec.timeout_s = 5;
-  const auto world = sim::PrepareWorld(worlds::ResolveWorld(sim::WorldRequestOf(spec)));
+  const auto world = sim::PrepareSpecWorld(spec);
   ASSERT_FALSE(world->world.movers.empty());
   // One run reuses a prepared world (no state carried over), the other regenerates it.
   const api::EpisodeResult first = sim::RunEpisode(spec, *world);

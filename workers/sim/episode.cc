@@ -312,9 +312,12 @@ api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const PreparedWorld&
   return episode.Finish();
 }
 
+std::shared_ptr<const PreparedWorld> PrepareSpecWorld(const api::EpisodeSpec& spec) {
+  return PrepareWorld(worlds::ResolveWorld(WorldRequestOf(spec)));
+}
+
 api::EpisodeResult RunEpisode(const api::EpisodeSpec& spec, const EpisodeOptions& options) {
-  const auto world = PrepareWorld(worlds::ResolveWorld(WorldRequestOf(spec)));
-  return RunEpisode(spec, *world, options);
+  return RunEpisode(spec, *PrepareSpecWorld(spec), options);
 }
 
 }  // namespace enavi::sim

@@ -53,6 +53,9 @@ std::shared_ptr<const PreparedWorld> PrepareWorld(worlds::World world);
 /// model path), as a request for worlds::ResolveWorld. Throws worlds::WorldError on a bad
 /// placement (unknown unit, up axis, scale out of range).
 worlds::WorldRequest WorldRequestOf(const api::EpisodeSpec& spec);
+/// The world `spec` names, resolved (generated or read) and prepared.
+/// @throws as WorldRequestOf and worlds::ResolveWorld.
+std::shared_ptr<const PreparedWorld> PrepareSpecWorld(const api::EpisodeSpec& spec);
 
 /// One depth frame's eci as the episode computed it (the metric, on every frame at f_sen).
 struct EciFrame {

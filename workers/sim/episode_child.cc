@@ -12,7 +12,6 @@
 #include "navstack/rl/random.h"
 #include "navstack/rl/rollout.h"
 #include "workers/sim/nav_stepper.h"
-#include "worlds/resolve.h"
 
 namespace enavi::sim {
 namespace {
@@ -54,7 +53,7 @@ api::EpisodeResult CollectNavRollout(const api::EpisodeSpec& spec, EpisodeOption
   const auto explore = spec.overrides.find("learned.explore");
   const bool sample = explore != spec.overrides.end() && explore->second > 0;
   rl::Rng rng(rl::NavExploreSeed(spec.seed));
-  const auto world = PrepareWorld(worlds::ResolveWorld(WorldRequestOf(spec)));
+  const auto world = PrepareSpecWorld(spec);
   NavStepper stepper(spec, *world, std::move(options));
   rollout->width = net.width();
   rollout->height = net.height();
